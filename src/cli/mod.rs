@@ -1,0 +1,28 @@
+//! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
+mod spectrum;
+
+use clap::{Parser, Subcommand};
+
+/// kelvin: a physically based light system (PBR's "Light Sources", on an ECS).
+#[derive(Parser)]
+#[command(name = "kelvin", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Colorimetry and photometry of an emission spectrum.
+    Spectrum(spectrum::SpectrumArgs),
+}
+
+/// Errors the CLI reports: a message that names what failed.
+pub type CliError = Box<dyn std::error::Error>;
+
+/// Runs the chosen subcommand.
+pub fn run(cli: Cli) -> Result<(), CliError> {
+    match cli.command {
+        Command::Spectrum(args) => spectrum::run(args),
+    }
+}

@@ -1,0 +1,6 @@
+//! kelvin: an ECS-based, data-oriented light system after the "Light Sources" chapter of
+//! Physically Based Rendering.
+//!
+//! `src/` holds what things are (data and pure math); `systems/` holds what happens each update.
+pub mod report;
+pub mod spectrum;

@@ -1,0 +1,2 @@
+//! Reports and plots: spectrum and IES plots, accuracy-vs-time and scaling reports.
+pub mod plot;

@@ -1,0 +1,155 @@
+//! Line plots written as SVG or PNG (chosen by the file extension), through plotters.
+
+use std::path::Path;
+use std::sync::Once;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// One named curve of (x, y) points.
+pub struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Axes and title of a plot.
+pub struct PlotSpec<'a> {
+    pub title: &'a str,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    /// Draw with equal units on both axes (polar plots).
+    pub equal_aspect: bool,
+}
+
+/// Errors writing a plot: the path and what failed.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write plot {path}: {msg}")]
+pub struct PlotError {
+    pub path: String,
+    pub msg: String,
+}
+
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    // DejaVu Sans (Bitstream Vera license, see fonts/LICENSE-DejaVu.txt) so PNGs need no system font.
+    ONCE.call_once(|| {
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            include_bytes!("fonts/DejaVuSans.ttf"),
+        );
+    });
+}
+
+/// Draws `series` as lines into `path` (.svg or .png).
+pub fn line_plot(path: &Path, spec: &PlotSpec, series: &[Series]) -> Result<(), PlotError> {
+    register_font();
+    let err = |e: String| PlotError {
+        path: path.display().to_string(),
+        msg: e,
+    };
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let size = if spec.equal_aspect {
+        (720, 720)
+    } else {
+        (960, 600)
+    };
+    match ext.as_str() {
+        "svg" => draw(
+            SVGBackend::new(path, size).into_drawing_area(),
+            spec,
+            series,
+        )
+        .map_err(err),
+        "png" => draw(
+            BitMapBackend::new(path, size).into_drawing_area(),
+            spec,
+            series,
+        )
+        .map_err(err),
+        _ => Err(err(format!(
+            "unsupported extension '{ext}'; use .svg or .png"
+        ))),
+    }
+}
+
+fn draw<DB: DrawingBackend>(
+    area: DrawingArea<DB, Shift>,
+    spec: &PlotSpec,
+    series: &[Series],
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |x: &dyn std::fmt::Display| x.to_string();
+    area.fill(&WHITE).map_err(|x| e(&x))?;
+    let pts = series
+        .iter()
+        .flat_map(|s| s.points.iter())
+        .filter(|p| p.0.is_finite() && p.1.is_finite());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y) in pts {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+    }
+    if x0 > x1 {
+        (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+    }
+    if spec.equal_aspect {
+        let r = (x1 - x0).max(y1 - y0) * 0.5;
+        let (cx, cy) = ((x0 + x1) * 0.5, (y0 + y1) * 0.5);
+        (x0, x1, y0, y1) = (cx - r, cx + r, cy - r, cy + r);
+    }
+    let pad = |a: f64, b: f64| if b > a { (b - a) * 0.03 } else { 1.0 };
+    let (px, py) = (pad(x0, x1), pad(y0, y1));
+    let mut chart = ChartBuilder::on(&area)
+        .caption(spec.title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0 - px..x1 + px, y0 - py..y1 + py)
+        .map_err(|x| e(&x))?;
+    chart
+        .configure_mesh()
+        .x_desc(spec.x_label)
+        .y_desc(spec.y_label)
+        .draw()
+        .map_err(|x| e(&x))?;
+    for (i, s) in series.iter().enumerate() {
+        let color = PALETTE[i % PALETTE.len()];
+        let pts = s
+            .points
+            .iter()
+            .copied()
+            .filter(|p| p.0.is_finite() && p.1.is_finite());
+        chart
+            .draw_series(LineSeries::new(pts, color.stroke_width(2)))
+            .map_err(|x| e(&x))?
+            .label(s.name.clone())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+            });
+    }
+    if series.len() > 1 || series.iter().any(|s| !s.name.is_empty()) {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|x| e(&x))?;
+    }
+    area.present().map_err(|x| e(&x))?;
+    Ok(())
+}
