@@ -2,5 +2,6 @@
 //! Physically Based Rendering.
 //!
 //! `src/` holds what things are (data and pure math); `systems/` holds what happens each update.
+pub mod geometry;
 pub mod report;
 pub mod spectrum;

@@ -29,28 +29,16 @@ pub fn run(args: SpectrumArgs) -> Result<(), CliError> {
         print!("{summary}");
     }
     if let Some(path) = args.plot {
-        let (lo, hi) = spectrum
-            .support_nm()
-            .map_or((360.0, 830.0), |(a, b)| (a.max(300.0), b.min(1000.0)));
+        let (lo, hi) = spectrum.support_nm().map_or((360.0, 830.0), |(a, b)| (a.max(300.0), b.min(1000.0)));
         let n = ((hi - lo) as usize).max(1);
-        let points = (0..=n)
-            .map(|i| lo + (hi - lo) * i as f64 / n as f64)
-            .map(|l| (l, spectrum.eval(l)))
-            .collect();
+        let points = (0..=n).map(|i| lo + (hi - lo) * i as f64 / n as f64).map(|l| (l, spectrum.eval(l))).collect();
         let spec = PlotSpec {
             title: &args.spec,
             x_label: "wavelength (nm)",
             y_label: "relative spectral power",
             equal_aspect: false,
         };
-        line_plot(
-            &path,
-            &spec,
-            &[Series {
-                name: String::new(),
-                points,
-            }],
-        )?;
+        line_plot(&path, &spec, &[Series { name: String::new(), points }])?;
         if !args.json {
             println!("plot               {}", path.display());
         }

@@ -42,64 +42,30 @@ fn register_font() {
     static ONCE: Once = Once::new();
     // DejaVu Sans (Bitstream Vera license, see fonts/LICENSE-DejaVu.txt) so PNGs need no system font.
     ONCE.call_once(|| {
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            include_bytes!("fonts/DejaVuSans.ttf"),
-        );
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, include_bytes!("fonts/DejaVuSans.ttf"));
     });
 }
 
 /// Draws `series` as lines into `path` (.svg or .png).
 pub fn line_plot(path: &Path, spec: &PlotSpec, series: &[Series]) -> Result<(), PlotError> {
     register_font();
-    let err = |e: String| PlotError {
-        path: path.display().to_string(),
-        msg: e,
-    };
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    let size = if spec.equal_aspect {
-        (720, 720)
-    } else {
-        (960, 600)
-    };
+    let err = |e: String| PlotError { path: path.display().to_string(), msg: e };
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let size = if spec.equal_aspect { (720, 720) } else { (960, 600) };
     match ext.as_str() {
-        "svg" => draw(
-            SVGBackend::new(path, size).into_drawing_area(),
-            spec,
-            series,
-        )
-        .map_err(err),
-        "png" => draw(
-            BitMapBackend::new(path, size).into_drawing_area(),
-            spec,
-            series,
-        )
-        .map_err(err),
-        _ => Err(err(format!(
-            "unsupported extension '{ext}'; use .svg or .png"
-        ))),
+        "svg" => draw(SVGBackend::new(path, size).into_drawing_area(), spec, series).map_err(err),
+        "png" => draw(BitMapBackend::new(path, size).into_drawing_area(), spec, series).map_err(err),
+        _ => Err(err(format!("unsupported extension '{ext}'; use .svg or .png"))),
     }
 }
 
-fn draw<DB: DrawingBackend>(
-    area: DrawingArea<DB, Shift>,
-    spec: &PlotSpec,
-    series: &[Series],
-) -> Result<(), String>
+fn draw<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, spec: &PlotSpec, series: &[Series]) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {
     let e = |x: &dyn std::fmt::Display| x.to_string();
     area.fill(&WHITE).map_err(|x| e(&x))?;
-    let pts = series
-        .iter()
-        .flat_map(|s| s.points.iter())
-        .filter(|p| p.0.is_finite() && p.1.is_finite());
+    let pts = series.iter().flat_map(|s| s.points.iter()).filter(|p| p.0.is_finite() && p.1.is_finite());
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &(x, y) in pts {
         (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
@@ -121,26 +87,15 @@ where
         .y_label_area_size(70)
         .build_cartesian_2d(x0 - px..x1 + px, y0 - py..y1 + py)
         .map_err(|x| e(&x))?;
-    chart
-        .configure_mesh()
-        .x_desc(spec.x_label)
-        .y_desc(spec.y_label)
-        .draw()
-        .map_err(|x| e(&x))?;
+    chart.configure_mesh().x_desc(spec.x_label).y_desc(spec.y_label).draw().map_err(|x| e(&x))?;
     for (i, s) in series.iter().enumerate() {
         let color = PALETTE[i % PALETTE.len()];
-        let pts = s
-            .points
-            .iter()
-            .copied()
-            .filter(|p| p.0.is_finite() && p.1.is_finite());
+        let pts = s.points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite());
         chart
             .draw_series(LineSeries::new(pts, color.stroke_width(2)))
             .map_err(|x| e(&x))?
             .label(s.name.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-            });
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
     }
     if series.len() > 1 || series.iter().any(|s| !s.name.is_empty()) {
         chart

@@ -14,9 +14,8 @@ const TABLE_RATIO: f64 = 1.001;
 
 /// xy of a blackbody at `t_k` (CIE 1931 2-degree observer, 1 nm integration 360-830 nm).
 pub fn planckian_xy(t_k: f64) -> [f64; 2] {
-    let xyz: DVec3 = (360..=830usize)
-        .map(|nm| DVec3::from_array(CIE_1931.at_nm(nm)) * planck::planck(nm as f64, t_k))
-        .sum();
+    let xyz: DVec3 =
+        (360..=830usize).map(|nm| DVec3::from_array(CIE_1931.at_nm(nm)) * planck::planck(nm as f64, t_k)).sum();
     let v = color::xyz_to_xyy(xyz);
     [v.x, v.y]
 }
@@ -38,10 +37,7 @@ static TABLE: LazyLock<PlanckTable> = LazyLock::new(|| {
         t.push(k);
         k *= TABLE_RATIO;
     }
-    let uv = t
-        .iter()
-        .map(|&k| color::xy_to_uv1960(planckian_xy(k)))
-        .collect();
+    let uv = t.iter().map(|&k| color::xy_to_uv1960(planckian_xy(k))).collect();
     PlanckTable { t, uv }
 });
 
@@ -50,18 +46,11 @@ static TABLE: LazyLock<PlanckTable> = LazyLock::new(|| {
 pub fn cct_duv_from_xy(xy: [f64; 2]) -> Result<(f64, f64), SpectrumError> {
     let [u, v] = color::xy_to_uv1960(xy);
     if !(u.is_finite() && v.is_finite()) {
-        return Err(SpectrumError::OutOfRange {
-            what: "chromaticity x".into(),
-            value: xy[0],
-            lo: 0.0,
-            hi: 1.0,
-        });
+        return Err(SpectrumError::OutOfRange { what: "chromaticity x".into(), value: xy[0], lo: 0.0, hi: 1.0 });
     }
     let tab = &*TABLE;
     let dist = |i: usize| ((u - tab.uv[i][0]).powi(2) + (v - tab.uv[i][1]).powi(2)).sqrt();
-    let m = (0..tab.t.len())
-        .min_by(|&a, &b| dist(a).total_cmp(&dist(b)))
-        .expect("table is not empty");
+    let m = (0..tab.t.len()).min_by(|&a, &b| dist(a).total_cmp(&dist(b))).expect("table is not empty");
     if m == 0 || m + 1 == tab.t.len() {
         let t = tab.t[m];
         return Err(SpectrumError::OutOfRange {
@@ -88,8 +77,7 @@ pub fn cct_duv_from_xy(xy: [f64; 2]) -> Result<(f64, f64), SpectrumError> {
     let big_x = (tn - tm) * (tp - tn) * (tm - tp);
     let a = (tp * (dn - dm) + tm * (dp - dn) + tn * (dm - dp)) / big_x;
     let b = -(tp * tp * (dn - dm) + tm * tm * (dp - dn) + tn * tn * (dm - dp)) / big_x;
-    let c =
-        -(dp * (tn - tm) * tm * tn + dm * (tp - tn) * tp * tn + dn * (tm - tp) * tp * tm) / big_x;
+    let c = -(dp * (tn - tm) * tm * tn + dm * (tp - tn) * tp * tn + dn * (tm - tp) * tp * tm) / big_x;
     let t = -b / (2.0 * a);
     Ok((t, sign * (a * t * t + b * t + c)))
 }

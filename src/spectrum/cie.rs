@@ -63,16 +63,10 @@ struct DaylightBasis {
 }
 
 static D_BASIS: LazyLock<DaylightBasis> = LazyLock::new(|| {
-    let rows = parse_csv_columns(include_str!("data/cie_d_basis.csv"), 4, "cie_d_basis.csv")
-        .expect("valid table");
+    let rows = parse_csv_columns(include_str!("data/cie_d_basis.csv"), 4, "cie_d_basis.csv").expect("valid table");
     let nm: Vec<f64> = rows.iter().map(|r| r[0]).collect();
     let s = [1, 2, 3].map(|k| {
-        TabulatedSpectrum::new(
-            nm.clone(),
-            rows.iter().map(|r| r[k]).collect(),
-            "cie_d_basis.csv",
-        )
-        .expect("valid")
+        TabulatedSpectrum::new(nm.clone(), rows.iter().map(|r| r[k]).collect(), "cie_d_basis.csv").expect("valid")
     });
     DaylightBasis { s }
 });
@@ -107,16 +101,11 @@ pub fn daylight(cct_k: f64) -> Result<TabulatedSpectrum, SpectrumError> {
     let m2 = ((0.0300 - 31.4424 * x + 30.0717 * y) / m * 1000.0).round() / 1000.0;
     let b = &D_BASIS.s;
     let nm = b[0].wavelengths().to_vec();
-    let raw: Vec<f64> = (0..nm.len())
-        .map(|i| b[0].values()[i] + m1 * b[1].values()[i] + m2 * b[2].values()[i])
-        .collect();
+    let raw: Vec<f64> =
+        (0..nm.len()).map(|i| b[0].values()[i] + m1 * b[1].values()[i] + m2 * b[2].values()[i]).collect();
     let s = TabulatedSpectrum::new(nm.clone(), raw, "daylight")?;
     let at560 = s.eval(560.0);
-    TabulatedSpectrum::new(
-        nm,
-        s.values().iter().map(|v| v * 100.0 / at560).collect(),
-        "daylight",
-    )
+    TabulatedSpectrum::new(nm, s.values().iter().map(|v| v * 100.0 / at560).collect(), "daylight")
 }
 
 /// CIE standard illuminant A at `lambda_nm` from its defining formula (CIE 015:2018 eq. 4.1):
@@ -131,9 +120,8 @@ pub fn illuminant_a(lambda_nm: f64) -> f64 {
 
 /// Names accepted by [`named_illuminant`], for help and error messages.
 pub const ILLUMINANT_NAMES: &[&str] = &[
-    "A", "B", "C", "D50", "D55", "D65", "D75", "E", "F1", "F2", "F3", "F4", "F5", "F6", "F7", "F8",
-    "F9", "F10", "F11", "F12", "LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1",
-    "LED-RGB1", "LED-V1", "LED-V2",
+    "A", "B", "C", "D50", "D55", "D65", "D75", "E", "F1", "F2", "F3", "F4", "F5", "F6", "F7", "F8", "F9", "F10", "F11",
+    "F12", "LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1", "LED-RGB1", "LED-V1", "LED-V2",
 ];
 
 macro_rules! tables {
@@ -147,25 +135,21 @@ macro_rules! tables {
     };
 }
 tables!(
-    "B", "C", "D50", "D55", "D65", "D75", "F1", "F2", "F3", "F4", "F5", "F6", "F7", "F8", "F9",
-    "F10", "F11", "F12", "LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1", "LED-RGB1",
-    "LED-V1", "LED-V2",
+    "B", "C", "D50", "D55", "D65", "D75", "F1", "F2", "F3", "F4", "F5", "F6", "F7", "F8", "F9", "F10", "F11", "F12",
+    "LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1", "LED-RGB1", "LED-V1", "LED-V2",
 );
 
 /// The tabulated CIE illuminant called `name` (case-insensitive, "FL11" is accepted for "F11").
 /// A and E are analytic: use [`super::Spectrum::illuminant`] for every name.
 pub fn tabulated_illuminant(name: &str) -> Option<Arc<TabulatedSpectrum>> {
-    static CACHE: LazyLock<std::sync::Mutex<Vec<(String, Arc<TabulatedSpectrum>)>>> =
-        LazyLock::new(Default::default);
+    static CACHE: LazyLock<std::sync::Mutex<Vec<(String, Arc<TabulatedSpectrum>)>>> = LazyLock::new(Default::default);
     let key = canonical_illuminant_name(name)?;
     let csv = illuminant_csv(key)?;
     let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
     if let Some((_, t)) = cache.iter().find(|(k, _)| k == key) {
         return Some(t.clone());
     }
-    let table = Arc::new(
-        TabulatedSpectrum::parse_csv(csv, key).expect("compiled-in illuminant table is valid"),
-    );
+    let table = Arc::new(TabulatedSpectrum::parse_csv(csv, key).expect("compiled-in illuminant table is valid"));
     cache.push((key.to_string(), table.clone()));
     Some(table)
 }
@@ -173,9 +157,6 @@ pub fn tabulated_illuminant(name: &str) -> Option<Arc<TabulatedSpectrum>> {
 /// Maps user spellings ("d65", "FL2", "led-b1") to the entry of [`ILLUMINANT_NAMES`].
 pub fn canonical_illuminant_name(name: &str) -> Option<&'static str> {
     let upper = name.trim().to_ascii_uppercase();
-    let upper = upper
-        .strip_prefix("FL")
-        .map(|rest| format!("F{rest}"))
-        .unwrap_or(upper);
+    let upper = upper.strip_prefix("FL").map(|rest| format!("F{rest}")).unwrap_or(upper);
     ILLUMINANT_NAMES.iter().copied().find(|n| *n == upper)
 }

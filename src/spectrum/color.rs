@@ -86,9 +86,7 @@ pub fn srgb_to_xyz(rgb: DVec3) -> DVec3 {
 /// Bradford chromatic adaptation from white `src` to white `dst` (xy chromaticities).
 pub fn bradford(src: [f64; 2], dst: [f64; 2]) -> DMat3 {
     // Bradford cone response matrix (Lam 1985), rows as published.
-    let m = DMat3::from_cols_array(&[
-        0.8951, -0.7502, 0.0389, 0.2664, 1.7135, -0.0685, -0.1614, 0.0367, 1.0296,
-    ]);
+    let m = DMat3::from_cols_array(&[0.8951, -0.7502, 0.0389, 0.2664, 1.7135, -0.0685, -0.1614, 0.0367, 1.0296]);
     let cone = |xy: [f64; 2]| m * xyy_to_xyz(DVec3::new(xy[0], xy[1], 1.0));
     let (s, d) = (cone(src), cone(dst));
     m.inverse() * DMat3::from_diagonal(d / s) * m
@@ -106,14 +104,6 @@ pub fn acescg_to_xyz(rgb: DVec3) -> DVec3 {
 
 /// sRGB transfer function (IEC 61966-2-1) for one linear channel, clamped to [0, 1].
 pub fn srgb_encode(linear: f64) -> f64 {
-    let c = if linear.is_nan() {
-        0.0
-    } else {
-        linear.clamp(0.0, 1.0)
-    };
-    if c <= 0.0031308 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    }
+    let c = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, 1.0) };
+    if c <= 0.0031308 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
 }

@@ -28,20 +28,11 @@ pub use tabulated::TabulatedSpectrum;
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum SpectrumError {
     #[error("{what} = {value} is outside [{lo}, {hi}]")]
-    OutOfRange {
-        what: String,
-        value: f64,
-        lo: f64,
-        hi: f64,
-    },
+    OutOfRange { what: String, value: f64, lo: f64, hi: f64 },
     #[error("{what}: {msg}")]
     BadTable { what: String, msg: String },
     #[error("{what}, line {line}: {msg}")]
-    BadCsv {
-        what: String,
-        line: usize,
-        msg: String,
-    },
+    BadCsv { what: String, line: usize, msg: String },
     #[error("unknown spectrum '{given}'; accepted: {accepted}")]
     Unknown { given: String, accepted: String },
     #[error("{what}: {msg}")]
@@ -60,10 +51,7 @@ pub enum Spectrum {
     Graybody { temperature_k: f64, emissivity: f64 },
     /// Kirchhoff's law with a tabulated emissivity (0 outside its table) times the normalised
     /// blackbody.
-    Emitter {
-        temperature_k: f64,
-        emissivity: Arc<TabulatedSpectrum>,
-    },
+    Emitter { temperature_k: f64, emissivity: Arc<TabulatedSpectrum> },
     /// CIE illuminant A from its defining formula, 300-830 nm, 100 at 560 nm.
     IlluminantA,
     /// A table, linearly interpolated (CIE illuminants, daylight, measured data).
@@ -87,17 +75,9 @@ impl Spectrum {
     pub fn graybody(temperature_k: f64, emissivity: f64) -> Result<Self, SpectrumError> {
         check_temperature(temperature_k)?;
         if !(0.0..=1.0).contains(&emissivity) {
-            return Err(SpectrumError::OutOfRange {
-                what: "emissivity".into(),
-                value: emissivity,
-                lo: 0.0,
-                hi: 1.0,
-            });
+            return Err(SpectrumError::OutOfRange { what: "emissivity".into(), value: emissivity, lo: 0.0, hi: 1.0 });
         }
-        Ok(Self::Graybody {
-            temperature_k,
-            emissivity,
-        })
+        Ok(Self::Graybody { temperature_k, emissivity })
     }
 
     /// The CIE standard illuminant called `name` (see [`cie::ILLUMINANT_NAMES`]).
@@ -105,9 +85,7 @@ impl Spectrum {
         match cie::canonical_illuminant_name(name) {
             Some("A") => Ok(Self::IlluminantA),
             Some("E") => Ok(Self::Constant(1.0)),
-            Some(key) => Ok(Self::Tabulated(
-                cie::tabulated_illuminant(key).expect("every listed table exists"),
-            )),
+            Some(key) => Ok(Self::Tabulated(cie::tabulated_illuminant(key).expect("every listed table exists"))),
             None => Err(SpectrumError::Unknown {
                 given: name.to_string(),
                 accepted: format!("illuminant:<{}>", cie::ILLUMINANT_NAMES.join("|")),
@@ -129,19 +107,12 @@ impl Spectrum {
     pub fn eval(&self, lambda_nm: f64) -> f64 {
         match self {
             Self::Constant(c) => *c,
-            Self::Blackbody { temperature_k } => {
-                planck::planck_normalized(lambda_nm, *temperature_k)
+            Self::Blackbody { temperature_k } => planck::planck_normalized(lambda_nm, *temperature_k),
+            Self::Graybody { temperature_k, emissivity } => {
+                emissivity * planck::planck_normalized(lambda_nm, *temperature_k)
             }
-            Self::Graybody {
-                temperature_k,
-                emissivity,
-            } => emissivity * planck::planck_normalized(lambda_nm, *temperature_k),
-            Self::Emitter {
-                temperature_k,
-                emissivity,
-            } => {
-                emissivity.eval(lambda_nm).clamp(0.0, 1.0)
-                    * planck::planck_normalized(lambda_nm, *temperature_k)
+            Self::Emitter { temperature_k, emissivity } => {
+                emissivity.eval(lambda_nm).clamp(0.0, 1.0) * planck::planck_normalized(lambda_nm, *temperature_k)
             }
             Self::IlluminantA => cie::illuminant_a(lambda_nm),
             Self::Tabulated(t) => t.eval(lambda_nm),
@@ -154,9 +125,7 @@ impl Spectrum {
     pub fn support_nm(&self) -> Option<(f64, f64)> {
         match self {
             Self::Constant(_) | Self::Blackbody { .. } | Self::Graybody { .. } => None,
-            Self::Emitter { emissivity: t, .. } | Self::Tabulated(t) => {
-                Some((t.min_nm(), t.max_nm()))
-            }
+            Self::Emitter { emissivity: t, .. } | Self::Tabulated(t) => Some((t.min_nm(), t.max_nm())),
             Self::IlluminantA => Some((300.0, 830.0)),
             Self::Rgb { .. } => Some((RGB_BASIS.min_nm(), RGB_BASIS.max_nm())),
         }
@@ -168,10 +137,7 @@ impl Spectrum {
         match self {
             Self::Constant(c) => c * (CONSTANT_RANGE_NM.1 - CONSTANT_RANGE_NM.0),
             Self::Blackbody { temperature_k: t } => blackbody_integral_normalized(*t),
-            Self::Graybody {
-                temperature_k: t,
-                emissivity,
-            } => emissivity * blackbody_integral_normalized(*t),
+            Self::Graybody { temperature_k: t, emissivity } => emissivity * blackbody_integral_normalized(*t),
             Self::Tabulated(t) => t.integrate_weighted(|_| 1.0),
             _ => {
                 let (lo, hi) = self.support_nm().expect("bounded");
@@ -184,23 +150,15 @@ impl Spectrum {
     /// summed on their own samples (CIE practice); other spectra at 1 nm over 360-830 nm.
     pub fn xyz_integral(&self, cmf: &Cmf) -> DVec3 {
         match self {
-            Self::Tabulated(t) => {
-                DVec3::from_array([0, 1, 2].map(|k| t.integrate_weighted(|l| cmf.eval(l)[k])))
-            }
-            _ => (360..=830usize)
-                .map(|nm| DVec3::from_array(cmf.at_nm(nm)) * self.eval(nm as f64))
-                .sum(),
+            Self::Tabulated(t) => DVec3::from_array([0, 1, 2].map(|k| t.integrate_weighted(|l| cmf.eval(l)[k]))),
+            _ => (360..=830usize).map(|nm| DVec3::from_array(cmf.at_nm(nm)) * self.eval(nm as f64)).sum(),
         }
     }
 
     /// XYZ scaled so that Y = 100 (the CIE's relative colorimetry; 2-degree observer).
     pub fn xyz_relative(&self) -> DVec3 {
         let xyz = self.xyz_integral(&CIE_1931);
-        if xyz.y > 0.0 {
-            xyz * (100.0 / xyz.y)
-        } else {
-            DVec3::ZERO
-        }
+        if xyz.y > 0.0 { xyz * (100.0 / xyz.y) } else { DVec3::ZERO }
     }
 
     /// xy chromaticity (2-degree observer).
@@ -224,23 +182,14 @@ fn check_temperature(t: f64) -> Result<(), SpectrumError> {
     if t > 0.0 && t <= 1e9 {
         Ok(())
     } else {
-        Err(SpectrumError::OutOfRange {
-            what: "temperature (K)".into(),
-            value: t,
-            lo: f64::MIN_POSITIVE,
-            hi: 1e9,
-        })
+        Err(SpectrumError::OutOfRange { what: "temperature (K)".into(), value: t, lo: f64::MIN_POSITIVE, hi: 1e9 })
     }
 }
 
 /// Integral over all wavelengths of the peak-normalised blackbody, nm.
 fn blackbody_integral_normalized(t_k: f64) -> f64 {
     let peak = planck::planck(planck::wien_peak_nm(t_k), t_k);
-    if peak > 0.0 {
-        planck::blackbody_radiance_total(t_k) / peak
-    } else {
-        0.0
-    }
+    if peak > 0.0 { planck::blackbody_radiance_total(t_k) / peak } else { 0.0 }
 }
 
 /// Trapezoid rule with steps of at most 1 nm over [lo, hi].
@@ -267,13 +216,10 @@ impl RgbBasis {
 
 static RGB_BASIS: LazyLock<RgbBasis> = LazyLock::new(|| {
     let text = include_str!("data/srgb_basis_mallett2019.csv");
-    let rows =
-        tabulated::parse_csv_columns(text, 4, "srgb_basis_mallett2019.csv").expect("valid table");
+    let rows = tabulated::parse_csv_columns(text, 4, "srgb_basis_mallett2019.csv").expect("valid table");
     let nm: Vec<f64> = rows.iter().map(|r| r[0]).collect();
-    let rgb = [1, 2, 3].map(|k| {
-        TabulatedSpectrum::new(nm.clone(), rows.iter().map(|r| r[k]).collect(), "rgb basis")
-            .expect("valid")
-    });
+    let rgb = [1, 2, 3]
+        .map(|k| TabulatedSpectrum::new(nm.clone(), rows.iter().map(|r| r[k]).collect(), "rgb basis").expect("valid"));
     RgbBasis { rgb }
 });
 
@@ -281,19 +227,13 @@ static D65_UNIT: LazyLock<Arc<TabulatedSpectrum>> = LazyLock::new(|| {
     let d65 = cie::tabulated_illuminant("D65").expect("compiled in");
     let s = 1.0 / d65.eval(560.0);
     Arc::new(
-        TabulatedSpectrum::new(
-            d65.wavelengths().to_vec(),
-            d65.values().iter().map(|v| v * s).collect(),
-            "D65",
-        )
-        .expect("valid"),
+        TabulatedSpectrum::new(d65.wavelengths().to_vec(), d65.values().iter().map(|v| v * s).collect(), "D65")
+            .expect("valid"),
     )
 });
 
 fn rgb_illuminant(rgb: [f64; 3], lambda_nm: f64) -> f64 {
     let b = &RGB_BASIS.rgb;
-    let reflectance = rgb[0] * b[0].eval(lambda_nm)
-        + rgb[1] * b[1].eval(lambda_nm)
-        + rgb[2] * b[2].eval(lambda_nm);
+    let reflectance = rgb[0] * b[0].eval(lambda_nm) + rgb[1] * b[1].eval(lambda_nm) + rgb[2] * b[2].eval(lambda_nm);
     reflectance * D65_UNIT.eval(lambda_nm)
 }

@@ -30,15 +30,10 @@ impl Spectrum {
             }
             "illuminant" => Self::illuminant(rest),
             "daylight" => Self::daylight(number(rest, "temperature")?),
-            _ if spec.to_ascii_lowercase().ends_with(".csv") => {
-                Self::from_csv_file(std::path::Path::new(spec))
-            }
+            _ if spec.to_ascii_lowercase().ends_with(".csv") => Self::from_csv_file(std::path::Path::new(spec)),
             _ => Err(SpectrumError::Unknown {
                 given: spec.to_string(),
-                accepted: format!(
-                    "{SPEC_FORMS}; illuminants: {}",
-                    cie::ILLUMINANT_NAMES.join(", ")
-                ),
+                accepted: format!("{SPEC_FORMS}; illuminants: {}", cie::ILLUMINANT_NAMES.join(", ")),
             }),
         }
     }
@@ -46,12 +41,8 @@ impl Spectrum {
     /// Reads a CSV file of `nm,value` rows (a header row and `#` comments are allowed).
     pub fn from_csv_file(path: &std::path::Path) -> Result<Self, SpectrumError> {
         let what = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SpectrumError::Io {
-            what: what.clone(),
-            msg: e.to_string(),
-        })?;
-        Ok(Self::Tabulated(Arc::new(TabulatedSpectrum::parse_csv(
-            &text, &what,
-        )?)))
+        let text =
+            std::fs::read_to_string(path).map_err(|e| SpectrumError::Io { what: what.clone(), msg: e.to_string() })?;
+        Ok(Self::Tabulated(Arc::new(TabulatedSpectrum::parse_csv(&text, &what)?)))
     }
 }

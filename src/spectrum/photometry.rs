@@ -8,21 +8,13 @@ pub const K_M: f64 = 683.0;
 
 /// K = 683 * integral(V S) / integral(S), from the two integrals. 0 when S integrates to 0.
 pub fn luminous_efficacy_of(y_integral: f64, spectrum_integral: f64) -> f64 {
-    if spectrum_integral > 0.0 && y_integral.is_finite() {
-        K_M * y_integral / spectrum_integral
-    } else {
-        0.0
-    }
+    if spectrum_integral > 0.0 && y_integral.is_finite() { K_M * y_integral / spectrum_integral } else { 0.0 }
 }
 
 /// Radiometric amount (W, W/sr, W/m^2, W/(m^2 sr)) of a photometric one (lm, cd, lx, nit) for a
 /// spectrum of efficacy `efficacy_lm_per_w`. 0 when the efficacy is 0 (invisible light).
 pub fn radiometric(photometric: f64, efficacy_lm_per_w: f64) -> f64 {
-    if efficacy_lm_per_w > 0.0 {
-        photometric / efficacy_lm_per_w
-    } else {
-        0.0
-    }
+    if efficacy_lm_per_w > 0.0 { photometric / efficacy_lm_per_w } else { 0.0 }
 }
 
 /// Photometric amount (lm, cd, lx, nit) of a radiometric one (W, W/sr, W/m^2, W/(m^2 sr)).

@@ -27,38 +27,25 @@ pub fn planck(lambda_nm: f64, t_k: f64) -> f64 {
     }
     // 2hc^2 / lambda^5 split so the intermediate stays in range for lambda down to 1e-12 m.
     let l2 = lambda * lambda;
-    let radiance_per_m =
-        2.0 * PLANCK_H * LIGHT_SPEED_C * LIGHT_SPEED_C / (l2 * l2 * lambda) / x.exp_m1();
+    let radiance_per_m = 2.0 * PLANCK_H * LIGHT_SPEED_C * LIGHT_SPEED_C / (l2 * l2 * lambda) / x.exp_m1();
     radiance_per_m * 1e-9
 }
 
 /// Wavelength of peak spectral radiance, nm (Wien: lambda_max = b / T). 0 for T <= 0.
 pub fn wien_peak_nm(t_k: f64) -> f64 {
-    if t_k > 0.0 && t_k.is_finite() {
-        WIEN_B / t_k * 1e9
-    } else {
-        0.0
-    }
+    if t_k > 0.0 && t_k.is_finite() { WIEN_B / t_k * 1e9 } else { 0.0 }
 }
 
 /// Planck's law divided by its value at Wien's peak, so the curve peaks at exactly 1 (pbrt's
 /// normalised `BlackbodySpectrum`). 0 wherever `planck` is 0.
 pub fn planck_normalized(lambda_nm: f64, t_k: f64) -> f64 {
     let peak = planck(wien_peak_nm(t_k), t_k);
-    if peak > 0.0 {
-        planck(lambda_nm, t_k) / peak
-    } else {
-        0.0
-    }
+    if peak > 0.0 { planck(lambda_nm, t_k) / peak } else { 0.0 }
 }
 
 /// Radiant exitance of a blackbody, W/m^2: M = sigma T^4 (pi times the integral of `planck`).
 pub fn blackbody_exitance(t_k: f64) -> f64 {
-    if t_k > 0.0 && t_k.is_finite() {
-        STEFAN_BOLTZMANN * t_k.powi(4)
-    } else {
-        0.0
-    }
+    if t_k > 0.0 && t_k.is_finite() { STEFAN_BOLTZMANN * t_k.powi(4) } else { 0.0 }
 }
 
 /// Radiance integrated over all wavelengths, W/(m^2 sr): sigma T^4 / pi.
@@ -69,10 +56,6 @@ pub fn blackbody_radiance_total(t_k: f64) -> f64 {
 /// Kirchhoff's law: a body in thermal equilibrium emits eps(lambda) B(lambda, T), where the
 /// emissivity eps equals its absorptivity. `emissivity` is clamped to [0, 1].
 pub fn kirchhoff(lambda_nm: f64, t_k: f64, emissivity: f64) -> f64 {
-    let eps = if emissivity.is_nan() {
-        0.0
-    } else {
-        emissivity.clamp(0.0, 1.0)
-    };
+    let eps = if emissivity.is_nan() { 0.0 } else { emissivity.clamp(0.0, 1.0) };
     eps * planck(lambda_nm, t_k)
 }

@@ -42,17 +42,12 @@ impl SpectrumSummary {
             Err(_) => (None, None),
         };
         let (exitance, lambda_max) = match spectrum {
-            Spectrum::Blackbody { temperature_k: t } => (
-                Some(planck::blackbody_exitance(*t)),
-                Some(planck::wien_peak_nm(*t)),
-            ),
-            Spectrum::Graybody {
-                temperature_k: t,
-                emissivity,
-            } => (
-                Some(emissivity * planck::blackbody_exitance(*t)),
-                Some(planck::wien_peak_nm(*t)),
-            ),
+            Spectrum::Blackbody { temperature_k: t } => {
+                (Some(planck::blackbody_exitance(*t)), Some(planck::wien_peak_nm(*t)))
+            }
+            Spectrum::Graybody { temperature_k: t, emissivity } => {
+                (Some(emissivity * planck::blackbody_exitance(*t)), Some(planck::wien_peak_nm(*t)))
+            }
             _ => (None, None),
         };
         Self {

@@ -16,48 +16,27 @@ pub struct TabulatedSpectrum {
 impl TabulatedSpectrum {
     /// Builds a table, checking the invariants above; `what` names the source in errors.
     pub fn new(nm: Vec<f64>, values: Vec<f64>, what: &str) -> Result<Self, SpectrumError> {
-        let bad = |msg: String| SpectrumError::BadTable {
-            what: what.to_string(),
-            msg,
-        };
+        let bad = |msg: String| SpectrumError::BadTable { what: what.to_string(), msg };
         if nm.len() != values.len() {
-            return Err(bad(format!(
-                "{} wavelengths but {} values",
-                nm.len(),
-                values.len()
-            )));
+            return Err(bad(format!("{} wavelengths but {} values", nm.len(), values.len())));
         }
         if nm.len() < 2 {
             return Err(bad("needs at least two rows".into()));
         }
         for (i, (&l, &v)) in nm.iter().zip(&values).enumerate() {
             if !l.is_finite() || l <= 0.0 {
-                return Err(bad(format!(
-                    "row {}: wavelength {l} is not a positive number",
-                    i + 1
-                )));
+                return Err(bad(format!("row {}: wavelength {l} is not a positive number", i + 1)));
             }
             if !v.is_finite() {
                 return Err(bad(format!("row {}: value {v} is not finite", i + 1)));
             }
             if i > 0 && l <= nm[i - 1] {
-                return Err(bad(format!(
-                    "row {}: wavelengths must increase ({} after {})",
-                    i + 1,
-                    l,
-                    nm[i - 1]
-                )));
+                return Err(bad(format!("row {}: wavelengths must increase ({} after {})", i + 1, l, nm[i - 1])));
             }
         }
         let step0 = nm[1] - nm[0];
-        let even = nm
-            .windows(2)
-            .all(|w| ((w[1] - w[0]) - step0).abs() <= 1e-9 * step0.max(1.0));
-        Ok(Self {
-            nm,
-            values,
-            step: even.then_some(step0),
-        })
+        let even = nm.windows(2).all(|w| ((w[1] - w[0]) - step0).abs() <= 1e-9 * step0.max(1.0));
+        Ok(Self { nm, values, step: even.then_some(step0) })
     }
 
     /// Parses CSV text of `nm,value` rows. Lines starting with `#` and a header row whose first
@@ -97,12 +76,7 @@ impl TabulatedSpectrum {
         }
         let i = match self.step {
             Some(step) => (((lambda_nm - lo) / step) as usize).min(self.nm.len() - 2),
-            None => {
-                self.nm
-                    .partition_point(|&l| l <= lambda_nm)
-                    .clamp(1, self.nm.len() - 1)
-                    - 1
-            }
+            None => self.nm.partition_point(|&l| l <= lambda_nm).clamp(1, self.nm.len() - 1) - 1,
         };
         let (l0, l1) = (self.nm[i], self.nm[i + 1]);
         let t = ((lambda_nm - l0) / (l1 - l0)).clamp(0.0, 1.0);
@@ -115,16 +89,8 @@ impl TabulatedSpectrum {
         let n = self.nm.len();
         (0..n)
             .map(|i| {
-                let left = if i > 0 {
-                    self.nm[i] - self.nm[i - 1]
-                } else {
-                    0.0
-                };
-                let right = if i + 1 < n {
-                    self.nm[i + 1] - self.nm[i]
-                } else {
-                    0.0
-                };
+                let left = if i > 0 { self.nm[i] - self.nm[i - 1] } else { 0.0 };
+                let right = if i + 1 < n { self.nm[i + 1] - self.nm[i] } else { 0.0 };
                 self.values[i] * weight(self.nm[i]) * 0.5 * (left + right)
             })
             .sum()
@@ -133,11 +99,7 @@ impl TabulatedSpectrum {
 
 /// Parses CSV text into rows of exactly `columns` numbers. Comment lines (`#`) and blank lines
 /// are skipped, as is a first data line that does not start with a number (a header).
-pub(crate) fn parse_csv_columns(
-    text: &str,
-    columns: usize,
-    what: &str,
-) -> Result<Vec<Vec<f64>>, SpectrumError> {
+pub(crate) fn parse_csv_columns(text: &str, columns: usize, what: &str) -> Result<Vec<Vec<f64>>, SpectrumError> {
     let mut rows = Vec::new();
     let mut seen_data = false;
     for (i, line) in text.lines().enumerate() {
@@ -151,32 +113,18 @@ pub(crate) fn parse_csv_columns(
             continue;
         }
         seen_data = true;
-        let bad = |msg: String| SpectrumError::BadCsv {
-            what: what.to_string(),
-            line: i + 1,
-            msg,
-        };
+        let bad = |msg: String| SpectrumError::BadCsv { what: what.to_string(), line: i + 1, msg };
         if fields.len() != columns {
-            return Err(bad(format!(
-                "expected {columns} comma-separated numbers, found {} fields",
-                fields.len()
-            )));
+            return Err(bad(format!("expected {columns} comma-separated numbers, found {} fields", fields.len())));
         }
         let row = fields
             .iter()
-            .map(|f| {
-                f.parse::<f64>()
-                    .map_err(|_| bad(format!("'{f}' is not a number")))
-            })
+            .map(|f| f.parse::<f64>().map_err(|_| bad(format!("'{f}' is not a number"))))
             .collect::<Result<Vec<_>, _>>()?;
         rows.push(row);
     }
     if rows.is_empty() {
-        return Err(SpectrumError::BadCsv {
-            what: what.to_string(),
-            line: 0,
-            msg: "no data rows".into(),
-        });
+        return Err(SpectrumError::BadCsv { what: what.to_string(), line: 0, msg: "no data rows".into() });
     }
     Ok(rows)
 }
