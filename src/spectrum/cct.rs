@@ -32,8 +32,9 @@ struct PlanckTable {
 
 static TABLE: LazyLock<PlanckTable> = LazyLock::new(|| {
     let mut t = Vec::new();
-    let mut k = CCT_RANGE_K.0;
-    while k <= CCT_RANGE_K.1 * TABLE_RATIO {
+    // One percent of margin on both sides so the ends of the stated range have neighbours.
+    let mut k = CCT_RANGE_K.0 / 1.01;
+    while k <= CCT_RANGE_K.1 * 1.01 {
         t.push(k);
         k *= TABLE_RATIO;
     }
@@ -71,7 +72,7 @@ pub fn cct_duv_from_xy(xy: [f64; 2]) -> Result<(f64, f64), SpectrumError> {
     let sign = if v - v_tx >= 0.0 { 1.0 } else { -1.0 };
     let duv_tri = (dp * dp - x * x).max(0.0).sqrt() * sign;
     if duv_tri.abs() < 0.002 {
-        return Ok((t_tri, duv_tri));
+        return in_range((t_tri, duv_tri));
     }
     // Parabolic solution (Ohno 2013, eqs. 8-12) away from the locus.
     let big_x = (tn - tm) * (tp - tn) * (tm - tp);
@@ -79,7 +80,15 @@ pub fn cct_duv_from_xy(xy: [f64; 2]) -> Result<(f64, f64), SpectrumError> {
     let b = -(tp * tp * (dn - dm) + tm * tm * (dp - dn) + tn * tn * (dm - dp)) / big_x;
     let c = -(dp * (tn - tm) * tm * tn + dm * (tp - tn) * tp * tn + dn * (tm - tp) * tp * tm) / big_x;
     let t = -b / (2.0 * a);
-    Ok((t, sign * (a * t * t + b * t + c)))
+    in_range((t, sign * (a * t * t + b * t + c)))
+}
+
+fn in_range((t, duv): (f64, f64)) -> Result<(f64, f64), SpectrumError> {
+    if (CCT_RANGE_K.0 * (1.0 - 1e-9)..=CCT_RANGE_K.1 * (1.0 + 1e-9)).contains(&t) {
+        Ok((t, duv))
+    } else {
+        Err(SpectrumError::OutOfRange { what: "CCT (K)".into(), value: t, lo: CCT_RANGE_K.0, hi: CCT_RANGE_K.1 })
+    }
 }
 
 /// CCT (K) and Duv of a spectrum's colour.

@@ -139,20 +139,25 @@ impl Spectrum {
             Self::Blackbody { temperature_k: t } => blackbody_integral_normalized(*t),
             Self::Graybody { temperature_k: t, emissivity } => emissivity * blackbody_integral_normalized(*t),
             Self::Tabulated(t) => t.integrate_weighted(|_| 1.0),
+            Self::Emitter { emissivity: t, .. } => trapezoid(t.min_nm(), t.max_nm(), t.wavelengths(), |l| self.eval(l)),
             _ => {
                 let (lo, hi) = self.support_nm().expect("bounded");
-                integrate_1nm(lo, hi, |l| self.eval(l))
+                trapezoid(lo, hi, &[], |l| self.eval(l))
             }
         }
     }
 
-    /// Tristimulus integral (integral of S times x-bar, y-bar, z-bar), in (value x nm). Tables are
-    /// summed on their own samples (CIE practice); other spectra at 1 nm over 360-830 nm.
+    /// Tristimulus integral (integral of S times x-bar, y-bar, z-bar), in (value x nm): trapezoid
+    /// rule on the 1 nm grid over 360-830 nm plus the spectrum's own table samples, so tables are
+    /// linearly interpolated; this reproduces the CIE's published chromaticities (F11 to 1e-5).
     pub fn xyz_integral(&self, cmf: &Cmf) -> DVec3 {
-        match self {
-            Self::Tabulated(t) => DVec3::from_array([0, 1, 2].map(|k| t.integrate_weighted(|l| cmf.eval(l)[k]))),
-            _ => (360..=830usize).map(|nm| DVec3::from_array(cmf.at_nm(nm)) * self.eval(nm as f64)).sum(),
-        }
+        let (lo, hi) = self.support_nm().unwrap_or(CONSTANT_RANGE_NM);
+        let (lo, hi) = (lo.max(cie::CMF_MIN_NM), hi.min(cie::CMF_MAX_NM));
+        let table = match self {
+            Self::Tabulated(t) | Self::Emitter { emissivity: t, .. } => t.wavelengths(),
+            _ => &[],
+        };
+        trapezoid(lo, hi, table, |l| DVec3::from_array(cmf.eval(l)) * self.eval(l))
     }
 
     /// XYZ scaled so that Y = 100 (the CIE's relative colorimetry; 2-degree observer).
@@ -192,12 +197,27 @@ fn blackbody_integral_normalized(t_k: f64) -> f64 {
     if peak > 0.0 { planck::blackbody_radiance_total(t_k) / peak } else { 0.0 }
 }
 
-/// Trapezoid rule with steps of at most 1 nm over [lo, hi].
-pub(crate) fn integrate_1nm(lo: f64, hi: f64, f: impl Fn(f64) -> f64) -> f64 {
-    let n = ((hi - lo).ceil() as usize).max(1);
-    let h = (hi - lo) / n as f64;
-    let inner: f64 = (1..n).map(|i| f(lo + i as f64 * h)).sum();
-    h * (inner + 0.5 * (f(lo) + f(hi)))
+/// Trapezoid rule over [lo, hi] with nodes at every integer nm, at `extra` nodes inside the range
+/// (a table's samples) and at both ends.
+fn trapezoid<T>(lo: f64, hi: f64, extra: &[f64], f: impl Fn(f64) -> T) -> T
+where
+    T: Copy + Default + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T>,
+{
+    if !(hi > lo) {
+        return T::default();
+    }
+    let mut nodes: Vec<f64> = (lo.ceil() as i64..=hi.floor() as i64).map(|n| n as f64).collect();
+    nodes.extend(extra.iter().copied().filter(|l| (lo..=hi).contains(l)));
+    nodes.extend([lo, hi]);
+    nodes.sort_by(f64::total_cmp);
+    nodes.dedup();
+    let values: Vec<T> = nodes.iter().map(|&l| f(l)).collect();
+    let mut sum = T::default();
+    for i in 1..nodes.len() {
+        let w = 0.5 * (nodes[i] - nodes[i - 1]);
+        sum = sum + (values[i - 1] + values[i]) * w;
+    }
+    sum
 }
 
 /// The Mallett-Yuksel sRGB basis, 380-780 nm at 5 nm (columns r, g, b).
