@@ -1,0 +1,185 @@
+//! What a light emits: a spectrum shape with a radiometric amount, plus its photometric RGB for
+//! RGB mode. Photometric inputs (lm, cd, lx, nit) are converted once here with the spectrum's
+//! luminous efficacy.
+
+use glam::Vec3;
+
+use super::ColorQuery;
+use crate::spectrum::{SampledSpectrum, Spectrum, rgb_reflectance};
+
+/// Errors in a light's description; each names the light and the field.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum LightError {
+    #[error("{light}: {field} = {value} must be finite and >= 0")]
+    BadAmount { light: &'static str, field: &'static str, value: f32 },
+    #[error("{light}: {field} is given in {given}, expected {expected}")]
+    WrongUnit { light: &'static str, field: &'static str, given: &'static str, expected: &'static str },
+    #[error("{light}: {msg}")]
+    Invalid { light: &'static str, msg: String },
+}
+
+/// How much light, in a photometric or a radiometric unit. Which units a light accepts is in its
+/// component's docs (a point light takes an intensity or a power, a distant light an irradiance).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Amount {
+    /// Luminous power, lm.
+    Lumens(f32),
+    /// Radiant power, W.
+    Watts(f32),
+    /// Luminous intensity, cd (lm/sr).
+    Candela(f32),
+    /// Radiant intensity, W/sr.
+    WattsPerSr(f32),
+    /// Illuminance, lx (lm/m^2).
+    Lux(f32),
+    /// Irradiance, W/m^2.
+    WattsPerM2(f32),
+    /// Luminance, nit (cd/m^2).
+    Nits(f32),
+    /// Radiance, W/(m^2 sr).
+    WattsPerM2Sr(f32),
+}
+
+/// The physical quantity an [`Amount`] measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quantity {
+    Power,
+    Intensity,
+    Irradiance,
+    Radiance,
+}
+
+impl Amount {
+    /// The number, whatever the unit.
+    pub fn value(self) -> f32 {
+        match self {
+            Self::Lumens(v) | Self::Watts(v) | Self::Candela(v) | Self::WattsPerSr(v) => v,
+            Self::Lux(v) | Self::WattsPerM2(v) | Self::Nits(v) | Self::WattsPerM2Sr(v) => v,
+        }
+    }
+    /// What is measured.
+    pub fn quantity(self) -> Quantity {
+        match self {
+            Self::Lumens(_) | Self::Watts(_) => Quantity::Power,
+            Self::Candela(_) | Self::WattsPerSr(_) => Quantity::Intensity,
+            Self::Lux(_) | Self::WattsPerM2(_) => Quantity::Irradiance,
+            Self::Nits(_) | Self::WattsPerM2Sr(_) => Quantity::Radiance,
+        }
+    }
+    /// True for lm, cd, lx and nit.
+    pub fn is_photometric(self) -> bool {
+        matches!(self, Self::Lumens(_) | Self::Candela(_) | Self::Lux(_) | Self::Nits(_))
+    }
+    /// The unit's symbol, for messages.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Self::Lumens(_) => "lm",
+            Self::Watts(_) => "W",
+            Self::Candela(_) => "cd",
+            Self::WattsPerSr(_) => "W/sr",
+            Self::Lux(_) => "lx",
+            Self::WattsPerM2(_) => "W/m^2",
+            Self::Nits(_) => "nit",
+            Self::WattsPerM2Sr(_) => "W/(m^2 sr)",
+        }
+    }
+    /// The radiometric value (W, W/sr, W/m^2, W/(m^2 sr)) for a spectrum of the given efficacy.
+    pub fn radiometric(self, efficacy_lm_per_w: f64) -> f32 {
+        if self.is_photometric() {
+            crate::spectrum::photometry::radiometric(self.value() as f64, efficacy_lm_per_w) as f32
+        } else {
+            self.value()
+        }
+    }
+    /// Checks the number is finite and non-negative.
+    pub fn validate(self, light: &'static str, field: &'static str) -> Result<Self, LightError> {
+        let v = self.value();
+        if v.is_finite() && v >= 0.0 { Ok(self) } else { Err(LightError::BadAmount { light, field, value: v }) }
+    }
+}
+
+/// A radiometric quantity Q (W, W/sr, W/m^2 or W/(m^2 sr), integrated over wavelength) with the
+/// spectral shape S: Q(lambda) = `scale` * S(lambda) per nm. `rgb` is the same light as
+/// photometric linear sRGB (lm, cd, lx or nit per channel; its Y is the photometric amount).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Emitter {
+    pub spectrum: Spectrum,
+    /// Multiplies `spectrum.eval(lambda)` to give the quantity per nm.
+    pub scale: f32,
+    /// Photometric linear sRGB.
+    pub rgb: Vec3,
+    /// The radiometric quantity integrated over wavelength.
+    pub radiometric: f32,
+}
+
+impl Emitter {
+    /// An emitter of radiometric total `radiometric` with shape `spectrum`.
+    pub fn new(spectrum: Spectrum, radiometric: f32) -> Self {
+        let integral = spectrum.integral();
+        let efficacy = spectrum.luminous_efficacy();
+        let scale = if integral > 0.0 { (radiometric as f64 / integral) as f32 } else { 0.0 };
+        let rgb = spectrum.srgb_normalized() * (radiometric as f64 * efficacy);
+        Self { spectrum, scale, rgb: rgb.as_vec3(), radiometric }
+    }
+
+    /// An emitter from an amount in any unit of the same quantity.
+    pub fn from_amount(spectrum: Spectrum, amount: Amount) -> Self {
+        let k = spectrum.luminous_efficacy();
+        Self::new(spectrum, amount.radiometric(k))
+    }
+
+    /// A black emitter.
+    pub fn black() -> Self {
+        Self { spectrum: Spectrum::Constant(0.0), scale: 0.0, rgb: Vec3::ZERO, radiometric: 0.0 }
+    }
+
+    /// The same emitter with its amount multiplied by `s`.
+    pub fn scaled(&self, s: f32) -> Self {
+        Self { spectrum: self.spectrum.clone(), scale: self.scale * s, rgb: self.rgb * s, radiometric: self.radiometric * s }
+    }
+
+    /// The emitted quantity in the query's colour mode.
+    pub fn eval(&self, query: ColorQuery) -> SampledSpectrum {
+        match query {
+            ColorQuery::Rgb => SampledSpectrum([self.rgb.x, self.rgb.y, self.rgb.z, 0.0]),
+            ColorQuery::Spectral(w) => w.eval(&self.spectrum).scale(self.scale),
+        }
+    }
+
+    /// The emitted quantity tinted by a linear-sRGB texture value: multiplied per channel in RGB
+    /// mode, by the tint's reflectance spectrum (Mallett-Yuksel basis) in spectral mode.
+    pub fn eval_tinted(&self, query: ColorQuery, tint: Vec3) -> SampledSpectrum {
+        match query {
+            ColorQuery::Rgb => {
+                let c = self.rgb * tint;
+                SampledSpectrum([c.x, c.y, c.z, 0.0])
+            }
+            ColorQuery::Spectral(w) => {
+                let t = [tint.x as f64, tint.y as f64, tint.z as f64];
+                SampledSpectrum(std::array::from_fn(|i| {
+                    let l = w.lambda[i] as f64;
+                    (self.spectrum.eval(l) * rgb_reflectance(t, l)) as f32 * self.scale
+                }))
+            }
+        }
+    }
+
+    /// Luminance-like weight of the emitter (photometric Y), for importance.
+    pub fn luminous(&self) -> f32 {
+        self.rgb.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+    }
+}
+
+/// Checks a user-facing amount has the expected quantity and a valid value.
+pub fn check_amount(
+    amount: Amount,
+    light: &'static str,
+    field: &'static str,
+    allowed: &[Quantity],
+    expected: &'static str,
+) -> Result<Amount, LightError> {
+    if !allowed.contains(&amount.quantity()) {
+        return Err(LightError::WrongUnit { light, field, given: amount.unit(), expected });
+    }
+    amount.validate(light, field)
+}

@@ -1,0 +1,147 @@
+//! Spot light: a point light restricted to a cone with a smooth falloff (pbrt-v4 `SpotLight`).
+//!
+//! Falloff: I(theta) = I * smoothstep(cos theta; cos outer, cos inner), the cubic Hermite
+//! smoothstep between the cosines of the outer and inner half-angles; power
+//! phi = 2 pi I ((1 - cos inner) + (cos inner - cos outer) / 2) (pbrt-v4 section 12.2.1).
+//!
+//! glTF (KHR_lights_punctual) gives `innerConeAngle` and `outerConeAngle` as half-angles from the
+//! axis; they map one to one onto `inner_angle` and `outer_angle`. glTF only *suggests* a falloff,
+//! (clamp((cos theta - cos outer) / (cos inner - cos outer), 0, 1))^2, which starts with a
+//! nonzero slope at the inner cone and has zero slope at the outer one; kelvin keeps pbrt's
+//! smoothstep (zero slope at both ends), so the beam edge looks slightly softer at the inner
+//! angle and the power differs by a few percent for wide falloff bands.
+
+use std::f32::consts::PI;
+
+use bevy_ecs::component::Component;
+use glam::Vec3;
+
+use super::emitter::check_amount;
+use super::{Amount, ColorQuery, Emitter, LiSample, LightBounds, LightError, LightSampleContext, Quantity};
+use crate::geometry::Transform;
+use crate::sampling::smooth_step;
+use crate::spectrum::Spectrum;
+
+/// glTF's default outer cone half-angle, pi/4.
+pub const DEFAULT_OUTER_ANGLE: f32 = PI / 4.0;
+
+/// A spot light at its entity's translation, shining along the entity's local -Z axis.
+#[derive(Component, Clone, Debug, PartialEq)]
+pub struct SpotLight {
+    /// On-axis intensity (cd or W/sr) or total power (lm or W, divided by the falloff's solid
+    /// angle). Defaults to 800 lm.
+    pub amount: Amount,
+    /// Spectral shape. Defaults to D65 (white).
+    pub spectrum: Spectrum,
+    /// Half-angle (radians) inside which the intensity is full. Defaults to 0.
+    pub inner_angle: f32,
+    /// Half-angle (radians) outside which there is no light, up to pi. Defaults to pi/4.
+    pub outer_angle: f32,
+    /// Whether shadow rays are traced. Defaults to true.
+    pub casts_shadows: bool,
+}
+
+impl Default for SpotLight {
+    fn default() -> Self {
+        Self {
+            amount: Amount::Lumens(super::point::DEFAULT_POINT_LUMENS),
+            spectrum: Spectrum::d65(),
+            inner_angle: 0.0,
+            outer_angle: DEFAULT_OUTER_ANGLE,
+            casts_shadows: true,
+        }
+    }
+}
+
+/// Solid-angle factor of the falloff: phi = I * this.
+fn falloff_solid_angle(cos_inner: f32, cos_outer: f32) -> f32 {
+    2.0 * PI * ((1.0 - cos_inner) + (cos_inner - cos_outer) / 2.0)
+}
+
+impl SpotLight {
+    /// World-space form; errors for NaN or out-of-order angles and bad amounts.
+    pub fn resolve(&self, transform: &Transform) -> Result<ResolvedSpot, LightError> {
+        let (inner, outer) = (self.inner_angle, self.outer_angle);
+        if !(0.0 <= inner && inner <= outer && outer <= PI) {
+            return Err(LightError::Invalid {
+                light: "SpotLight",
+                msg: format!("need 0 <= inner_angle ({inner}) <= outer_angle ({outer}) <= pi"),
+            });
+        }
+        let (cos_inner, cos_outer) = (inner.cos(), outer.cos());
+        let amount =
+            check_amount(self.amount, "SpotLight", "amount", &[Quantity::Intensity, Quantity::Power], "cd, W/sr, lm or W")?;
+        let mut intensity = Emitter::from_amount(self.spectrum.clone(), amount);
+        if amount.quantity() == Quantity::Power {
+            let omega = falloff_solid_angle(cos_inner, cos_outer);
+            intensity = intensity.scaled(if omega > 0.0 { 1.0 / omega } else { 0.0 });
+        }
+        Ok(ResolvedSpot {
+            position: transform.translation,
+            direction: transform.forward().normalize(),
+            cos_inner,
+            cos_outer,
+            intensity,
+        })
+    }
+}
+
+/// A spot light in world space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedSpot {
+    pub position: Vec3,
+    /// Unit axis the light shines along.
+    pub direction: Vec3,
+    pub cos_inner: f32,
+    pub cos_outer: f32,
+    /// On-axis radiant intensity, W/sr.
+    pub intensity: Emitter,
+}
+
+impl ResolvedSpot {
+    /// Relative intensity toward world direction `w` (from the light, unit): the smoothstep
+    /// falloff. With inner == outer it is a hard step.
+    pub fn falloff(&self, w: Vec3) -> f32 {
+        smooth_step(w.dot(self.direction), self.cos_outer, self.cos_inner)
+    }
+
+    /// The delta direction toward the light; None when the point is outside the cone or at the
+    /// light.
+    pub fn sample_li(&self, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
+        let d = self.position - ctx.p;
+        let r2 = d.length_squared();
+        if !(r2 > 0.0) || !r2.is_finite() {
+            return None;
+        }
+        let wi = d / r2.sqrt();
+        let f = self.falloff(-wi);
+        if f <= 0.0 {
+            return None;
+        }
+        Some(LiSample { radiance: self.intensity.eval(query).scale(f / r2), wi, pdf: 1.0, p_light: self.position, n_light: Vec3::ZERO })
+    }
+
+    /// A delta light is never hit by sampled directions.
+    pub fn pdf_li(&self) -> f32 {
+        0.0
+    }
+
+    /// Radiant power, W.
+    pub fn phi(&self) -> f32 {
+        self.intensity.radiometric * falloff_solid_angle(self.cos_inner, self.cos_outer)
+    }
+
+    /// Bounds for light BVHs (pbrt-v4: theta_o = inner angle, theta_e = outer - inner).
+    pub fn bounds(&self) -> LightBounds {
+        let theta_e = self.cos_outer.clamp(-1.0, 1.0).acos() - self.cos_inner.clamp(-1.0, 1.0).acos();
+        LightBounds {
+            min: self.position,
+            max: self.position,
+            phi: self.phi(),
+            w: self.direction,
+            cos_theta_o: self.cos_inner,
+            cos_theta_e: theta_e.cos(),
+            two_sided: false,
+        }
+    }
+}
