@@ -5,5 +5,6 @@
 pub mod geometry;
 pub mod render;
 pub mod report;
+pub mod sampling;
 pub mod scene;
 pub mod spectrum;
