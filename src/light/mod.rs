@@ -5,10 +5,12 @@
 //! functions on that form. A light is `(LightKind, index)` into per-kind tables; one `match` per
 //! operation, no trait objects on hot paths.
 
+mod dispatch;
 pub mod distant;
 pub mod emitter;
 pub mod point;
 pub mod spot;
+pub mod table;
 
 use glam::Vec3;
 
@@ -18,6 +20,7 @@ pub use distant::{DistantLight, ResolvedDistant};
 pub use emitter::{Amount, Emitter, LightError, Quantity};
 pub use point::{PointLight, ResolvedPoint};
 pub use spot::{ResolvedSpot, SpotLight};
+pub use table::{LightId, LightTable};
 
 /// Where light is being gathered: a point with its geometric normal and, optionally, its shading
 /// normal. `n == Vec3::ZERO` marks a point not on a surface (a medium, or "no normal").
@@ -151,9 +154,4 @@ impl Default for SceneSphere {
     fn default() -> Self {
         Self { center: Vec3::ZERO, radius: 1.0 }
     }
-}
-
-/// Radiance along a direction in the query's colour mode from an `Emitter` value scaled by `s`.
-pub(crate) fn scaled(emitter: &Emitter, query: ColorQuery, s: f32) -> SampledSpectrum {
-    emitter.eval(query).scale(s)
 }

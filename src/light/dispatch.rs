@@ -1,0 +1,75 @@
+//! One `match` per Light operation over the `LightTable`'s blocks.
+
+use glam::{Vec2, Vec3};
+
+use super::table::LightTable;
+use super::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext};
+
+impl LightTable {
+    /// Sample_Li of light `id` at `ctx` with uniform numbers `u`.
+    #[inline]
+    pub fn sample_li(&self, id: LightId, ctx: &LightSampleContext, u: Vec2, query: ColorQuery) -> Option<LiSample> {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => self.points.sample_li(i, ctx, query),
+            LightKind::Spot => self.spots.sample_li(i, ctx, query),
+            LightKind::Distant => self.distant.items[i].sample_li(ctx, u, query),
+            other => unreachable!("no block for {other:?}"),
+        }
+    }
+
+    /// Pdf_Li: solid-angle density with which `sample_li` returns `wi` (0 for delta lights).
+    pub fn pdf_li(&self, id: LightId, _ctx: &LightSampleContext, wi: Vec3) -> f32 {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point | LightKind::Spot => 0.0,
+            LightKind::Distant => self.distant.items[i].pdf_li(wi),
+            other => unreachable!("no block for {other:?}"),
+        }
+    }
+
+    /// The emission flags of light `id`.
+    pub fn flags(&self, id: LightId) -> LightFlags {
+        match id.kind {
+            LightKind::Distant => self.distant.items[id.row as usize].flags(),
+            kind => kind.flags(),
+        }
+    }
+
+    /// Radiant power of light `id`, W.
+    pub fn phi(&self, id: LightId) -> f32 {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => self.points.phi(i),
+            LightKind::Spot => self.spots.phi(i),
+            LightKind::Distant => self.distant.items[i].phi(),
+            other => unreachable!("no block for {other:?}"),
+        }
+    }
+
+    /// Luminous power of light `id`, lm: its radiant power times its spectrum's efficacy.
+    pub fn luminous_power(&self, id: LightId) -> f32 {
+        let i = id.row as usize;
+        let (rgb_y, radiometric) = match id.kind {
+            LightKind::Point => (self.points.rgb[i].y, self.points.radiometric[i]),
+            LightKind::Spot => (self.spots.rgb[i].y, self.spots.radiometric[i]),
+            LightKind::Distant => {
+                let e = &self.distant.items[i].irradiance;
+                (e.rgb.y, e.radiometric)
+            }
+            other => unreachable!("no block for {other:?}"),
+        };
+        if radiometric > 0.0 { (self.phi(id) * rgb_y / radiometric).max(0.0) } else { 0.0 }
+    }
+
+    /// Whether shadow rays are traced for light `id`.
+    pub fn casts_shadows(&self, id: LightId) -> bool {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => self.points.casts_shadows[i],
+            LightKind::Spot => self.spots.casts_shadows[i],
+            LightKind::Distant => self.distant.casts_shadows[i],
+            other => unreachable!("no block for {other:?}"),
+        }
+    }
+}

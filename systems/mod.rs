@@ -1,0 +1,93 @@
+//! What happens each update: bevy_ecs systems that turn the world into flat tables and batched
+//! work, and the plugin that schedules them.
+//!
+//! The chain, set by set (each set's doc says what holds after it):
+//! sync lights -> update the scene BVH -> update the light sampler -> build env-map tables ->
+//! sample lights for the shading batch -> trace shadow rays -> write direct lighting.
+
+mod plan;
+mod sample;
+mod sync_lights;
+
+use bevy_ecs::prelude::*;
+
+use crate::light::LightTable;
+use crate::light_sampler::LightSampler;
+use crate::shading::{DirectLighting, RunReport, SceneBounds, Settings, ShadingBatch};
+
+pub use plan::Work;
+pub use sample::{ShadowRays, sample_direct_lighting};
+pub use sync_lights::{remove_lights, sync_distant_lights, sync_point_lights, sync_spot_lights};
+
+/// The light system's sets, in order.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub enum LightingSet {
+    /// After this set, every added, changed or removed light is reflected in the `LightTable`.
+    SyncLights,
+    /// After this set, the light sampler matches the `LightTable`.
+    UpdateSampler,
+    /// After this set, `DirectLighting` holds one unoccluded light sample per point (or per point
+    /// and light) and `ShadowRays` the segments to test.
+    SampleLights,
+    /// After this set, every shadow ray has an occluded flag.
+    TraceShadows,
+    /// After this set, `DirectLighting` has visibility applied and is ready to read.
+    WriteResults,
+}
+
+/// Adds kelvin's resources to a `World` and its systems to a `Schedule`: the one entry an app
+/// needs to embed the light system.
+pub struct LightingPlugin;
+
+impl LightingPlugin {
+    /// Inserts the resources (keeping any the app already inserted, such as `Settings`) and adds
+    /// the systems and their order to `schedule`.
+    pub fn build(world: &mut World, schedule: &mut Schedule) {
+        world.init_resource::<Settings>();
+        world.init_resource::<LightTable>();
+        world.init_resource::<LightSampler>();
+        world.init_resource::<ShadingBatch>();
+        world.init_resource::<DirectLighting>();
+        world.init_resource::<ShadowRays>();
+        world.init_resource::<RunReport>();
+        world.init_resource::<Work>();
+        world.init_resource::<SceneBounds>();
+
+        schedule.configure_sets(
+            (
+                LightingSet::SyncLights,
+                // The sampler weighs lights by power, so it reads the synced table.
+                LightingSet::UpdateSampler,
+                // Light selection uses the updated sampler.
+                LightingSet::SampleLights,
+                // Shadow rays are the segments the sampling step produced.
+                LightingSet::TraceShadows,
+                // Visibility is applied once every ray is traced.
+                LightingSet::WriteResults,
+            )
+                .chain(),
+        );
+        schedule.add_systems(
+            (
+                plan::begin_update,
+                // Removals first: an entity whose light changed kind is removed, then re-added.
+                remove_lights,
+                (sync_point_lights, sync_spot_lights, sync_distant_lights),
+            )
+                .chain()
+                .in_set(LightingSet::SyncLights),
+        );
+        schedule.add_systems(
+            (plan::plan_sampler, sample::update_light_sampler.run_if(plan::planned(|w| w.sampler)))
+                .chain()
+                .in_set(LightingSet::UpdateSampler),
+        );
+        schedule.add_systems(
+            (plan::plan_sampling, sample_direct_lighting.run_if(plan::planned(|w| w.sampling)))
+                .chain()
+                .in_set(LightingSet::SampleLights),
+        );
+        schedule.add_systems(plan::plan_shadows.in_set(LightingSet::TraceShadows));
+        schedule.add_systems(sample::apply_visibility.in_set(LightingSet::WriteResults));
+    }
+}
