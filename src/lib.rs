@@ -14,3 +14,8 @@ pub mod shading;
 pub mod spectrum;
 #[path = "../systems/mod.rs"]
 pub mod systems;
+
+/// The README's examples, compiled and run as doc-tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

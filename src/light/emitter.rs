@@ -115,16 +115,15 @@ pub struct Emitter {
 impl Emitter {
     /// An emitter of radiometric total `radiometric` with shape `spectrum`.
     pub fn new(spectrum: Spectrum, radiometric: f32) -> Self {
-        let integral = spectrum.integral();
-        let efficacy = spectrum.luminous_efficacy();
+        let SpectrumFacts { integral, efficacy, srgb } = SpectrumFacts::of(&spectrum);
         let scale = if integral > 0.0 { (radiometric as f64 / integral) as f32 } else { 0.0 };
-        let rgb = spectrum.srgb_normalized() * (radiometric as f64 * efficacy);
+        let rgb = srgb * (radiometric as f64 * efficacy);
         Self { spectrum, scale, rgb: rgb.as_vec3(), radiometric }
     }
 
     /// An emitter from an amount in any unit of the same quantity.
     pub fn from_amount(spectrum: Spectrum, amount: Amount) -> Self {
-        let k = spectrum.luminous_efficacy();
+        let k = SpectrumFacts::of(&spectrum).efficacy;
         Self::new(spectrum, amount.radiometric(k))
     }
 
@@ -172,6 +171,56 @@ impl Emitter {
     /// Luminance-like weight of the emitter (photometric Y), for importance.
     pub fn luminous(&self) -> f32 {
         self.rgb.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+    }
+}
+
+/// What converting a spectrum needs: its integral, efficacy and normalised sRGB. Computing them
+/// integrates over ~500 wavelengths, so they are memoised: lights that move or change their
+/// amount but not their spectrum (the common case in a game loop) reuse them.
+#[derive(Clone, Copy)]
+struct SpectrumFacts {
+    integral: f64,
+    efficacy: f64,
+    srgb: glam::DVec3,
+}
+
+impl SpectrumFacts {
+    fn of(spectrum: &Spectrum) -> Self {
+        use std::collections::HashMap;
+        use std::sync::{LazyLock, Mutex};
+        // Keyed by the spectrum's parameters; tables by the address of their Arc, which the cache
+        // keeps alive so the address cannot be reused.
+        static CACHE: LazyLock<Mutex<HashMap<Vec<u64>, (Spectrum, SpectrumFacts)>>> = LazyLock::new(Default::default);
+        const MAX_ENTRIES: usize = 4096;
+        let key = spectrum_key(spectrum);
+        if let Some((_, facts)) = CACHE.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+            return *facts;
+        }
+        let facts = Self {
+            integral: spectrum.integral(),
+            efficacy: spectrum.luminous_efficacy(),
+            srgb: spectrum.srgb_normalized(),
+        };
+        let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        if cache.len() >= MAX_ENTRIES {
+            cache.clear();
+        }
+        cache.insert(key, (spectrum.clone(), facts));
+        facts
+    }
+}
+
+fn spectrum_key(s: &Spectrum) -> Vec<u64> {
+    match s {
+        Spectrum::Constant(c) => vec![0, c.to_bits()],
+        Spectrum::Blackbody { temperature_k } => vec![1, temperature_k.to_bits()],
+        Spectrum::Graybody { temperature_k, emissivity } => vec![2, temperature_k.to_bits(), emissivity.to_bits()],
+        Spectrum::Emitter { temperature_k, emissivity } => {
+            vec![3, temperature_k.to_bits(), std::sync::Arc::as_ptr(emissivity) as u64]
+        }
+        Spectrum::IlluminantA => vec![4],
+        Spectrum::Tabulated(t) => vec![5, std::sync::Arc::as_ptr(t) as u64],
+        Spectrum::Rgb { rgb } => vec![6, rgb[0].to_bits(), rgb[1].to_bits(), rgb[2].to_bits()],
     }
 }
 

@@ -162,10 +162,10 @@ impl PointColumns {
         }
         let radiance = match query {
             ColorQuery::Rgb => {
-                let c = self.rgb[row] / r2;
-                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0])
+                let c = self.rgb[row];
+                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0]).scale(1.0 / r2)
             }
-            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row] / r2),
+            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row]).scale(1.0 / r2),
         };
         Some(LiSample { radiance, wi: d / r2.sqrt(), pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
     }

@@ -216,10 +216,10 @@ impl SpotColumns {
         }
         let radiance = match query {
             ColorQuery::Rgb => {
-                let c = self.rgb[row] * (f / r2);
-                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0])
+                let c = self.rgb[row];
+                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0]).scale(f / r2)
             }
-            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row] * f / r2),
+            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row]).scale(f / r2),
         };
         Some(LiSample { radiance, wi, pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
     }
