@@ -1,2 +1,4 @@
-//! Rendering: film and image output.
+//! Rendering: materials and BSDFs, film and image output.
+pub mod bsdf;
 pub mod film_io;
+pub mod material;
