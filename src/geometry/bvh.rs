@@ -228,6 +228,19 @@ impl SceneBvh {
         self.shapes.get(r.shape as usize)
     }
 
+    /// World-space vertices of triangle `triangle` of mesh instance `instance`, exactly as the
+    /// tree stores them (sample mesh area lights from these so samples lie on the traced
+    /// surface). `None` for shapes, left-out instances and degenerate triangles.
+    pub fn world_triangle(&self, instance: u32, triangle: u32) -> Option<[Vec3; 3]> {
+        let rec = self.instances.get(instance as usize)?;
+        if !matches!(rec.source, Source::Mesh(_)) {
+            return None;
+        }
+        let range = rec.prims.start as usize..rec.prims.end as usize;
+        let k = self.prim_local[range.clone()].binary_search(&triangle).ok()?;
+        Some(self.leaf[self.slot_of_prim[range.start + k] as usize].v)
+    }
+
     /// SAH-style cost of the tree now, relative to its value after the last build (1 = as built).
     pub fn cost_ratio(&self) -> f32 {
         if self.built_cost > 0.0 { self.cost / self.built_cost } else { 1.0 }
