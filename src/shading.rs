@@ -70,6 +70,9 @@ impl Default for Settings {
 pub struct ShadingBatch {
     /// World positions, m.
     pub position: Vec<Vec3>,
+    /// Per-axis error bound of each position (for robust shadow-ray offsets; see
+    /// `geometry::ray`). `push` fills a conservative bound for points of unknown origin.
+    pub position_error: Vec<Vec3>,
     /// Geometric normals (unit), or zero for points not on a surface.
     pub normal: Vec<Vec3>,
     /// Shading normals (unit); the geometric normal where absent.
@@ -93,17 +96,33 @@ impl ShadingBatch {
     /// Empties every column, keeping capacity.
     pub fn clear(&mut self) {
         self.position.clear();
+        self.position_error.clear();
         self.normal.clear();
         self.shading_normal.clear();
         self.pixel.clear();
         self.sample.clear();
         self.wavelengths.clear();
     }
-    /// Appends a point on a surface.
+    /// Appends a point on a surface whose position error is unknown (an app's G-buffer).
     pub fn push(&mut self, position: Vec3, normal: Vec3, pixel: u32, sample: u32) {
+        let error = crate::geometry::SurfacePoint::from_point(position, normal).p_error;
+        self.push_with_error(position, error, normal, normal, pixel, sample);
+    }
+
+    /// Appends a point with a known position error bound and separate shading normal (a ray hit).
+    pub fn push_with_error(
+        &mut self,
+        position: Vec3,
+        error: Vec3,
+        normal: Vec3,
+        shading: Vec3,
+        pixel: u32,
+        sample: u32,
+    ) {
         self.position.push(position);
+        self.position_error.push(error);
         self.normal.push(normal);
-        self.shading_normal.push(normal);
+        self.shading_normal.push(shading);
         self.pixel.push(pixel);
         self.sample.push(sample);
     }

@@ -2,11 +2,13 @@
 //! work, and the plugin that schedules them.
 //!
 //! The chain, set by set (each set's doc says what holds after it):
-//! sync lights -> update the scene BVH -> update the light sampler -> build env-map tables ->
+//! update the scene BVH -> sync lights -> update the light sampler -> build env-map tables ->
 //! sample lights for the shading batch -> trace shadow rays -> write direct lighting.
 
+mod geometry;
 mod plan;
 mod sample;
+mod shadows;
 mod sync_lights;
 
 use bevy_ecs::prelude::*;
@@ -15,13 +17,17 @@ use crate::light::LightTable;
 use crate::light_sampler::LightSampler;
 use crate::shading::{DirectLighting, RunReport, SceneBounds, Settings, ShadingBatch};
 
+pub use geometry::{BvhWork, GeometryIndex, plan_bvh, update_scene_bvh};
 pub use plan::Work;
 pub use sample::{ShadowRays, sample_direct_lighting};
+pub use shadows::trace_shadow_rays;
 pub use sync_lights::{remove_lights, sync_distant_lights, sync_point_lights, sync_spot_lights};
 
 /// The light system's sets, in order.
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
 pub enum LightingSet {
+    /// After this set, the `SceneBvh` and `SceneBounds` match the geometry entities.
+    UpdateBvh,
     /// After this set, every added, changed or removed light is reflected in the `LightTable`.
     SyncLights,
     /// After this set, the light sampler matches the `LightTable`.
@@ -52,9 +58,13 @@ impl LightingPlugin {
         world.init_resource::<RunReport>();
         world.init_resource::<Work>();
         world.init_resource::<SceneBounds>();
+        world.init_resource::<crate::geometry::SceneBvh>();
+        world.init_resource::<GeometryIndex>();
 
         schedule.configure_sets(
             (
+                LightingSet::UpdateBvh,
+                // Distant and infinite lights read the scene bounds the BVH step computes.
                 LightingSet::SyncLights,
                 // The sampler weighs lights by power, so it reads the synced table.
                 LightingSet::UpdateSampler,
@@ -68,8 +78,12 @@ impl LightingPlugin {
                 .chain(),
         );
         schedule.add_systems(
+            (plan::begin_update, plan_bvh, update_scene_bvh.run_if(plan::planned(|w| w.bvh != BvhWork::None)))
+                .chain()
+                .in_set(LightingSet::UpdateBvh),
+        );
+        schedule.add_systems(
             (
-                plan::begin_update,
                 // Removals first: an entity whose light changed kind is removed, then re-added.
                 remove_lights,
                 (sync_point_lights, sync_spot_lights, sync_distant_lights),
@@ -87,7 +101,11 @@ impl LightingPlugin {
                 .chain()
                 .in_set(LightingSet::SampleLights),
         );
-        schedule.add_systems(plan::plan_shadows.in_set(LightingSet::TraceShadows));
+        schedule.add_systems(
+            (shadows::plan_shadows, trace_shadow_rays.run_if(plan::planned(|w| w.shadows)))
+                .chain()
+                .in_set(LightingSet::TraceShadows),
+        );
         schedule.add_systems(sample::apply_visibility.in_set(LightingSet::WriteResults));
     }
 }

@@ -14,6 +14,7 @@ pub struct Work {
     pub sampler: bool,
     pub sampling: bool,
     pub shadows: bool,
+    pub bvh: super::geometry::BvhWork,
 }
 
 /// A run condition that reads one of `Work`'s flags.
@@ -70,23 +71,4 @@ pub fn plan_sampling(
     };
     work.sampling = run;
     report.record("sample_direct_lighting", run, why);
-}
-
-/// Shadow rays are traced only when asked for, when there are rays and when some geometry can
-/// occlude them.
-pub fn plan_shadows(
-    settings: Res<Settings>,
-    rays: Res<super::ShadowRays>,
-    mut work: ResMut<Work>,
-    mut report: ResMut<RunReport>,
-) {
-    let (run, why) = if !settings.shadows {
-        (false, "shadows are off in Settings")
-    } else if rays.is_empty() {
-        (false, "no shadow rays (no samples, or every light has casts_shadows = false)")
-    } else {
-        (false, "no occluding geometry")
-    };
-    work.shadows = run;
-    report.record("trace_shadow_rays", run, why);
 }

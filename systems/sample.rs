@@ -5,7 +5,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::light::{ColorQuery, LightId, LightKind, LightSampleContext, LightTable};
+use crate::light::{ColorQuery, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
 use crate::shading::{ColorMode, DirectLighting, LightSelection, RunReport, Settings, ShadingBatch};
@@ -18,12 +18,15 @@ const CHUNK: usize = 1024;
 /// Invariant: all columns have the same length; `entry` indexes `DirectLighting`.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct ShadowRays {
-    /// Segment start (the shading point) and its geometric normal, for the offset.
+    /// Segment start (the shading point), its error bound and geometric normal, for the offset.
     pub origin: Vec<Vec3>,
+    pub origin_error: Vec<Vec3>,
     pub origin_normal: Vec<Vec3>,
     /// Segment end (the light point) and the light's surface normal there (zero if none).
     pub target: Vec<Vec3>,
     pub target_normal: Vec<Vec3>,
+    /// True for lights at infinity (distant, infinite): the ray leaves along `target - origin`.
+    pub to_infinity: Vec<bool>,
     /// The `DirectLighting` entry each ray belongs to.
     pub entry: Vec<u32>,
     /// Answers, filled by the trace step.
@@ -41,9 +44,11 @@ impl ShadowRays {
     }
     fn clear(&mut self) {
         self.origin.clear();
+        self.origin_error.clear();
         self.origin_normal.clear();
         self.target.clear();
         self.target_normal.clear();
+        self.to_infinity.clear();
         self.entry.clear();
         self.occluded.clear();
     }
@@ -157,10 +162,13 @@ pub fn sample_direct_lighting(
         let r = &out.radiance[e];
         if out.pdf[e] > 0.0 && r.0.iter().any(|&v| v > 0.0) && table.casts_shadows(out.light[e]) {
             let i = e / k;
+            let flags = table.flags(out.light[e]);
             rays.origin.push(batch.position[i]);
+            rays.origin_error.push(batch.position_error[i]);
             rays.origin_normal.push(batch.normal[i]);
             rays.target.push(p_light[e]);
             rays.target_normal.push(n_light[e]);
+            rays.to_infinity.push(flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION));
             rays.entry.push(e as u32);
         }
     }

@@ -57,3 +57,36 @@ fn invalid_spot_angles_are_reported_not_panicking() {
     let report = world.resource::<RunReport>();
     assert!(report.warnings.iter().any(|w| w.contains("inner_angle")), "{report}");
 }
+
+#[test]
+fn occluders_block_shadow_rays_and_the_bvh_follows_moving_geometry() {
+    use kelvin::geometry::{Rectangle, Sphere};
+    let (mut world, mut schedule) = world_and_schedule();
+    world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.0, 4.0, 0.0))));
+    let floor = Transform::from_translation(Vec3::ZERO).looking_to(Vec3::NEG_Y, Vec3::Z); // +Z (front) -> +Y
+    world.spawn((Rectangle { half_size: glam::Vec2::splat(10.0) }, floor));
+    let ball = world.spawn((Sphere { radius: 0.5 }, Transform::from_translation(Vec3::new(0.0, 2.0, 0.0)))).id();
+    world.resource_mut::<ShadingBatch>().push(Vec3::ZERO, Vec3::Y, 0, 0);
+    world.resource_mut::<ShadingBatch>().push(Vec3::new(3.0, 0.0, 0.0), Vec3::Y, 1, 0);
+    schedule.run(&mut world);
+    let out = world.resource::<DirectLighting>();
+    assert!(out.occluded[0] && out.radiance[0].0[1] == 0.0, "the ball shadows the point below it");
+    assert!(!out.occluded[1] && out.radiance[1].0[1] > 0.0, "the floor never shadows itself");
+    assert!(world.resource::<RunReport>().ran("trace_shadow_rays"));
+
+    // Move the ball away: a refit, and the shadow is gone.
+    world.get_mut::<Transform>(ball).unwrap().translation.x = 5.0;
+    schedule.run(&mut world);
+    let report = world.resource::<RunReport>();
+    assert!(report.ran("update_scene_bvh") && report.entries.iter().any(|e| e.system == "bvh_refit"), "{report}");
+    assert!(!world.resource::<DirectLighting>().occluded[0]);
+
+    // Lights that cast no shadows trace no rays.
+    let mut lights = world.query::<&mut PointLight>();
+    for mut l in lights.iter_mut(&mut world) {
+        l.casts_shadows = false;
+    }
+    schedule.run(&mut world);
+    let report = world.resource::<RunReport>();
+    assert!(!report.ran("trace_shadow_rays") && !report.ran("update_scene_bvh"), "{report}");
+}

@@ -30,11 +30,11 @@ use obvhs::ploc::PlocBuilder;
 use obvhs::{BvhBuildParams, PerComponent};
 use std::collections::HashMap;
 
+use super::GeometryError;
 use super::mesh::Mesh;
 use super::shapes::{PlacedShape, Shape};
 use super::transform::Transform;
 use super::triangle::is_degenerate;
-use super::GeometryError;
 
 /// Rebuild after refits once the tree's SAH cost has grown by this factor since the last build.
 pub const REBUILD_COST_RATIO: f32 = 1.5;
@@ -144,10 +144,7 @@ fn affine(t: &Transform) -> Affine3A {
 }
 
 fn mesh_transform_ok(t: &Transform) -> bool {
-    t.translation.is_finite()
-        && t.scale.is_finite()
-        && t.rotation.is_finite()
-        && t.rotation.length_squared() > 0.0
+    t.translation.is_finite() && t.scale.is_finite() && t.rotation.is_finite() && t.rotation.length_squared() > 0.0
 }
 
 impl SceneBvh {
@@ -239,6 +236,11 @@ impl SceneBvh {
         let range = rec.prims.start as usize..rec.prims.end as usize;
         let k = self.prim_local[range.clone()].binary_search(&triangle).ok()?;
         Some(self.leaf[self.slot_of_prim[range.start + k] as usize].v)
+    }
+
+    /// World-space bounding box of everything in the tree, or None when it is empty.
+    pub fn world_bounds(&self) -> Option<(Vec3, Vec3)> {
+        (self.primitive_count() > 0).then(|| (self.cwbvh.total_aabb.min.into(), self.cwbvh.total_aabb.max.into()))
     }
 
     /// SAH-style cost of the tree now, relative to its value after the last build (1 = as built).
@@ -557,7 +559,10 @@ mod tests {
         let bvh = SceneBvh::build(&inst);
         assert_eq!(bvh.primitive_count(), 1);
         assert_eq!(bvh.report().degenerate_triangles, vec![GeometryId { entity_index: 3, primitive: 1 }]);
-        assert!(matches!(bvh.report().skipped_instances[..], [GeometryError::Instance { instance: 1, entity_index: 4, .. }]));
+        assert!(matches!(
+            bvh.report().skipped_instances[..],
+            [GeometryError::Instance { instance: 1, entity_index: 4, .. }]
+        ));
     }
 
     #[test]
@@ -568,10 +573,14 @@ mod tests {
         let small = [(2, Transform::from_translation(Vec3::new(6.0, 0.5, 0.0)))];
         assert!(matches!(bvh.update_transforms(&small), Ok(UpdateKind::Refitted { .. })));
         // Scatter everything far apart in a different order: the old topology is now poor.
-        let scatter: Vec<(u32, Transform)> =
-            (0..20).map(|i| (i, Transform::from_translation(Vec3::new(0.0, ((i * 7) % 20) as f32 * 50.0, 0.0)))).collect();
+        let scatter: Vec<(u32, Transform)> = (0..20)
+            .map(|i| (i, Transform::from_translation(Vec3::new(0.0, ((i * 7) % 20) as f32 * 50.0, 0.0))))
+            .collect();
         assert_eq!(bvh.update_transforms(&scatter), Ok(UpdateKind::Rebuilt));
         assert!((bvh.cost_ratio() - 1.0).abs() < 1e-6);
-        assert!(matches!(bvh.update_transforms(&[(99, Transform::IDENTITY)]), Err(GeometryError::UnknownInstance { .. })));
+        assert!(matches!(
+            bvh.update_transforms(&[(99, Transform::IDENTITY)]),
+            Err(GeometryError::UnknownInstance { .. })
+        ));
     }
 }

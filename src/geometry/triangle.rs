@@ -164,7 +164,8 @@ mod tests {
             let y = -0.9 + 0.018 * i as f32;
             let ray = Ray::new(Vec3::new(0.0, y, 1.0), Vec3::new(0.0, 0.0, -1.0));
             let s = ShearedRay::new(&ray);
-            let hits = s.intersect(&a, f32::INFINITY).is_some() as u32 + s.intersect(&b, f32::INFINITY).is_some() as u32;
+            let hits =
+                s.intersect(&a, f32::INFINITY).is_some() as u32 + s.intersect(&b, f32::INFINITY).is_some() as u32;
             assert!(hits >= 1, "ray at y = {y} slipped through the shared edge");
         }
     }
