@@ -73,3 +73,25 @@ impl LightTable {
         }
     }
 }
+
+impl LightTable {
+    /// Ids of the lights seen by rays that escape the scene (infinite lights, distant lights with
+    /// an angular size).
+    pub fn escape_lights(&self) -> impl Iterator<Item = LightId> + '_ {
+        self.ids().filter(|&id| self.flags(id).contains(LightFlags::INFINITE))
+    }
+
+    /// Radiance arriving along an escaping ray with direction `wi` from light `id` (zero unless
+    /// the light is at infinity and covers `wi`).
+    pub fn le(&self, id: LightId, wi: Vec3, query: ColorQuery) -> crate::spectrum::SampledSpectrum {
+        match id.kind {
+            LightKind::Distant => self.distant.items[id.row as usize].le(wi, query),
+            _ => Default::default(),
+        }
+    }
+
+    /// True when some light is not a delta light, so BSDF sampling can find it (MIS pays off).
+    pub fn has_non_delta_lights(&self) -> bool {
+        self.ids().any(|id| !self.flags(id).is_delta())
+    }
+}

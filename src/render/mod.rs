@@ -1,4 +1,7 @@
-//! Rendering: materials and BSDFs, film and image output.
+//! Rendering: camera, materials and BSDFs, the direct-lighting renderer, film and image output.
 pub mod bsdf;
+pub mod camera;
+pub mod film;
 pub mod film_io;
 pub mod material;
+pub mod renderer;
