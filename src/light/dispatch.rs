@@ -62,6 +62,18 @@ impl LightTable {
         if radiometric > 0.0 { (self.phi(id) * rgb_y / radiometric).max(0.0) } else { 0.0 }
     }
 
+    /// Bounds for light BVHs; None for lights at infinity (distant, infinite), which samplers
+    /// handle outside the tree.
+    pub fn bounds(&self, id: LightId) -> Option<super::LightBounds> {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => Some(self.points.get(i).bounds()),
+            LightKind::Spot => Some(self.spots.get(i).bounds()),
+            LightKind::Distant => None,
+            other => unreachable!("no block for {other:?}"),
+        }
+    }
+
     /// Whether shadow rays are traced for light `id`.
     pub fn casts_shadows(&self, id: LightId) -> bool {
         let i = id.row as usize;
