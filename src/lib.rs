@@ -3,5 +3,7 @@
 //!
 //! `src/` holds what things are (data and pure math); `systems/` holds what happens each update.
 pub mod geometry;
+pub mod render;
 pub mod report;
+pub mod scene;
 pub mod spectrum;

@@ -1,0 +1,2 @@
+//! Rendering: film and image output.
+pub mod film_io;

@@ -1,0 +1,2 @@
+//! Loading: images (env maps, light images, textures).
+pub mod image;
