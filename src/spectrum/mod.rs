@@ -252,8 +252,13 @@ static D65_UNIT: LazyLock<Arc<TabulatedSpectrum>> = LazyLock::new(|| {
     )
 });
 
-fn rgb_illuminant(rgb: [f64; 3], lambda_nm: f64) -> f64 {
+/// The reflectance spectrum of a linear-sRGB albedo at `lambda_nm` (Mallett & Yuksel 2019: the
+/// basis sums to 1, so (1, 1, 1) is a perfect white and values stay in [0, 1] for albedos in it).
+pub fn rgb_reflectance(rgb: [f64; 3], lambda_nm: f64) -> f64 {
     let b = &RGB_BASIS.rgb;
-    let reflectance = rgb[0] * b[0].eval(lambda_nm) + rgb[1] * b[1].eval(lambda_nm) + rgb[2] * b[2].eval(lambda_nm);
-    reflectance * D65_UNIT.eval(lambda_nm)
+    rgb[0] * b[0].eval(lambda_nm) + rgb[1] * b[1].eval(lambda_nm) + rgb[2] * b[2].eval(lambda_nm)
+}
+
+fn rgb_illuminant(rgb: [f64; 3], lambda_nm: f64) -> f64 {
+    rgb_reflectance(rgb, lambda_nm) * D65_UNIT.eval(lambda_nm)
 }

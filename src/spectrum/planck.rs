@@ -38,9 +38,24 @@ pub fn wien_peak_nm(t_k: f64) -> f64 {
 
 /// Planck's law divided by its value at Wien's peak, so the curve peaks at exactly 1 (pbrt's
 /// normalised `BlackbodySpectrum`). 0 wherever `planck` is 0.
+///
+/// At the peak, x = hc / (lambda_max k T) = hc / (b k) is the same for every T, so the ratio is
+/// (lambda_max / lambda)^5 (e^x_max - 1) / (e^x - 1): one exponential per call.
 pub fn planck_normalized(lambda_nm: f64, t_k: f64) -> f64 {
-    let peak = planck(wien_peak_nm(t_k), t_k);
-    if peak > 0.0 { planck(lambda_nm, t_k) / peak } else { 0.0 }
+    if !(t_k > 0.0 && lambda_nm > 0.0) || !t_k.is_finite() || !lambda_nm.is_finite() {
+        return 0.0;
+    }
+    const X_MAX: f64 = PLANCK_H * LIGHT_SPEED_C / (WIEN_B * BOLTZMANN_K);
+    let x = PLANCK_H * LIGHT_SPEED_C / (lambda_nm * 1e-9 * BOLTZMANN_K * t_k);
+    if x > 700.0 {
+        return 0.0;
+    }
+    let r = wien_peak_nm(t_k) / lambda_nm;
+    let r5 = r * r * r * r * r;
+    if !r5.is_finite() {
+        return 0.0; // lambda far below the peak of a very cold body: the true value underflows
+    }
+    r5 * X_MAX.exp_m1() / x.exp_m1()
 }
 
 /// Radiant exitance of a blackbody, W/m^2: M = sigma T^4 (pi times the integral of `planck`).
