@@ -7,6 +7,7 @@
 
 pub mod distant;
 pub mod emitter;
+pub mod infinite;
 pub mod point;
 pub mod spot;
 
@@ -16,6 +17,10 @@ use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 
 pub use distant::{DistantLight, ResolvedDistant};
 pub use emitter::{Amount, Emitter, LightError, Quantity};
+pub use infinite::{
+    EnvLookup, EnvMapTables, EnvTableOptions, ImageInfiniteLight, ResolvedImageInfinite, ResolvedUniformInfinite,
+    UniformInfiniteLight,
+};
 pub use point::{PointLight, ResolvedPoint};
 pub use spot::{ResolvedSpot, SpotLight};
 
