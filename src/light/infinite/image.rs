@@ -8,11 +8,11 @@ use std::sync::Arc;
 use bevy_ecs::component::Component;
 use glam::{DVec3, Quat, Vec2, Vec3};
 
-use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions, clean_texel, lat_long_pdf_to_solid_angle};
+use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions, clean_texel};
 use super::{ColorQuery, Emitter, LiSample, LightError, LightFlags, LightSampleContext, SceneSphere, far_distance};
 use crate::geometry::Transform;
 use crate::light::Amount;
-use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage, direction_to_lat_long, lat_long_direction};
+use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage, direction_to_lat_long};
 use crate::spectrum::{SampledSpectrum, Spectrum};
 
 /// An environment map around the scene, turned by its entity's `Transform` rotation.
@@ -144,7 +144,7 @@ impl ResolvedImageInfinite {
         self.sample(ctx, u, query, true)
     }
 
-    /// Solid-angle density of [`Self::sample_li`] at unit `wi`; 0 at the poles and for a black map.
+    /// Solid-angle density of [`Self::sample_li`] at unit `wi`; 0 for a black map.
     pub fn pdf_li(&self, wi: Vec3) -> f32 {
         self.pdf(wi, false)
     }
@@ -155,8 +155,8 @@ impl ResolvedImageInfinite {
     }
 
     fn sample(&self, ctx: &LightSampleContext, u: Vec2, query: ColorQuery, mis: bool) -> Option<LiSample> {
-        let (uv, _) = self.tables.sample_uv(u, mis)?;
-        let wi = (self.rotation * lat_long_direction(uv)).normalize();
+        let (local, _) = self.tables.sample_direction(u, mis)?;
+        let wi = (self.rotation * local).normalize();
         // Density and radiance are taken at `wi` itself, so that pdf == pdf_li(wi) and
         // radiance == le(wi) exactly: the uv -> direction -> uv round trip can cross a texel edge.
         let pdf = self.pdf(wi, mis);
@@ -168,9 +168,7 @@ impl ResolvedImageInfinite {
     }
 
     fn pdf(&self, wi: Vec3, mis: bool) -> f32 {
-        let local = (self.rotation.inverse() * wi).normalize_or_zero();
-        let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
-        lat_long_pdf_to_solid_angle(self.tables.pdf_uv(direction_to_lat_long(local), mis), sin_theta)
+        self.tables.pdf_direction(self.rotation.inverse() * wi, mis)
     }
 
     /// The texel value (clean, linear RGB relative to the spectrum) seen along `wi`.

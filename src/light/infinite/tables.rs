@@ -1,10 +1,14 @@
 //! Sampling tables for lat-long environment maps: a [`PiecewiseConstant2D`] over the map's
-//! (u, v) square proportional to texel luminance times sin(theta), and its MIS-compensated variant.
+//! (u, v) square whose cell masses are proportional to luminance times the cell's solid angle,
+//! and its MIS-compensated variant.
 //!
-//! Why sin(theta): the lat-long map takes (u, v) to the direction with theta = pi v,
-//! phi = 2 pi (u - 1/2), so d(omega) = sin(theta) dtheta dphi = 2 pi^2 sin(theta) du dv; a density
-//! proportional to L(omega) in solid angle is proportional to L sin(theta) in (u, v), and
-//! p(omega) = p(u, v) / (2 pi^2 sin(theta)) (pbrt-v3 section 14.2.4, "Infinite Area Lights").
+//! The lat-long map takes (u, v) to theta = pi v, phi = 2 pi (u - 1/2), so
+//! d(omega) = 2 pi^2 sin(theta) du dv (pbrt-v3 section 14.2.4 weights by sin(theta) at row centres
+//! and divides the uv density by 2 pi^2 sin(theta), which blows up at the poles). Here each row
+//! is weighted by its exact solid angle, 2 pi (cos theta0 - cos theta1), and inside its row a
+//! sample's v is remapped so cos(theta) is uniform: the density is then constant in solid angle
+//! within each cell, p(omega) = P(cell) / Omega(cell), finite everywhere including the poles,
+//! and exactly proportional to luminance for texel-constant radiance.
 //!
 //! Compensation (Karlik, Sik, Vevoda, Skrivan, Krivanek 2019, "MIS compensation: optimizing
 //! sampling techniques in multiple importance sampling"; pbrt-v4 `ImageInfiniteLight`): when light
@@ -23,7 +27,7 @@ use std::f64::consts::PI as PI64;
 use glam::{Vec2, Vec3};
 
 use crate::sampling::PiecewiseConstant2D;
-use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
+use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage, direction_to_lat_long, lat_long_direction};
 
 /// How radiance is looked up between texel centres.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -65,9 +69,9 @@ impl Default for EnvTableOptions {
 pub struct EnvMapTables {
     /// Table resolution in cells, [width, height].
     pub resolution: [usize; 2],
-    /// Density proportional to luminance * sin(theta); None for a black map.
+    /// Cell masses proportional to luminance * solid angle; None for a black map.
     pub distribution: Option<PiecewiseConstant2D>,
-    /// Density proportional to max(0, luminance - mean) * sin(theta); None if not built.
+    /// Cell masses proportional to max(0, luminance - mean) * solid angle; None if not built.
     pub compensated: Option<PiecewiseConstant2D>,
     /// Texels with a NaN or infinite channel, counted and treated as black (the loader rejects
     /// them, so this is 0 for loaded maps).
@@ -81,21 +85,25 @@ pub fn clean_texel(t: Vec3) -> Vec3 {
     if t.is_finite() { t.max(Vec3::ZERO) } else { Vec3::ZERO }
 }
 
-/// sin(theta) of the lat-long row at `v`, computed from the nearer pole so it stays accurate
-/// (and never negative) at both ends.
-pub fn lat_long_sin_theta(v: f32) -> f32 {
-    let v = v.clamp(0.0, 1.0);
-    (std::f32::consts::PI * v.min(1.0 - v)).sin().max(0.0)
+/// Solid angle of row `j` of `n` lat-long rows over 2 pi: cos theta0 - cos theta1, written as
+/// 2 sin(mid) sin(half-width) so it keeps its precision at the poles. The rows sum to 2.
+pub fn row_band(j: usize, n: usize) -> f64 {
+    let n = n as f64;
+    2.0 * (PI64 * (j as f64 + 0.5) / n).sin() * (PI64 / (2.0 * n)).sin()
 }
 
-/// Solid-angle density from a (u, v) density of the lat-long map: p_uv / (2 pi^2 sin(theta)).
-/// 0 at the poles (sin(theta) = 0) and wherever the result would not be finite.
-pub fn lat_long_pdf_to_solid_angle(pdf_uv: f32, sin_theta: f32) -> f32 {
-    if !(pdf_uv > 0.0 && sin_theta > 0.0) {
-        return 0.0;
-    }
-    let pdf = (pdf_uv as f64 / (2.0 * PI64 * PI64 * sin_theta as f64)) as f32;
-    if pdf.is_finite() { pdf } else { 0.0 }
+/// Moves a uniform position `t` in [0, 1] across row `j` of `n` to the polar angle at which
+/// cos(theta) has moved the same fraction of the row's range (uniform in solid angle).
+fn theta_in_row(t: f64, j: usize, n: usize) -> f64 {
+    let (t0, t1) = (PI64 * j as f64 / n as f64, PI64 * (j + 1) as f64 / n as f64);
+    // 1 - cos(theta) = 2 sin^2(theta / 2) keeps the cosines exact near the north pole; rows
+    // nearer the south pole are mirrored so the same holds there.
+    let mirrored = 2 * j + 1 > n;
+    let (a0, a1, t) = if mirrored { (PI64 - t1, PI64 - t0, 1.0 - t) } else { (t0, t1, t) };
+    let one_minus_cos = |a: f64| 2.0 * (a / 2.0).sin().powi(2);
+    let c = one_minus_cos(a0) + t.clamp(0.0, 1.0) * (one_minus_cos(a1) - one_minus_cos(a0));
+    let theta = 2.0 * (c / 2.0).sqrt().min(1.0).asin();
+    if mirrored { PI64 - theta } else { theta }
 }
 
 /// Per-texel luminance (Rec. 709 Y, f64) of the radiance the `lookup` returns, averaged over each
@@ -139,11 +147,6 @@ fn footprint_average(lum: &[f64], w: usize, h: usize) -> Vec<f64> {
         }
     }
     out
-}
-
-/// sin(theta) at the centre of row `y` of `h`.
-fn row_sin_theta(y: usize, h: usize) -> f64 {
-    (PI64 * (y as f64 + 0.5) / h as f64).sin()
 }
 
 /// For each of `coarse` equal cells over [0, 1], the fine cells (of `fine`) it overlaps and the
@@ -217,16 +220,17 @@ impl EnvMapTables {
         let (w, h) = (image.width.max(1), image.height.max(1));
         let (mut lum, bad_texels) = texel_luminance(image, options.lookup);
         lum.resize(w * h, 0.0);
-        let sin: Vec<f64> = (0..h).map(|y| row_sin_theta(y, h)).collect();
-        let importance: Vec<f64> = lum.iter().enumerate().map(|(i, l)| l * sin[i / w]).collect();
+        // Row solid angles, scaled to average 1 (a constant factor does not change the density).
+        let band: Vec<f64> = (0..h).map(|y| row_band(y, h) * h as f64 / 2.0).collect();
+        let importance: Vec<f64> = lum.iter().enumerate().map(|(i, l)| l * band[i / w]).collect();
         let [nw, nh] = table_resolution(w, h, options.max_width);
         let distribution = distribution_of(&downsample(&importance, w, h, nw, nh), nw, nh);
         let compensated = if options.compensate && distribution.is_some() {
-            // The solid-angle mean: sum L sin / sum sin over all texels.
-            let mean = importance.iter().sum::<f64>() / (w as f64 * sin.iter().sum::<f64>());
+            // The solid-angle mean: sum L Omega / sum Omega over all texels.
+            let mean = importance.iter().sum::<f64>() / (w * h) as f64;
             // Excesses within rounding of the mean (a constant map) count as none.
             let excess = |l: f64| if l - mean > 1e-9 * mean { l - mean } else { 0.0 };
-            let comp: Vec<f64> = lum.iter().enumerate().map(|(i, &l)| excess(l) * sin[i / w]).collect();
+            let comp: Vec<f64> = lum.iter().enumerate().map(|(i, &l)| excess(l) * band[i / w]).collect();
             distribution_of(&downsample(&comp, w, h, nw, nh), nw, nh)
         } else {
             None
@@ -239,16 +243,44 @@ impl EnvMapTables {
         if mis { self.compensated.as_ref().or(self.distribution.as_ref()) } else { self.distribution.as_ref() }
     }
 
-    /// A (u, v) sample and its density in (u, v); None for a black map.
-    pub fn sample_uv(&self, u: Vec2, mis: bool) -> Option<(Vec2, f32)> {
-        let (uv, pdf, _) = self.distribution(mis)?.sample(u);
-        (pdf > 0.0).then_some((uv, pdf))
+    /// A direction in the image's frame (unit, +Y up) drawn from the table, and its solid-angle
+    /// density; None for a black map.
+    pub fn sample_direction(&self, u: Vec2, mis: bool) -> Option<(Vec3, f32)> {
+        let dist = self.distribution(mis)?;
+        let (uv, pdf_uv, [_, row]) = dist.sample(u);
+        let nv = self.resolution[1];
+        let t = uv.y as f64 * nv as f64 - row as f64;
+        let v = (theta_in_row(t, row, nv) / PI64) as f32;
+        let dir = lat_long_direction(Vec2::new(uv.x, v));
+        let pdf = cell_pdf_to_solid_angle(pdf_uv, row, nv);
+        (pdf > 0.0).then_some((dir, pdf))
     }
 
-    /// Density in (u, v) at `uv`; 0 for a black map or outside [0, 1]^2.
+    /// Solid-angle density of [`Self::sample_direction`] at `dir` (image frame); 0 for a black map.
+    pub fn pdf_direction(&self, dir: Vec3, mis: bool) -> f32 {
+        let Some(dist) = self.distribution(mis) else { return 0.0 };
+        let uv = direction_to_lat_long(dir);
+        let nv = self.resolution[1];
+        // The same f64 bin arithmetic as the distribution's lookup.
+        let row = ((uv.y as f64 * nv as f64) as usize).min(nv - 1);
+        cell_pdf_to_solid_angle(dist.pdf(uv), row, nv)
+    }
+
+    /// Density in (u, v) of the table itself at `uv`; 0 for a black map or outside [0, 1]^2.
     pub fn pdf_uv(&self, uv: Vec2, mis: bool) -> f32 {
         self.distribution(mis).map_or(0.0, |d| d.pdf(uv))
     }
+}
+
+/// Solid-angle density of a cell of (u, v) density `pdf_uv` in row `row` of `nv`: its mass
+/// pdf_uv / (nu nv) over its solid angle (2 pi / nu) * band, i.e. pdf_uv / (2 pi nv band).
+/// 0 for a zero or non-finite result.
+pub fn cell_pdf_to_solid_angle(pdf_uv: f32, row: usize, nv: usize) -> f32 {
+    if !(pdf_uv > 0.0) {
+        return 0.0;
+    }
+    let pdf = (pdf_uv as f64 / (2.0 * PI64 * nv as f64 * row_band(row, nv))) as f32;
+    if pdf.is_finite() { pdf } else { 0.0 }
 }
 
 #[cfg(test)]
@@ -363,12 +395,30 @@ mod tests {
     }
 
     #[test]
-    fn solid_angle_pdf_guards_the_poles() {
-        assert_eq!(lat_long_pdf_to_solid_angle(1.0, 0.0), 0.0);
-        assert_eq!(lat_long_pdf_to_solid_angle(0.0, 0.5), 0.0);
-        assert_eq!(lat_long_pdf_to_solid_angle(f32::MAX, 1e-30), 0.0);
-        assert_eq!(lat_long_sin_theta(0.0), 0.0);
-        assert_eq!(lat_long_sin_theta(1.0), 0.0);
-        assert!(lat_long_sin_theta(1.0 - f32::EPSILON) > 0.0);
+    fn row_bands_are_exact_and_rows_are_uniform_in_cos_theta() {
+        for n in [1usize, 2, 5, 512, 100_000] {
+            let sum: f64 = (0..n).map(|j| row_band(j, n)).sum();
+            assert!((sum - 2.0).abs() < 1e-9, "{n}: {sum}");
+            for j in [0, n / 2, n - 1] {
+                let (t0, t1) = (PI64 * j as f64 / n as f64, PI64 * (j + 1) as f64 / n as f64);
+                assert!((row_band(j, n) - (t0.cos() - t1.cos())).abs() < 1e-12);
+                assert!((theta_in_row(0.0, j, n) - t0).abs() < 1e-12 && (theta_in_row(1.0, j, n) - t1).abs() < 1e-12);
+                let mid = theta_in_row(0.5, j, n).cos();
+                assert!((mid - 0.5 * (t0.cos() + t1.cos())).abs() < 1e-12, "{n} {j}");
+            }
+        }
+    }
+
+    #[test]
+    fn solid_angle_pdf_is_finite_at_the_poles() {
+        let img = image(8, 4, |_, _| Vec3::ONE);
+        let t = EnvMapTables::build_with(&img, EnvTableOptions { lookup: EnvLookup::Nearest, ..Default::default() });
+        // A constant map samples the sphere uniformly.
+        for d in [Vec3::Y, -Vec3::Y, Vec3::X, Vec3::new(0.3, -0.9, 0.1).normalize()] {
+            let pdf = t.pdf_direction(d, false);
+            assert!((pdf - 0.25 / PI64 as f32).abs() < 1e-6, "{d}: {pdf}");
+        }
+        assert_eq!(cell_pdf_to_solid_angle(0.0, 0, 4), 0.0);
+        assert_eq!(cell_pdf_to_solid_angle(f32::NAN, 0, 4), 0.0);
     }
 }
