@@ -16,7 +16,7 @@ use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage, direction_to_lat_long};
 use crate::spectrum::{SampledSpectrum, Spectrum};
 
 /// An environment map around the scene, turned by its entity's `Transform` rotation.
-#[derive(Component, Clone, Debug)]
+#[derive(Component, Clone)]
 pub struct ImageInfiniteLight {
     /// Lat-long map of linear RGB radiance relative to `spectrum`: row 0 at the zenith (+Y), the
     /// centre column looking along +X (see [`crate::scene::image`]).
@@ -107,13 +107,48 @@ impl ImageInfiniteLight {
     }
 }
 
+/// The image's size, not its pixels, in debug output.
+struct ImageShape<'a>(&'a RgbImage);
+impl std::fmt::Debug for ImageShape<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "RgbImage {{ {} x {} }}", self.0.width, self.0.height)
+    }
+}
+
+impl std::fmt::Debug for ImageInfiniteLight {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ImageInfiniteLight")
+            .field("image", &ImageShape(&self.image))
+            .field("scale", &self.scale)
+            .field("spectrum", &self.spectrum)
+            .field("mis_compensation", &self.mis_compensation)
+            .field("lookup", &self.lookup)
+            .field("table_max_width", &self.table_max_width)
+            .finish()
+    }
+}
+
+impl std::fmt::Debug for ResolvedImageInfinite {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ResolvedImageInfinite")
+            .field("image", &ImageShape(&self.image))
+            .field("tables", &self.tables)
+            .field("lookup", &self.lookup)
+            .field("rotation", &self.rotation)
+            .field("emitter", &self.emitter)
+            .field("scene", &self.scene)
+            .field("phi", &self.phi)
+            .finish()
+    }
+}
+
 /// An image infinite light in world space.
 ///
 /// Two sampling modes, as pbrt-v4's `allowIncompletePDF`: [`Self::sample_li`] / [`Self::pdf_li`]
 /// sample the luminance and are unbiased on their own; [`Self::sample_li_mis`] /
 /// [`Self::pdf_li_mis`] use the compensated table (zero density in the sky's dim part) and are
 /// only for estimators that combine them with BSDF sampling by MIS.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct ResolvedImageInfinite {
     pub image: Arc<RgbImage>,
     pub tables: Arc<EnvMapTables>,
@@ -159,22 +194,28 @@ impl ResolvedImageInfinite {
         let wi = (self.rotation * local).normalize();
         // Density and radiance are taken at `wi` itself, so that pdf == pdf_li(wi) and
         // radiance == le(wi) exactly: the uv -> direction -> uv round trip can cross a texel edge.
-        let pdf = self.pdf(wi, mis);
+        let uv = self.image_uv(wi);
+        let pdf = self.tables.pdf_solid_angle(uv, mis);
         if !(pdf > 0.0) {
             return None;
         }
+        let radiance = self.emitter.eval_tinted(query, texel_at(&self.image, self.lookup, uv));
         let p_light = ctx.p + wi * far_distance(self.scene, ctx.p);
-        Some(LiSample { radiance: self.le(wi, query), wi, pdf, p_light, n_light: Vec3::ZERO })
+        Some(LiSample { radiance, wi, pdf, p_light, n_light: Vec3::ZERO })
+    }
+
+    /// The lat-long coordinates of world direction `wi` in the image.
+    fn image_uv(&self, wi: Vec3) -> Vec2 {
+        direction_to_lat_long(self.rotation.inverse() * wi)
     }
 
     fn pdf(&self, wi: Vec3, mis: bool) -> f32 {
-        self.tables.pdf_direction(self.rotation.inverse() * wi, mis)
+        self.tables.pdf_solid_angle(self.image_uv(wi), mis)
     }
 
     /// The texel value (clean, linear RGB relative to the spectrum) seen along `wi`.
     pub fn texel(&self, wi: Vec3) -> Vec3 {
-        let uv = direction_to_lat_long(self.rotation.inverse() * wi);
-        texel_at(&self.image, self.lookup, uv)
+        texel_at(&self.image, self.lookup, self.image_uv(wi))
     }
 
     /// Radiance along an escaping ray with direction `wi`, in the query's colour mode.

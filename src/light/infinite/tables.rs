@@ -65,7 +65,7 @@ impl Default for EnvTableOptions {
 /// Invariants: `distribution` is None exactly when the importance is zero everywhere (a black
 /// map); `compensated` is None when not requested or when compensation left nothing (a constant
 /// map), in which case MIS sampling uses `distribution`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, PartialEq)]
 pub struct EnvMapTables {
     /// Table resolution in cells, [width, height].
     pub resolution: [usize; 2],
@@ -78,6 +78,19 @@ pub struct EnvMapTables {
     pub bad_texels: usize,
     /// The lookup the table was built for.
     pub lookup: EnvLookup,
+}
+
+impl std::fmt::Debug for EnvMapTables {
+    // The tables hold one value per texel: print their shape, not their contents.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("EnvMapTables")
+            .field("resolution", &self.resolution)
+            .field("integral", &self.distribution.as_ref().map(|d| d.integral()))
+            .field("compensated", &self.compensated.is_some())
+            .field("bad_texels", &self.bad_texels)
+            .field("lookup", &self.lookup)
+            .finish()
+    }
 }
 
 /// A texel as the light uses it: negative channels clamped to 0, a non-finite texel black.
@@ -258,8 +271,12 @@ impl EnvMapTables {
 
     /// Solid-angle density of [`Self::sample_direction`] at `dir` (image frame); 0 for a black map.
     pub fn pdf_direction(&self, dir: Vec3, mis: bool) -> f32 {
+        self.pdf_solid_angle(direction_to_lat_long(dir), mis)
+    }
+
+    /// Solid-angle density of [`Self::sample_direction`] at the direction of lat-long `uv`.
+    pub fn pdf_solid_angle(&self, uv: Vec2, mis: bool) -> f32 {
         let Some(dist) = self.distribution(mis) else { return 0.0 };
-        let uv = direction_to_lat_long(dir);
         let nv = self.resolution[1];
         // The same f64 bin arithmetic as the distribution's lookup.
         let row = ((uv.y as f64 * nv as f64) as usize).min(nv - 1);
