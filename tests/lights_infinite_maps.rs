@@ -91,7 +91,7 @@ fn check_sampling_matches_luminance(name: &str, img: &Arc<RgbImage>) {
     for (lookup, table_max_width) in configs {
         let comp = ImageInfiniteLight { lookup, table_max_width, ..ImageInfiniteLight::new(img.clone()) };
         let light = resolve(&comp, Quat::IDENTITY);
-        let probs = expected_cell_probabilities(&img, lookup, cw, ch);
+        let probs = expected_cell_probabilities(img, lookup, cw, ch);
         let mut counts = vec![0u64; cw * ch];
         let mut rng = Rng(15);
         let mut worst = 0.0f32;
