@@ -8,6 +8,7 @@
 mod dispatch;
 pub mod distant;
 pub mod emitter;
+pub mod infinite;
 pub mod point;
 pub mod spot;
 pub mod table;
@@ -18,6 +19,10 @@ use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 
 pub use distant::{DistantLight, ResolvedDistant};
 pub use emitter::{Amount, Emitter, LightError, Quantity};
+pub use infinite::{
+    EnvLookup, EnvMapTables, EnvTableOptions, ImageInfiniteLight, ResolvedImageInfinite, ResolvedUniformInfinite,
+    UniformInfiniteLight,
+};
 pub use point::{PointLight, ResolvedPoint};
 pub use spot::{ResolvedSpot, SpotLight};
 pub use table::{LightId, LightTable};
