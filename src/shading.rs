@@ -49,6 +49,9 @@ pub struct Settings {
     pub samples_per_point: u32,
     /// Seed of the counter-based random numbers.
     pub seed: u64,
+    /// The caller combines light samples with BSDF samples by MIS, so image lights may sample
+    /// their MIS-compensated tables. Set false when light samples are used alone.
+    pub mis: bool,
 }
 
 impl Default for Settings {
@@ -60,6 +63,7 @@ impl Default for Settings {
             shadows: true,
             samples_per_point: 1,
             seed: 0,
+            mis: true,
         }
     }
 }

@@ -14,16 +14,24 @@ impl LightTable {
             LightKind::Point => self.points.sample_li(i, ctx, query),
             LightKind::Spot => self.spots.sample_li(i, ctx, query),
             LightKind::Distant => self.distant.items[i].sample_li(ctx, u, query),
+            LightKind::UniformInfinite => self.uniform_infinite.items[i].sample_li(ctx, u, query),
+            LightKind::ImageInfinite if self.mis_compensation => {
+                self.image_infinite.items[i].sample_li_mis(ctx, u, query)
+            }
+            LightKind::ImageInfinite => self.image_infinite.items[i].sample_li(ctx, u, query),
             other => unreachable!("no block for {other:?}"),
         }
     }
 
     /// Pdf_Li: solid-angle density with which `sample_li` returns `wi` (0 for delta lights).
-    pub fn pdf_li(&self, id: LightId, _ctx: &LightSampleContext, wi: Vec3) -> f32 {
+    pub fn pdf_li(&self, id: LightId, ctx: &LightSampleContext, wi: Vec3) -> f32 {
         let i = id.row as usize;
         match id.kind {
             LightKind::Point | LightKind::Spot => 0.0,
             LightKind::Distant => self.distant.items[i].pdf_li(wi),
+            LightKind::UniformInfinite => self.uniform_infinite.items[i].pdf_li(ctx, wi),
+            LightKind::ImageInfinite if self.mis_compensation => self.image_infinite.items[i].pdf_li_mis(wi),
+            LightKind::ImageInfinite => self.image_infinite.items[i].pdf_li(wi),
             other => unreachable!("no block for {other:?}"),
         }
     }
@@ -43,6 +51,8 @@ impl LightTable {
             LightKind::Point => self.points.phi(i),
             LightKind::Spot => self.spots.phi(i),
             LightKind::Distant => self.distant.items[i].phi(),
+            LightKind::UniformInfinite => self.uniform_infinite.items[i].phi(),
+            LightKind::ImageInfinite => self.image_infinite.items[i].phi(),
             other => unreachable!("no block for {other:?}"),
         }
     }
@@ -57,6 +67,11 @@ impl LightTable {
                 let e = &self.distant.items[i].irradiance;
                 (e.rgb.y, e.radiometric)
             }
+            LightKind::UniformInfinite => {
+                let e = &self.uniform_infinite.items[i].radiance;
+                (e.rgb.y, e.radiometric)
+            }
+            LightKind::ImageInfinite => return self.image_infinite.items[i].luminous_phi().max(0.0),
             other => unreachable!("no block for {other:?}"),
         };
         if radiometric > 0.0 { (self.phi(id) * rgb_y / radiometric).max(0.0) } else { 0.0 }
@@ -70,6 +85,7 @@ impl LightTable {
             LightKind::Point => Some(self.points.get(i).bounds()),
             LightKind::Spot => Some(self.spots.get(i).bounds()),
             LightKind::Distant => None,
+            LightKind::UniformInfinite | LightKind::ImageInfinite => None,
             other => unreachable!("no block for {other:?}"),
         }
     }
@@ -81,6 +97,8 @@ impl LightTable {
             LightKind::Point => self.points.casts_shadows[i],
             LightKind::Spot => self.spots.casts_shadows[i],
             LightKind::Distant => self.distant.casts_shadows[i],
+            LightKind::UniformInfinite => self.uniform_infinite.casts_shadows[i],
+            LightKind::ImageInfinite => self.image_infinite.casts_shadows[i],
             other => unreachable!("no block for {other:?}"),
         }
     }
@@ -98,6 +116,8 @@ impl LightTable {
     pub fn le(&self, id: LightId, wi: Vec3, query: ColorQuery) -> crate::spectrum::SampledSpectrum {
         match id.kind {
             LightKind::Distant => self.distant.items[id.row as usize].le(wi, query),
+            LightKind::UniformInfinite => self.uniform_infinite.items[id.row as usize].le(wi, query),
+            LightKind::ImageInfinite => self.image_infinite.items[id.row as usize].le(wi, query),
             _ => Default::default(),
         }
     }

@@ -8,7 +8,9 @@ use std::collections::HashMap;
 use bevy_ecs::entity::Entity;
 use bevy_ecs::resource::Resource;
 
-use super::{LightKind, ResolvedDistant, point::PointColumns, spot::SpotColumns};
+use super::{
+    LightKind, ResolvedDistant, ResolvedImageInfinite, ResolvedUniformInfinite, point::PointColumns, spot::SpotColumns,
+};
 
 /// A light: its kind and its row in that kind's block. Rows move when lights are removed, so a
 /// `LightId` is valid until the next table update.
@@ -75,6 +77,11 @@ pub struct LightTable {
     pub points: PointColumns,
     pub spots: SpotColumns,
     pub distant: Rows<ResolvedDistant>,
+    pub uniform_infinite: Rows<ResolvedUniformInfinite>,
+    pub image_infinite: Rows<ResolvedImageInfinite>,
+    /// Image lights sample their MIS-compensated tables (valid only when the caller combines light
+    /// samples with BSDF samples by MIS); set from `Settings::mis` by the sampling system.
+    pub mis_compensation: bool,
     rows_of: HashMap<Entity, Vec<LightId>>,
     /// Bumped on every change; samplers compare it to know when to update.
     pub generation: u64,
@@ -99,6 +106,14 @@ macro_rules! for_block {
                 let $b = &mut $table.distant;
                 $body
             }
+            LightKind::UniformInfinite => {
+                let $b = &mut $table.uniform_infinite;
+                $body
+            }
+            LightKind::ImageInfinite => {
+                let $b = &mut $table.image_infinite;
+                $body
+            }
             other => unreachable!("no block for {other:?}"),
         }
     };
@@ -107,7 +122,11 @@ macro_rules! for_block {
 impl LightTable {
     /// Number of lights (rows) of every kind.
     pub fn len(&self) -> usize {
-        self.points.len() + self.spots.len() + self.distant.len()
+        self.points.len()
+            + self.spots.len()
+            + self.distant.len()
+            + self.uniform_infinite.len()
+            + self.image_infinite.len()
     }
     /// True with no lights.
     pub fn is_empty(&self) -> bool {
@@ -127,6 +146,8 @@ impl LightTable {
         block(LightKind::Point, self.points.len())
             .chain(block(LightKind::Spot, self.spots.len()))
             .chain(block(LightKind::Distant, self.distant.len()))
+            .chain(block(LightKind::UniformInfinite, self.uniform_infinite.len()))
+            .chain(block(LightKind::ImageInfinite, self.image_infinite.len()))
     }
     /// The entity that owns light `id`.
     pub fn owner(&self, id: LightId) -> Entity {
@@ -135,6 +156,8 @@ impl LightTable {
             LightKind::Point => self.points.owner(i),
             LightKind::Spot => self.spots.owner(i),
             LightKind::Distant => self.distant.owner(i),
+            LightKind::UniformInfinite => self.uniform_infinite.owner(i),
+            LightKind::ImageInfinite => self.image_infinite.owner(i),
             other => unreachable!("no block for {other:?}"),
         }
     }
@@ -157,6 +180,15 @@ impl LightTable {
     /// See [`Self::upsert_point`].
     pub fn upsert_distant(&mut self, entity: Entity, row: ResolvedDistant, casts_shadows: bool, power_changed: bool) {
         self.upsert(entity, LightKind::Distant, power_changed, |t| &mut t.distant, row, casts_shadows);
+    }
+
+    /// See [`Self::upsert_point`].
+    pub fn upsert_uniform_infinite(&mut self, entity: Entity, row: ResolvedUniformInfinite, power_changed: bool) {
+        self.upsert(entity, LightKind::UniformInfinite, power_changed, |t| &mut t.uniform_infinite, row, true);
+    }
+    /// See [`Self::upsert_point`].
+    pub fn upsert_image_infinite(&mut self, entity: Entity, row: ResolvedImageInfinite, power_changed: bool) {
+        self.upsert(entity, LightKind::ImageInfinite, power_changed, |t| &mut t.image_infinite, row, true);
     }
 
     fn upsert<B: Block>(

@@ -98,6 +98,7 @@ pub fn render(
     mut progress: impl FnMut(f32),
 ) -> (Film, RenderStats) {
     let start = std::time::Instant::now();
+    world.resource_mut::<Settings>().mis = opts.mis;
     // One update brings the BVH and light tables up to date before cameras are placed.
     world.resource_mut::<ShadingBatch>().clear();
     schedule.run(world);
