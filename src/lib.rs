@@ -3,7 +3,9 @@
 //!
 //! `src/` holds what things are (data and pure math); `systems/` holds what happens each update.
 pub mod geometry;
+pub mod light;
 pub mod render;
 pub mod report;
+pub mod sampling;
 pub mod scene;
 pub mod spectrum;
