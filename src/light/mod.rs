@@ -8,6 +8,7 @@
 pub mod distant;
 pub mod emitter;
 pub mod point;
+pub mod projection;
 pub mod spot;
 
 use glam::Vec3;
@@ -17,6 +18,7 @@ use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 pub use distant::{DistantLight, ResolvedDistant};
 pub use emitter::{Amount, Emitter, LightError, Quantity};
 pub use point::{PointLight, ResolvedPoint};
+pub use projection::{ProjectionLight, ResolvedProjection};
 pub use spot::{ResolvedSpot, SpotLight};
 
 /// Where light is being gathered: a point with its geometric normal and, optionally, its shading
