@@ -7,6 +7,7 @@
 
 pub mod distant;
 pub mod emitter;
+pub mod goniometric;
 pub mod point;
 pub mod projection;
 pub mod spot;
@@ -17,6 +18,7 @@ use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 
 pub use distant::{DistantLight, ResolvedDistant};
 pub use emitter::{Amount, Emitter, LightError, Quantity};
+pub use goniometric::{GonioProfile, GoniometricLight, ResolvedGoniometric};
 pub use point::{PointLight, ResolvedPoint};
 pub use projection::{ProjectionLight, ResolvedProjection};
 pub use spot::{ResolvedSpot, SpotLight};
