@@ -63,17 +63,16 @@ pub fn assert_chi_square(what: &str, counts: &[u64], probs: &[f64]) -> f64 {
     stat
 }
 
-/// Mean and standard error of `n` values of `f`.
+/// Mean and standard error of `n` values of `f` (Welford's running variance).
 pub fn mean_and_error(n: usize, mut f: impl FnMut() -> f64) -> (f64, f64) {
-    let (mut s, mut s2) = (0.0, 0.0);
-    for _ in 0..n {
+    let (mut mean, mut m2) = (0.0, 0.0);
+    for k in 1..=n {
         let v = f();
-        s += v;
-        s2 += v * v;
+        let delta = v - mean;
+        mean += delta / k as f64;
+        m2 += delta * (v - mean);
     }
-    let mean = s / n as f64;
-    let var = (s2 / n as f64 - mean * mean).max(0.0);
-    (mean, (var / n as f64).sqrt())
+    (mean, (m2 / (n as f64 - 1.0) / n as f64).sqrt())
 }
 
 /// Step of the finite differences: a power of two, so u +- k h is exact on the test grids.

@@ -30,7 +30,13 @@ fn never(_: Vec2) -> bool {
 fn direction_warps() -> Vec<(&'static str, Dir, DirPdf, Skip, bool)> {
     vec![
         ("uniform sphere", Box::new(sample_uniform_sphere), Box::new(|_| uniform_sphere_pdf()), never, false),
-        ("uniform hemisphere", Box::new(sample_uniform_hemisphere), Box::new(|_| uniform_hemisphere_pdf()), never, false),
+        (
+            "uniform hemisphere",
+            Box::new(sample_uniform_hemisphere),
+            Box::new(|_| uniform_hemisphere_pdf()),
+            never,
+            false,
+        ),
         (
             "cosine hemisphere",
             Box::new(sample_cosine_hemisphere),
@@ -38,13 +44,7 @@ fn direction_warps() -> Vec<(&'static str, Dir, DirPdf, Skip, bool)> {
             near_diagonals,
             false,
         ),
-        (
-            "cone cos 0.3",
-            Box::new(|u| sample_uniform_cone(u, 0.3)),
-            Box::new(|_| uniform_cone_pdf(0.3)),
-            never,
-            false,
-        ),
+        ("cone cos 0.3", Box::new(|u| sample_uniform_cone(u, 0.3)), Box::new(|_| uniform_cone_pdf(0.3)), never, false),
         (
             "cone sin2 0.2",
             Box::new(|u| sample_uniform_cone_sin2(u, 0.2)),
@@ -170,7 +170,8 @@ fn pdfs_integrate_to_one_monte_carlo_within_3_sigma() {
 
 #[test]
 fn inverses_round_trip() {
-    let close = |a: Vec2, b: Vec2, tol: f32, what: &str| assert!((a - b).abs().max_element() < tol, "{what}: {a} -> {b}");
+    let close =
+        |a: Vec2, b: Vec2, tol: f32, what: &str| assert!((a - b).abs().max_element() < tol, "{what}: {a} -> {b}");
     for u in u_grid(40, 0.001, 0.999) {
         close(u, invert_uniform_disk_concentric(sample_uniform_disk_concentric(u)), 2e-5, "concentric");
         close(u, invert_uniform_disk_polar(sample_uniform_disk_polar(u)), 2e-5, "polar");
