@@ -94,6 +94,8 @@ impl ProjectionLight {
         } else {
             DVec2::new(tan_half, tan_half / aspect)
         };
+        // Texel solid angles from the same (f32) window that lookups and sampling use.
+        let half = half.as_vec2().as_dvec2();
 
         // Texel weights Y * Omega; their sum is the power per unit of s.
         let mut weights = Vec::with_capacity(width * height);
