@@ -8,8 +8,10 @@
 mod dispatch;
 pub mod distant;
 pub mod emitter;
+pub mod goniometric;
 pub mod infinite;
 pub mod point;
+pub mod projection;
 pub mod spot;
 pub mod table;
 
@@ -19,11 +21,13 @@ use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 
 pub use distant::{DistantLight, ResolvedDistant};
 pub use emitter::{Amount, Emitter, LightError, Quantity};
+pub use goniometric::{GonioProfile, GoniometricLight, ResolvedGoniometric};
 pub use infinite::{
     EnvLookup, EnvMapTables, EnvTableOptions, ImageInfiniteLight, ResolvedImageInfinite, ResolvedUniformInfinite,
     UniformInfiniteLight,
 };
 pub use point::{PointLight, ResolvedPoint};
+pub use projection::{ProjectionLight, ResolvedProjection};
 pub use spot::{ResolvedSpot, SpotLight};
 pub use table::{LightId, LightTable};
 

@@ -1,3 +1,4 @@
-//! Loading: images (env maps, light images, textures) and IES photometric profiles, each with clear errors.
+//! Loading: glTF scenes, environment maps, light images and textures, and IES photometric profiles,
+//! each with clear errors.
 pub mod ies;
 pub mod image;
