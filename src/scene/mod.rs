@@ -1,2 +1,3 @@
-//! Loading: images (env maps, light images, textures).
+//! Loading: images (env maps, light images, textures) and glTF scenes.
+pub mod gltf;
 pub mod image;
