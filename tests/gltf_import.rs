@@ -302,8 +302,13 @@ fn triangle_json(buffer_uri: &str, byte_length: usize, base_color_uri: &str, mr_
         "asset": { "version": "2.0" },
         "scene": 0,
         "scenes": [{ "nodes": [0] }],
-        "nodes": [{ "name": "parent", "translation": [1.0, 2.0, 3.0], "children": [1] }, { "mesh": 0, "scale": [2.0, 2.0, 2.0] }],
-        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "indices": 2, "material": 0 }] }],
+        "nodes": [
+            { "name": "parent", "translation": [1.0, 2.0, 3.0], "children": [1] },
+            { "mesh": 0, "scale": [2.0, 2.0, 2.0] }
+        ],
+        "meshes": [{ "primitives": [
+            { "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "indices": 2, "material": 0 }
+        ] }],
         "materials": [{
             "name": "textured",
             "pbrMetallicRoughness": {
@@ -581,7 +586,10 @@ fn ies_lights_are_resolved_relative_to_the_file() {
             { "bufferView": 0, "mimeType": "application/x-ies-lm-63" }
         ] } },
         "nodes": [
-            { "translation": [0.0, 3.0, 0.0], "extensions": { "EXT_lights_ies": { "light": 0, "multiplier": 2.5, "color": [1.0, 0.5, 0.25] } } },
+            {
+                "translation": [0.0, 3.0, 0.0],
+                "extensions": { "EXT_lights_ies": { "light": 0, "multiplier": 2.5, "color": [1.0, 0.5, 0.25] } }
+            },
             { "extensions": { "EXT_lights_ies": { "light": 1 } } },
             { "extensions": { "EXT_lights_ies": { "light": 2 } } },
             { "extensions": { "EXT_lights_ies": { "light": 3 } } }

@@ -27,21 +27,25 @@
 //!
 //! | problem | fallback |
 //! |---|---|
-//! | texture file missing, unreadable, undecodable; KTX2/WebP/unknown MIME type | texture `None`, material keeps its factors |
+//! | texture file missing, unreadable or undecodable; KTX2, WebP or unknown type | texture `None`, factors kept |
 //! | texture on a UV set other than 0 | texture `None` |
 //! | KHR_texture_transform on a texture | transform ignored |
 //! | extension in `extensionsUsed` that kelvin does not read | ignored |
-//! | extension in `extensionsRequired` that kelvin does not read | ignored; the scene may not look as its author meant |
+//! | extension in `extensionsRequired` that kelvin does not read | ignored; the scene may look unlike intended |
 //! | primitive mode points / lines / invalid; no POSITION; Draco-compressed | primitive skipped |
 //! | vertex indices out of range; NaN / infinite positions | the triangles using them dropped |
 //! | NaN / infinite normals; NORMAL or TEXCOORD_0 count differs from POSITION's | normals (or uvs) dropped |
 //! | material index out of range | default material (`None`) |
-//! | factor out of its range (colour, metallic, roughness, specular); bad ior or emissive strength | clamped, or the glTF default |
+//! | factor out of range (colour, metallic, roughness, specular); bad ior or emissive strength | clamped / default |
 //! | node reached twice (cycle or shared child); bad mesh / camera / child index | that reference skipped |
 //! | non-finite node transform | identity |
 //! | orthographic or invalid camera | skipped |
+//! | EXT_lights_ies profile missing or unreadable; light index unresolved | light dropped |
 //!
-//! # Light policy, per Khronos glTF-Validator case (`../shared/data/gltf/khronos-validator`)
+//! # Policy per Khronos glTF-Validator case (`../shared/data/gltf/khronos-validator`)
+//!
+//! No validator file gives a [`GltfError`]: each error the validator reports becomes a warning at its JSON pointer
+//! (or one under or above it), with the fallback below; lights not attached to a node are checked but not placed.
 //!
 //! | validator case (errors) | kelvin |
 //! |---|---|
@@ -107,11 +111,12 @@ pub struct GltfScene {
     /// Decoded textures referenced by [`MaterialData`] (not indexed as glTF textures: a texture used both as
     /// colour and as data appears twice). Only successfully decoded images are here.
     pub textures: Vec<Arc<RgbImage>>,
-    /// Lights placed by the chosen scene's nodes, in world space.
+    /// Lights placed by the chosen scene's nodes, in world space (a light defined but not attached to a node of
+    /// the scene is not placed).
     pub lights: Vec<LightData>,
     /// Perspective cameras placed by the chosen scene's nodes.
     pub cameras: Vec<CameraData>,
-    /// What was ignored, fixed or dropped, one line each: "<file>: <JSON pointer>: <what and the fallback>".
+    /// What was ignored, fixed or dropped, one line each: `<file>: <JSON pointer>: <what and the fallback>`.
     pub warnings: Vec<String>,
 }
 
