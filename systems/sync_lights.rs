@@ -4,7 +4,8 @@ use bevy_ecs::prelude::*;
 
 use crate::geometry::Transform;
 use crate::light::{
-    DistantLight, ImageInfiniteLight, LightError, LightTable, PointLight, SpotLight, UniformInfiniteLight,
+    DistantLight, GoniometricLight, ImageInfiniteLight, LightError, LightTable, PointLight, ProjectionLight, SpotLight,
+    UniformInfiniteLight,
 };
 use crate::shading::{RunReport, SceneBounds};
 
@@ -36,6 +37,34 @@ pub fn sync_spot_lights(
     for (entity, light, transform) in &query {
         match light.resolve(&transform) {
             Ok(row) => table.upsert_spot(entity, row, light.casts_shadows, light.is_changed()),
+            Err(e) => reject(&mut table, &mut report, entity, e),
+        }
+    }
+}
+
+/// Upserts projection lights that were added or changed, or whose transform moved.
+pub fn sync_projection_lights(
+    query: Query<(Entity, Ref<ProjectionLight>, Ref<Transform>), Or<(Changed<ProjectionLight>, Changed<Transform>)>>,
+    mut table: ResMut<LightTable>,
+    mut report: ResMut<RunReport>,
+) {
+    for (entity, light, transform) in &query {
+        match light.resolve(&transform) {
+            Ok(row) => table.upsert_projection(entity, row, light.casts_shadows, light.is_changed()),
+            Err(e) => reject(&mut table, &mut report, entity, e),
+        }
+    }
+}
+
+/// Upserts goniometric lights that were added or changed, or whose transform moved.
+pub fn sync_goniometric_lights(
+    query: Query<(Entity, Ref<GoniometricLight>, Ref<Transform>), Or<(Changed<GoniometricLight>, Changed<Transform>)>>,
+    mut table: ResMut<LightTable>,
+    mut report: ResMut<RunReport>,
+) {
+    for (entity, light, transform) in &query {
+        match light.resolve(&transform) {
+            Ok(row) => table.upsert_goniometric(entity, row, light.casts_shadows, light.is_changed()),
             Err(e) => reject(&mut table, &mut report, entity, e),
         }
     }
@@ -111,11 +140,20 @@ pub fn remove_lights(
     mut points: RemovedComponents<PointLight>,
     mut spots: RemovedComponents<SpotLight>,
     mut distant: RemovedComponents<DistantLight>,
+    mut projection: RemovedComponents<ProjectionLight>,
+    mut goniometric: RemovedComponents<GoniometricLight>,
     mut uniform: RemovedComponents<UniformInfiniteLight>,
     mut image: RemovedComponents<ImageInfiniteLight>,
     mut table: ResMut<LightTable>,
 ) {
-    let removed = points.read().chain(spots.read()).chain(distant.read()).chain(uniform.read()).chain(image.read());
+    let removed = points
+        .read()
+        .chain(spots.read())
+        .chain(distant.read())
+        .chain(projection.read())
+        .chain(goniometric.read())
+        .chain(uniform.read())
+        .chain(image.read());
     for entity in removed {
         table.remove(entity);
     }

@@ -63,3 +63,39 @@ fn directional_light_gives_rho_over_pi_e_cos_theta() {
     eprintln!("directional: {got} cd/m^2, expected {want}");
     assert!((got / want - 1.0).abs() < 1e-3, "{got} vs {want}");
 }
+
+/// Mean and standard error of the centre pixel's luminance over renders with different seeds.
+fn centre_stats(world: &mut World, schedule: &mut Schedule, renders: u64, spp: u32, size: u32) -> (f64, f64) {
+    let opts = RenderOptions { width: size, height: size, spp, mis: true };
+    let values: Vec<f64> = (0..renders)
+        .map(|seed| {
+            world.resource_mut::<Settings>().seed = seed;
+            let (film, _) = render(world, schedule, &opts, |_| {});
+            luminance(film.pixel(size / 2, size / 2)) as f64
+        })
+        .collect();
+    let mean = values.iter().sum::<f64>() / renders as f64;
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (renders as f64 - 1.0);
+    (mean, (var / renders as f64).sqrt())
+}
+
+#[test]
+fn furnace_lambertian_sphere_under_uniform_sky_renders_albedo_times_l() {
+    use kelvin::geometry::Sphere;
+    use kelvin::light::UniformInfiniteLight;
+    let (albedo, l) = (0.5f32, 100.0f32);
+    for mode in [ColorMode::Rgb, ColorMode::Spectral] {
+        let mut world = World::new();
+        let mut schedule = Schedule::default();
+        world.insert_resource(Settings { color_mode: mode, ..Default::default() });
+        LightingPlugin::build(&mut world, &mut schedule);
+        world.spawn((Sphere { radius: 1.0 }, Transform::default(), Material::lambertian(Vec3::splat(albedo))));
+        world.spawn(UniformInfiniteLight::nits(l));
+        let cam = Transform::from_translation(Vec3::new(0.0, 0.0, 5.0)).looking_to(Vec3::NEG_Z, Vec3::Y);
+        world.spawn((Camera { yfov: 0.3 }, cam));
+        let (mean, se) = centre_stats(&mut world, &mut schedule, 16, 16, 3);
+        let want = (albedo * l) as f64;
+        eprintln!("furnace {mode:?}: {mean:.4} +- {se:.4} (want {want})");
+        assert!((mean - want).abs() <= 3.0 * se + 1e-3 * want, "{mode:?}: {mean} +- {se} vs {want}");
+    }
+}

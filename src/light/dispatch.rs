@@ -19,6 +19,8 @@ impl LightTable {
                 self.image_infinite.items[i].sample_li_mis(ctx, u, query)
             }
             LightKind::ImageInfinite => self.image_infinite.items[i].sample_li(ctx, u, query),
+            LightKind::Projection => self.projection.items[i].sample_li(ctx, query),
+            LightKind::Goniometric => self.goniometric.items[i].sample_li(ctx, query),
             other => unreachable!("no block for {other:?}"),
         }
     }
@@ -27,7 +29,7 @@ impl LightTable {
     pub fn pdf_li(&self, id: LightId, ctx: &LightSampleContext, wi: Vec3) -> f32 {
         let i = id.row as usize;
         match id.kind {
-            LightKind::Point | LightKind::Spot => 0.0,
+            LightKind::Point | LightKind::Spot | LightKind::Projection | LightKind::Goniometric => 0.0,
             LightKind::Distant => self.distant.items[i].pdf_li(wi),
             LightKind::UniformInfinite => self.uniform_infinite.items[i].pdf_li(ctx, wi),
             LightKind::ImageInfinite if self.mis_compensation => self.image_infinite.items[i].pdf_li_mis(wi),
@@ -53,6 +55,8 @@ impl LightTable {
             LightKind::Distant => self.distant.items[i].phi(),
             LightKind::UniformInfinite => self.uniform_infinite.items[i].phi(),
             LightKind::ImageInfinite => self.image_infinite.items[i].phi(),
+            LightKind::Projection => self.projection.items[i].phi(),
+            LightKind::Goniometric => self.goniometric.items[i].phi(),
             other => unreachable!("no block for {other:?}"),
         }
     }
@@ -63,6 +67,14 @@ impl LightTable {
         let (rgb_y, radiometric) = match id.kind {
             LightKind::Point => (self.points.rgb[i].y, self.points.radiometric[i]),
             LightKind::Spot => (self.spots.rgb[i].y, self.spots.radiometric[i]),
+            LightKind::Projection => {
+                let e = &self.projection.items[i].intensity;
+                (e.rgb.y, e.radiometric)
+            }
+            LightKind::Goniometric => {
+                let e = &self.goniometric.items[i].intensity;
+                (e.rgb.y, e.radiometric)
+            }
             LightKind::Distant => {
                 let e = &self.distant.items[i].irradiance;
                 (e.rgb.y, e.radiometric)
@@ -86,6 +98,8 @@ impl LightTable {
             LightKind::Spot => Some(self.spots.get(i).bounds()),
             LightKind::Distant => None,
             LightKind::UniformInfinite | LightKind::ImageInfinite => None,
+            LightKind::Projection => Some(self.projection.items[i].bounds()),
+            LightKind::Goniometric => Some(self.goniometric.items[i].bounds()),
             other => unreachable!("no block for {other:?}"),
         }
     }
@@ -99,6 +113,8 @@ impl LightTable {
             LightKind::Distant => self.distant.casts_shadows[i],
             LightKind::UniformInfinite => self.uniform_infinite.casts_shadows[i],
             LightKind::ImageInfinite => self.image_infinite.casts_shadows[i],
+            LightKind::Projection => self.projection.casts_shadows[i],
+            LightKind::Goniometric => self.goniometric.casts_shadows[i],
             other => unreachable!("no block for {other:?}"),
         }
     }

@@ -9,7 +9,8 @@ use bevy_ecs::entity::Entity;
 use bevy_ecs::resource::Resource;
 
 use super::{
-    LightKind, ResolvedDistant, ResolvedImageInfinite, ResolvedUniformInfinite, point::PointColumns, spot::SpotColumns,
+    LightKind, ResolvedDistant, ResolvedGoniometric, ResolvedImageInfinite, ResolvedProjection,
+    ResolvedUniformInfinite, point::PointColumns, spot::SpotColumns,
 };
 
 /// A light: its kind and its row in that kind's block. Rows move when lights are removed, so a
@@ -76,6 +77,8 @@ impl<T> Block for Rows<T> {
 pub struct LightTable {
     pub points: PointColumns,
     pub spots: SpotColumns,
+    pub projection: Rows<ResolvedProjection>,
+    pub goniometric: Rows<ResolvedGoniometric>,
     pub distant: Rows<ResolvedDistant>,
     pub uniform_infinite: Rows<ResolvedUniformInfinite>,
     pub image_infinite: Rows<ResolvedImageInfinite>,
@@ -100,6 +103,14 @@ macro_rules! for_block {
             }
             LightKind::Spot => {
                 let $b = &mut $table.spots;
+                $body
+            }
+            LightKind::Projection => {
+                let $b = &mut $table.projection;
+                $body
+            }
+            LightKind::Goniometric => {
+                let $b = &mut $table.goniometric;
                 $body
             }
             LightKind::Distant => {
@@ -145,6 +156,8 @@ impl LightTable {
         let block = |kind, n: usize| (0..n as u32).map(move |row| LightId { kind, row });
         block(LightKind::Point, self.points.len())
             .chain(block(LightKind::Spot, self.spots.len()))
+            .chain(block(LightKind::Projection, self.projection.len()))
+            .chain(block(LightKind::Goniometric, self.goniometric.len()))
             .chain(block(LightKind::Distant, self.distant.len()))
             .chain(block(LightKind::UniformInfinite, self.uniform_infinite.len()))
             .chain(block(LightKind::ImageInfinite, self.image_infinite.len()))
@@ -155,6 +168,8 @@ impl LightTable {
         match id.kind {
             LightKind::Point => self.points.owner(i),
             LightKind::Spot => self.spots.owner(i),
+            LightKind::Projection => self.projection.owner(i),
+            LightKind::Goniometric => self.goniometric.owner(i),
             LightKind::Distant => self.distant.owner(i),
             LightKind::UniformInfinite => self.uniform_infinite.owner(i),
             LightKind::ImageInfinite => self.image_infinite.owner(i),
@@ -182,6 +197,26 @@ impl LightTable {
         self.upsert(entity, LightKind::Distant, power_changed, |t| &mut t.distant, row, casts_shadows);
     }
 
+    /// See [`Self::upsert_point`].
+    pub fn upsert_projection(
+        &mut self,
+        entity: Entity,
+        row: ResolvedProjection,
+        casts_shadows: bool,
+        power_changed: bool,
+    ) {
+        self.upsert(entity, LightKind::Projection, power_changed, |t| &mut t.projection, row, casts_shadows);
+    }
+    /// See [`Self::upsert_point`].
+    pub fn upsert_goniometric(
+        &mut self,
+        entity: Entity,
+        row: ResolvedGoniometric,
+        casts_shadows: bool,
+        power_changed: bool,
+    ) {
+        self.upsert(entity, LightKind::Goniometric, power_changed, |t| &mut t.goniometric, row, casts_shadows);
+    }
     /// See [`Self::upsert_point`].
     pub fn upsert_uniform_infinite(&mut self, entity: Entity, row: ResolvedUniformInfinite, power_changed: bool) {
         self.upsert(entity, LightKind::UniformInfinite, power_changed, |t| &mut t.uniform_infinite, row, true);
