@@ -12,6 +12,7 @@ use crate::common::*;
 fn triangles() -> Vec<(&'static str, [Vec3; 3], Vec3)> {
     vec![
         ("ordinary", [Vec3::ZERO, Vec3::X, Vec3::new(0.3, 1.0, 0.0)], Vec3::new(0.4, 0.2, 0.8)),
+        ("ordinary clockwise", [Vec3::ZERO, Vec3::new(0.3, 1.0, 0.0), Vec3::X], Vec3::new(0.4, 0.2, 0.8)),
         (
             "tiny ~1e-8 sr",
             [Vec3::ZERO, Vec3::new(1.4e-4, 0.0, 0.0), Vec3::new(0.3e-4, 1.4e-4, 0.0)],
@@ -180,7 +181,7 @@ fn spherical_triangle_inverse_round_trips_ordinary_tiny_near_2pi_grazing_sliver(
             worst = worst.max((back - u).abs().max_element());
         }
         println!("triangle {name}: inverse round trip max error {worst:.1e}");
-        assert!(worst < 1e-3, "{name}: round trip error {worst}");
+        assert!(worst < 2e-4, "{name}: round trip error {worst}");
     }
 }
 
@@ -307,6 +308,6 @@ fn spherical_rectangle_inverse_round_trips_ordinary_tiny_near_2pi_grazing() {
             worst = worst.max((back - u).abs().max_element());
         }
         println!("rectangle {name}: inverse round trip max error {worst:.1e}");
-        assert!(worst < 1e-3, "{name}: round trip error {worst}");
+        assert!(worst < 2e-4, "{name}: round trip error {worst}");
     }
 }
