@@ -130,6 +130,10 @@ impl SphericalTriangle {
 /// barycentrics `[b0, b1, b2]` (weights of `v[0]`, `v[1]`, `v[2]`) of the point it hits, with the
 /// pdf per steradian, 1 / solid angle (Arvo 1995; pbrt-v4 §6.5.4, made robust as above).
 ///
+/// Corners of the unit square land where pbrt-v4's bilinear pre-warp expects them: u.y = 0 gives
+/// `v[1]`, u = (0, 1) gives `v[0]`, u = (1, 1) gives `v[2]`; so weights
+/// `[cos1, cos1, cos0, cos2]` for [`crate::sampling::sample_bilinear`] approximate cos(theta).
+///
 /// None when the triangle is degenerate as seen from `p`: `p` in its plane or on a vertex, or
 /// collinear vertices. Callers that want to handle tiny or nearly-hemispherical triangles
 /// differently can test [`triangle_solid_angle`] first; this function itself is accurate for
