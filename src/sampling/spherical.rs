@@ -16,9 +16,10 @@ use glam::{DVec2, DVec3, Vec2, Vec3};
 const RECT_PLANAR_BELOW_SR: f64 = 1e-10;
 
 /// Solid angle subtended from the origin by the triangle (r1, r2, r3), vectors of any length.
-/// Van Oosterom & Strackee 1983: tan(Omega / 2) = |r1 . (r2 × r3)| / (|r1||r2||r3| + (r1.r2)|r3|
-/// + (r1.r3)|r2| + (r2.r3)|r1|). The triple product is taken over edges (r2 - r1, r3 - r1), which
-/// keeps its digits for tiny triangles; atan2 keeps them for triangles near a hemisphere.
+/// Van Oosterom & Strackee 1983: tan(Omega / 2) = |r1 . (r2 × r3)| / D with
+/// D = |r1||r2||r3| + (r1.r2)|r3| + (r1.r3)|r2| + (r2.r3)|r1|. The triple product is taken over
+/// edges (r2 - r1, r3 - r1), which keeps its digits for tiny triangles; atan2 keeps them for
+/// triangles near a hemisphere.
 fn solid_angle_f64(r1: DVec3, r2: DVec3, r3: DVec3) -> f64 {
     let (l1, l2, l3) = (r1.length(), r2.length(), r3.length());
     let det = r1.dot((r2 - r1).cross(r3 - r1)).abs();
@@ -129,6 +130,10 @@ impl SphericalTriangle {
 /// barycentrics `[b0, b1, b2]` (weights of `v[0]`, `v[1]`, `v[2]`) of the point it hits, with the
 /// pdf per steradian, 1 / solid angle (Arvo 1995; pbrt-v4 §6.5.4, made robust as above).
 ///
+/// Corners of the unit square land where pbrt-v4's bilinear pre-warp expects them: u.y = 0 gives
+/// `v[1]`, u = (0, 1) gives `v[0]`, u = (1, 1) gives `v[2]`; so weights
+/// `[cos1, cos1, cos0, cos2]` for [`crate::sampling::sample_bilinear`] approximate cos(theta).
+///
 /// None when the triangle is degenerate as seen from `p`: `p` in its plane or on a vertex, or
 /// collinear vertices. Callers that want to handle tiny or nearly-hemispherical triangles
 /// differently can test [`triangle_solid_angle`] first; this function itself is accurate for
@@ -207,7 +212,7 @@ impl SphericalRectangle {
     fn new(p_ref: Vec3, corner: Vec3, ex: Vec3, ey: Vec3) -> Option<Self> {
         let (p_ref, corner, ex, ey) = (p_ref.as_dvec3(), corner.as_dvec3(), ex.as_dvec3(), ey.as_dvec3());
         let (exl, eyl) = (ex.length(), ey.length());
-        if !(exl > 0.0 && eyl > 0.0) || !(exl * eyl).is_finite() || ex.dot(ey).abs() > 1e-3 * exl * eyl {
+        if !(exl > 0.0 && eyl > 0.0 && (exl * eyl).is_finite()) || ex.dot(ey).abs() > 1e-3 * exl * eyl {
             return None;
         }
         let x_axis = ex / exl;
@@ -219,8 +224,8 @@ impl SphericalRectangle {
             z_axis = -z_axis;
             z0 = -z0;
         }
-        if !(z0 < 0.0) {
-            return None;
+        if z0 == 0.0 || z0.is_nan() {
+            return None; // the viewpoint is in the rectangle's plane
         }
         let (x1, y1, z) = (x0 + exl, y0 + eyl, -z0);
         // Interior angles at the four corners, as atan2 of the edge planes' normals (Ureña et al.

@@ -12,6 +12,7 @@ use crate::common::*;
 fn triangles() -> Vec<(&'static str, [Vec3; 3], Vec3)> {
     vec![
         ("ordinary", [Vec3::ZERO, Vec3::X, Vec3::new(0.3, 1.0, 0.0)], Vec3::new(0.4, 0.2, 0.8)),
+        ("ordinary clockwise", [Vec3::ZERO, Vec3::new(0.3, 1.0, 0.0), Vec3::X], Vec3::new(0.4, 0.2, 0.8)),
         (
             "tiny ~1e-8 sr",
             [Vec3::ZERO, Vec3::new(1.4e-4, 0.0, 0.0), Vec3::new(0.3e-4, 1.4e-4, 0.0)],
@@ -110,7 +111,7 @@ fn cell_of(cells: &[[(f64, f64); 3]], b1: f64, b2: f64) -> usize {
 
 #[test]
 fn spherical_triangle_samples_are_uniform_chi_square_ordinary_tiny_near_2pi_grazing_sliver() {
-    let cells = sub_triangles(4);
+    let cells = sub_triangles(8);
     let mut rng = Rng::new(21);
     for (name, v, p) in triangles() {
         let at = |(b1, b2): (f64, f64)| (point(v, [(1.0 - b1 - b2) as f32, b1 as f32, b2 as f32])).as_vec3();
@@ -120,7 +121,7 @@ fn spherical_triangle_samples_are_uniform_chi_square_ordinary_tiny_near_2pi_graz
         assert!(rel(total, triangle_solid_angle(v, p) as f64) < 1e-5, "{name}: cells sum to {total}");
         let probs: Vec<f64> = omegas.iter().map(|o| o / total).collect();
         let mut counts = vec![0u64; cells.len()];
-        for _ in 0..100_000 {
+        for _ in 0..200_000 {
             let (b, _) = sample_spherical_triangle(v, p, rng.uniform2()).unwrap();
             counts[cell_of(&cells, b[1] as f64, b[2] as f64)] += 1;
         }
@@ -180,7 +181,7 @@ fn spherical_triangle_inverse_round_trips_ordinary_tiny_near_2pi_grazing_sliver(
             worst = worst.max((back - u).abs().max_element());
         }
         println!("triangle {name}: inverse round trip max error {worst:.1e}");
-        assert!(worst < 1e-3, "{name}: round trip error {worst}");
+        assert!(worst < 2e-4, "{name}: round trip error {worst}");
     }
 }
 
@@ -233,7 +234,7 @@ fn spherical_rectangle_pdf_equals_inverse_jacobian_ordinary_tiny_near_2pi_grazin
 #[test]
 fn spherical_rectangle_samples_are_uniform_chi_square_ordinary_tiny_near_2pi_grazing() {
     let mut rng = Rng::new(8);
-    let k = 4;
+    let k = 8;
     for (name, p, corner, ex, ey) in rectangles() {
         let (cx, cy) = (ex / k as f32, ey / k as f32);
         let probs: Vec<f64> = (0..k * k)
@@ -246,7 +247,7 @@ fn spherical_rectangle_samples_are_uniform_chi_square_ordinary_tiny_near_2pi_gra
         assert!(rel(total, spherical_rectangle_solid_angle(p, corner, ex, ey) as f64) < 1e-5, "{name}");
         let probs: Vec<f64> = probs.iter().map(|o| o / total).collect();
         let mut counts = vec![0u64; k * k];
-        for _ in 0..100_000 {
+        for _ in 0..200_000 {
             let (q, _) = sample_spherical_rectangle(p, corner, ex, ey, rng.uniform2()).unwrap();
             let [s, t] = st(q.as_dvec3(), corner, ex, ey);
             let (i, j) = (((s * k as f64) as usize).min(k - 1), ((t * k as f64) as usize).min(k - 1));
@@ -307,6 +308,6 @@ fn spherical_rectangle_inverse_round_trips_ordinary_tiny_near_2pi_grazing() {
             worst = worst.max((back - u).abs().max_element());
         }
         println!("rectangle {name}: inverse round trip max error {worst:.1e}");
-        assert!(worst < 1e-3, "{name}: round trip error {worst}");
+        assert!(worst < 2e-4, "{name}: round trip error {worst}");
     }
 }

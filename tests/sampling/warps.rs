@@ -10,6 +10,8 @@ use crate::common::*;
 type Dir = Box<dyn Fn(Vec2) -> Vec3>;
 type DirPdf = Box<dyn Fn(Vec3) -> f32>;
 type Skip = fn(Vec2) -> bool;
+type Disk = fn(Vec2) -> Vec2;
+type SpherePdf = Box<dyn Fn(Vec3) -> f64>;
 
 fn near_diagonals(u: Vec2) -> bool {
     let m = 3.0 * H;
@@ -96,7 +98,7 @@ fn direction_warps_pdf_equals_inverse_jacobian_within_1e4() {
 
 #[test]
 fn planar_warps_pdf_equals_inverse_jacobian_within_1e4() {
-    let disks: [(&str, fn(Vec2) -> Vec2, Skip); 2] = [
+    let disks: [(&str, Disk, Skip); 2] = [
         ("concentric disk", sample_uniform_disk_concentric, near_diagonals),
         ("polar disk", sample_uniform_disk_polar, never),
     ];
@@ -143,7 +145,7 @@ fn pdfs_integrate_to_one_monte_carlo_within_3_sigma() {
     let n = 400_000;
     let four_pi = 4.0 * PI;
     // Directions: integrate each pdf over the sphere with uniform-sphere samples.
-    let sphere_pdfs: [(&str, Box<dyn Fn(Vec3) -> f64>); 5] = [
+    let sphere_pdfs: [(&str, SpherePdf); 5] = [
         ("uniform sphere", Box::new(|_| uniform_sphere_pdf() as f64)),
         ("uniform hemisphere", Box::new(|w| if w.z >= 0.0 { uniform_hemisphere_pdf() as f64 } else { 0.0 })),
         ("cosine hemisphere", Box::new(|w| cosine_hemisphere_pdf(w.z) as f64)),
