@@ -1,5 +1,6 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
 mod ies;
+mod render;
 mod spectrum;
 
 use clap::{Parser, Subcommand};
@@ -18,6 +19,8 @@ enum Command {
     Spectrum(spectrum::SpectrumArgs),
     /// Header, flux, peak intensity and beam angles of an IES LM-63 photometric file.
     Ies(ies::IesArgs),
+    /// Render a glTF scene (or the embedded default scene) with direct lighting.
+    Render(render::RenderArgs),
 }
 
 /// Errors the CLI reports: a message that names what failed.
@@ -28,5 +31,6 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Spectrum(args) => spectrum::run(args),
         Command::Ies(args) => ies::run(args),
+        Command::Render(args) => render::run(args),
     }
 }
