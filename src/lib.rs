@@ -4,4 +4,5 @@
 //! `src/` holds what things are (data and pure math); `systems/` holds what happens each update.
 pub mod geometry;
 pub mod report;
+pub mod sampling;
 pub mod spectrum;
