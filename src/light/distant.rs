@@ -8,9 +8,7 @@ use bevy_ecs::component::Component;
 use glam::Vec3;
 
 use super::emitter::check_amount;
-use super::{
-    Amount, ColorQuery, Emitter, LiSample, LightError, LightFlags, LightSampleContext, Quantity, SceneSphere,
-};
+use super::{Amount, ColorQuery, Emitter, LiSample, LightError, LightFlags, LightSampleContext, Quantity, SceneSphere};
 use crate::geometry::Transform;
 use crate::sampling::{Frame, sample_uniform_cone_sin2};
 use crate::spectrum::Spectrum;
@@ -36,7 +34,12 @@ pub struct DistantLight {
 
 impl Default for DistantLight {
     fn default() -> Self {
-        Self { amount: Amount::Lux(DEFAULT_DISTANT_LUX), spectrum: Spectrum::d65(), angular_diameter: 0.0, casts_shadows: true }
+        Self {
+            amount: Amount::Lux(DEFAULT_DISTANT_LUX),
+            spectrum: Spectrum::d65(),
+            angular_diameter: 0.0,
+            casts_shadows: true,
+        }
     }
 }
 
@@ -105,7 +108,13 @@ impl ResolvedDistant {
         let far = 2.0 * self.scene.radius + (ctx.p - self.scene.center).length();
         if self.is_delta() {
             let radiance = self.irradiance.eval(query);
-            return Some(LiSample { radiance, wi: self.to_light, pdf: 1.0, p_light: ctx.p + self.to_light * far, n_light: -self.to_light });
+            return Some(LiSample {
+                radiance,
+                wi: self.to_light,
+                pdf: 1.0,
+                p_light: ctx.p + self.to_light * far,
+                n_light: -self.to_light,
+            });
         }
         let wi = Frame::from_z(self.to_light).from_local(sample_uniform_cone_sin2(u, self.sin2_half_angle)).normalize();
         Some(LiSample {

@@ -135,7 +135,12 @@ impl Emitter {
 
     /// The same emitter with its amount multiplied by `s`.
     pub fn scaled(&self, s: f32) -> Self {
-        Self { spectrum: self.spectrum.clone(), scale: self.scale * s, rgb: self.rgb * s, radiometric: self.radiometric * s }
+        Self {
+            spectrum: self.spectrum.clone(),
+            scale: self.scale * s,
+            rgb: self.rgb * s,
+            radiometric: self.radiometric * s,
+        }
     }
 
     /// The emitted quantity in the query's colour mode.

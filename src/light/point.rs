@@ -46,8 +46,13 @@ impl PointLight {
 
     /// The radiant intensity emitter (W/sr) this light describes.
     pub fn intensity(&self) -> Result<Emitter, LightError> {
-        let amount =
-            check_amount(self.amount, "PointLight", "amount", &[Quantity::Intensity, Quantity::Power], "cd, W/sr, lm or W")?;
+        let amount = check_amount(
+            self.amount,
+            "PointLight",
+            "amount",
+            &[Quantity::Intensity, Quantity::Power],
+            "cd, W/sr, lm or W",
+        )?;
         let e = Emitter::from_amount(self.spectrum.clone(), amount);
         Ok(if amount.quantity() == Quantity::Power { e.scaled(1.0 / (4.0 * PI)) } else { e })
     }

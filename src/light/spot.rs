@@ -69,8 +69,13 @@ impl SpotLight {
             });
         }
         let (cos_inner, cos_outer) = (inner.cos(), outer.cos());
-        let amount =
-            check_amount(self.amount, "SpotLight", "amount", &[Quantity::Intensity, Quantity::Power], "cd, W/sr, lm or W")?;
+        let amount = check_amount(
+            self.amount,
+            "SpotLight",
+            "amount",
+            &[Quantity::Intensity, Quantity::Power],
+            "cd, W/sr, lm or W",
+        )?;
         let mut intensity = Emitter::from_amount(self.spectrum.clone(), amount);
         if amount.quantity() == Quantity::Power {
             let omega = falloff_solid_angle(cos_inner, cos_outer);
@@ -118,7 +123,13 @@ impl ResolvedSpot {
         if f <= 0.0 {
             return None;
         }
-        Some(LiSample { radiance: self.intensity.eval(query).scale(f / r2), wi, pdf: 1.0, p_light: self.position, n_light: Vec3::ZERO })
+        Some(LiSample {
+            radiance: self.intensity.eval(query).scale(f / r2),
+            wi,
+            pdf: 1.0,
+            p_light: self.position,
+            n_light: Vec3::ZERO,
+        })
     }
 
     /// A delta light is never hit by sampled directions.
