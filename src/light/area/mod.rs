@@ -254,7 +254,7 @@ impl AreaLight {
     ) -> Result<ResolvedMesh, LightError> {
         let invalid = |msg: String| LightError::Invalid { light: "AreaLight", msg };
         check_transform(transform)?;
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(invalid(format!("mesh has {} indices, not a multiple of 3", indices.len())));
         }
         if !uvs.is_empty() && uvs.len() != positions.len() {

@@ -252,10 +252,9 @@ impl AreaShape {
             _ => {
                 let on = self.sample_area(u)?;
                 let wi = dir(on.p);
-                // Density t^2 / (|cos| A) of the direction as rounded to f32, which near grazing
-                // differs from the unrounded one by ~1e-7 / |cos| relative.
-                // The plane through the shape's own reference point, as `hit` (on.p is off it by
-                // f32 rounding, which grazing directions would amplify).
+                // Density t^2 / (|cos| A) of the direction as rounded to f32 (near grazing it
+                // differs from the unrounded one by ~1e-7 / |cos|), with t to the plane `hit`
+                // uses: on.p is off that plane by f32 rounding, which grazing rays amplify.
                 let (o, w, n) = (p_ref.as_dvec3(), wi.as_dvec3().normalize_or_zero(), on.n.as_dvec3());
                 let t = n.dot(self.plane_point().as_dvec3() - o) / n.dot(w);
                 finite_sample(on, wi, area_pdf(t, w, on.n, self.area() as f64) as f32)
