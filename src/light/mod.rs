@@ -156,6 +156,7 @@ impl Default for SceneSphere {
 }
 
 /// Radiance along a direction in the query's colour mode from an `Emitter` value scaled by `s`.
+#[allow(dead_code)] // no light type uses it yet; kept for the ones still to come
 pub(crate) fn scaled(emitter: &Emitter, query: ColorQuery, s: f32) -> SampledSpectrum {
     emitter.eval(query).scale(s)
 }
