@@ -1,4 +1,5 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
+mod ies;
 mod spectrum;
 
 use clap::{Parser, Subcommand};
@@ -15,6 +16,8 @@ pub struct Cli {
 enum Command {
     /// Colorimetry and photometry of an emission spectrum.
     Spectrum(spectrum::SpectrumArgs),
+    /// Header, flux, peak intensity and beam angles of an IES LM-63 photometric file.
+    Ies(ies::IesArgs),
 }
 
 /// Errors the CLI reports: a message that names what failed.
@@ -24,5 +27,6 @@ pub type CliError = Box<dyn std::error::Error>;
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Spectrum(args) => spectrum::run(args),
+        Command::Ies(args) => ies::run(args),
     }
 }

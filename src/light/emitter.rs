@@ -7,6 +7,9 @@ use glam::Vec3;
 use super::ColorQuery;
 use crate::spectrum::{SampledSpectrum, Spectrum, rgb_reflectance};
 
+/// Wavelength range of the Mallett-Yuksel basis behind [`rgb_reflectance`], nm.
+const RGB_BASIS_NM: (f64, f64) = (380.0, 780.0);
+
 /// Errors in a light's description; each names the light and the field.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum LightError {
@@ -115,16 +118,15 @@ pub struct Emitter {
 impl Emitter {
     /// An emitter of radiometric total `radiometric` with shape `spectrum`.
     pub fn new(spectrum: Spectrum, radiometric: f32) -> Self {
-        let integral = spectrum.integral();
-        let efficacy = spectrum.luminous_efficacy();
+        let SpectrumFacts { integral, efficacy, srgb } = SpectrumFacts::of(&spectrum);
         let scale = if integral > 0.0 { (radiometric as f64 / integral) as f32 } else { 0.0 };
-        let rgb = spectrum.srgb_normalized() * (radiometric as f64 * efficacy);
+        let rgb = srgb * (radiometric as f64 * efficacy);
         Self { spectrum, scale, rgb: rgb.as_vec3(), radiometric }
     }
 
     /// An emitter from an amount in any unit of the same quantity.
     pub fn from_amount(spectrum: Spectrum, amount: Amount) -> Self {
-        let k = spectrum.luminous_efficacy();
+        let k = SpectrumFacts::of(&spectrum).efficacy;
         Self::new(spectrum, amount.radiometric(k))
     }
 
@@ -163,7 +165,10 @@ impl Emitter {
                 let t = [tint.x as f64, tint.y as f64, tint.z as f64];
                 SampledSpectrum(std::array::from_fn(|i| {
                     let l = w.lambda[i] as f64;
-                    (self.spectrum.eval(l) * rgb_reflectance(t, l)) as f32 * self.scale
+                    // The basis ends at 380-780 nm (zero beyond); hold its end values so a white tint
+                    // keeps every sampled wavelength (360-830 nm).
+                    let tint = rgb_reflectance(t, l.clamp(RGB_BASIS_NM.0, RGB_BASIS_NM.1));
+                    (self.spectrum.eval(l) * tint) as f32 * self.scale
                 }))
             }
         }
@@ -172,6 +177,56 @@ impl Emitter {
     /// Luminance-like weight of the emitter (photometric Y), for importance.
     pub fn luminous(&self) -> f32 {
         self.rgb.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+    }
+}
+
+/// What converting a spectrum needs: its integral, efficacy and normalised sRGB. Computing them
+/// integrates over ~500 wavelengths, so they are memoised: lights that move or change their
+/// amount but not their spectrum (the common case in a game loop) reuse them.
+#[derive(Clone, Copy)]
+struct SpectrumFacts {
+    integral: f64,
+    efficacy: f64,
+    srgb: glam::DVec3,
+}
+
+impl SpectrumFacts {
+    fn of(spectrum: &Spectrum) -> Self {
+        use std::collections::HashMap;
+        use std::sync::{LazyLock, Mutex};
+        // Keyed by the spectrum's parameters; tables by the address of their Arc, which the cache
+        // keeps alive so the address cannot be reused.
+        static CACHE: LazyLock<Mutex<HashMap<Vec<u64>, (Spectrum, SpectrumFacts)>>> = LazyLock::new(Default::default);
+        const MAX_ENTRIES: usize = 4096;
+        let key = spectrum_key(spectrum);
+        if let Some((_, facts)) = CACHE.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+            return *facts;
+        }
+        let facts = Self {
+            integral: spectrum.integral(),
+            efficacy: spectrum.luminous_efficacy(),
+            srgb: spectrum.srgb_normalized(),
+        };
+        let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        if cache.len() >= MAX_ENTRIES {
+            cache.clear();
+        }
+        cache.insert(key, (spectrum.clone(), facts));
+        facts
+    }
+}
+
+fn spectrum_key(s: &Spectrum) -> Vec<u64> {
+    match s {
+        Spectrum::Constant(c) => vec![0, c.to_bits()],
+        Spectrum::Blackbody { temperature_k } => vec![1, temperature_k.to_bits()],
+        Spectrum::Graybody { temperature_k, emissivity } => vec![2, temperature_k.to_bits(), emissivity.to_bits()],
+        Spectrum::Emitter { temperature_k, emissivity } => {
+            vec![3, temperature_k.to_bits(), std::sync::Arc::as_ptr(emissivity) as u64]
+        }
+        Spectrum::IlluminantA => vec![4],
+        Spectrum::Tabulated(t) => vec![5, std::sync::Arc::as_ptr(t) as u64],
+        Spectrum::Rgb { rgb } => vec![6, rgb[0].to_bits(), rgb[1].to_bits(), rgb[2].to_bits()],
     }
 }
 

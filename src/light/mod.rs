@@ -6,10 +6,15 @@
 //! operation, no trait objects on hot paths.
 
 pub mod area;
+mod dispatch;
 pub mod distant;
 pub mod emitter;
+pub mod goniometric;
+pub mod infinite;
 pub mod point;
+pub mod projection;
 pub mod spot;
+pub mod table;
 
 use glam::Vec3;
 
@@ -18,8 +23,15 @@ use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 pub use area::{AreaLight, AreaShape, LightTexture, ResolvedArea, ResolvedMesh};
 pub use distant::{DistantLight, ResolvedDistant};
 pub use emitter::{Amount, Emitter, LightError, Quantity};
+pub use goniometric::{GonioProfile, GoniometricLight, ResolvedGoniometric};
+pub use infinite::{
+    EnvLookup, EnvMapTables, EnvTableOptions, ImageInfiniteLight, ResolvedImageInfinite, ResolvedUniformInfinite,
+    UniformInfiniteLight,
+};
 pub use point::{PointLight, ResolvedPoint};
+pub use projection::{ProjectionLight, ResolvedProjection};
 pub use spot::{ResolvedSpot, SpotLight};
+pub use table::{LightId, LightTable};
 
 /// Where light is being gathered: a point with its geometric normal and, optionally, its shading
 /// normal. `n == Vec3::ZERO` marks a point not on a surface (a medium, or "no normal").
@@ -153,10 +165,4 @@ impl Default for SceneSphere {
     fn default() -> Self {
         Self { center: Vec3::ZERO, radius: 1.0 }
     }
-}
-
-/// Radiance along a direction in the query's colour mode from an `Emitter` value scaled by `s`.
-#[allow(dead_code)] // no light type uses it yet; kept for the ones still to come
-pub(crate) fn scaled(emitter: &Emitter, query: ColorQuery, s: f32) -> SampledSpectrum {
-    emitter.eval(query).scale(s)
 }

@@ -115,3 +115,99 @@ impl ResolvedPoint {
         }
     }
 }
+
+/// Point lights as columns (the `LightTable` block): what the batch paths read.
+#[derive(Clone, Debug, Default)]
+pub struct PointColumns {
+    pub position: Vec<Vec3>,
+    /// Photometric linear sRGB intensity, cd.
+    pub rgb: Vec<Vec3>,
+    /// Spectral shape and its scale (W/(sr nm) per unit), for spectral mode.
+    pub spectrum: Vec<crate::spectrum::Spectrum>,
+    pub scale: Vec<f32>,
+    /// Radiant intensity, W/sr.
+    pub radiometric: Vec<f32>,
+    pub casts_shadows: Vec<bool>,
+    pub owner: Vec<bevy_ecs::entity::Entity>,
+}
+
+impl PointColumns {
+    /// Number of lights.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+    /// True with no lights.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+
+    /// The resolved light at `row`.
+    pub fn get(&self, row: usize) -> ResolvedPoint {
+        let intensity = Emitter {
+            spectrum: self.spectrum[row].clone(),
+            scale: self.scale[row],
+            rgb: self.rgb[row],
+            radiometric: self.radiometric[row],
+        };
+        ResolvedPoint { position: self.position[row], intensity }
+    }
+
+    /// Sample_Li of the light at `row` without building a `ResolvedPoint`.
+    #[inline]
+    pub fn sample_li(&self, row: usize, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
+        let d = self.position[row] - ctx.p;
+        let r2 = d.length_squared();
+        if !(r2 > 0.0) || !r2.is_finite() {
+            return None;
+        }
+        let radiance = match query {
+            ColorQuery::Rgb => {
+                let c = self.rgb[row];
+                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0]).scale(1.0 / r2)
+            }
+            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row]).scale(1.0 / r2),
+        };
+        Some(LiSample { radiance, wi: d / r2.sqrt(), pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
+    }
+
+    /// Radiant power of the light at `row`, W.
+    pub fn phi(&self, row: usize) -> f32 {
+        4.0 * PI * self.radiometric[row]
+    }
+}
+
+impl crate::light::table::Block for PointColumns {
+    type Row = ResolvedPoint;
+    fn len(&self) -> usize {
+        self.position.len()
+    }
+    fn push(&mut self, owner: bevy_ecs::entity::Entity, r: ResolvedPoint, casts_shadows: bool) {
+        self.position.push(r.position);
+        self.rgb.push(r.intensity.rgb);
+        self.scale.push(r.intensity.scale);
+        self.radiometric.push(r.intensity.radiometric);
+        self.spectrum.push(r.intensity.spectrum);
+        self.casts_shadows.push(casts_shadows);
+        self.owner.push(owner);
+    }
+    fn set(&mut self, i: usize, r: ResolvedPoint, casts_shadows: bool) {
+        self.position[i] = r.position;
+        self.rgb[i] = r.intensity.rgb;
+        self.scale[i] = r.intensity.scale;
+        self.radiometric[i] = r.intensity.radiometric;
+        self.spectrum[i] = r.intensity.spectrum;
+        self.casts_shadows[i] = casts_shadows;
+    }
+    fn swap_remove(&mut self, i: usize) {
+        self.position.swap_remove(i);
+        self.rgb.swap_remove(i);
+        self.scale.swap_remove(i);
+        self.radiometric.swap_remove(i);
+        self.spectrum.swap_remove(i);
+        self.casts_shadows.swap_remove(i);
+        self.owner.swap_remove(i);
+    }
+    fn owner(&self, i: usize) -> bevy_ecs::entity::Entity {
+        self.owner[i]
+    }
+}

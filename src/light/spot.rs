@@ -156,3 +156,121 @@ impl ResolvedSpot {
         }
     }
 }
+
+/// Spot lights as columns (the `LightTable` block).
+#[derive(Clone, Debug, Default)]
+pub struct SpotColumns {
+    pub position: Vec<Vec3>,
+    pub direction: Vec<Vec3>,
+    pub cos_inner: Vec<f32>,
+    pub cos_outer: Vec<f32>,
+    /// Photometric linear sRGB on-axis intensity, cd.
+    pub rgb: Vec<Vec3>,
+    pub spectrum: Vec<Spectrum>,
+    pub scale: Vec<f32>,
+    /// On-axis radiant intensity, W/sr.
+    pub radiometric: Vec<f32>,
+    pub casts_shadows: Vec<bool>,
+    pub owner: Vec<bevy_ecs::entity::Entity>,
+}
+
+impl SpotColumns {
+    /// Number of lights.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+    /// True with no lights.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+
+    /// The resolved light at `row`.
+    pub fn get(&self, row: usize) -> ResolvedSpot {
+        let intensity = Emitter {
+            spectrum: self.spectrum[row].clone(),
+            scale: self.scale[row],
+            rgb: self.rgb[row],
+            radiometric: self.radiometric[row],
+        };
+        ResolvedSpot {
+            position: self.position[row],
+            direction: self.direction[row],
+            cos_inner: self.cos_inner[row],
+            cos_outer: self.cos_outer[row],
+            intensity,
+        }
+    }
+
+    /// Sample_Li of the light at `row` straight from the columns.
+    #[inline]
+    pub fn sample_li(&self, row: usize, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
+        let d = self.position[row] - ctx.p;
+        let r2 = d.length_squared();
+        if !(r2 > 0.0) || !r2.is_finite() {
+            return None;
+        }
+        let wi = d / r2.sqrt();
+        let f = smooth_step(-wi.dot(self.direction[row]), self.cos_outer[row], self.cos_inner[row]);
+        if f <= 0.0 {
+            return None;
+        }
+        let radiance = match query {
+            ColorQuery::Rgb => {
+                let c = self.rgb[row];
+                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0]).scale(f / r2)
+            }
+            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row]).scale(f / r2),
+        };
+        Some(LiSample { radiance, wi, pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
+    }
+
+    /// Radiant power of the light at `row`, W.
+    pub fn phi(&self, row: usize) -> f32 {
+        self.radiometric[row] * falloff_solid_angle(self.cos_inner[row], self.cos_outer[row])
+    }
+}
+
+impl crate::light::table::Block for SpotColumns {
+    type Row = ResolvedSpot;
+    fn len(&self) -> usize {
+        self.position.len()
+    }
+    fn push(&mut self, owner: bevy_ecs::entity::Entity, r: ResolvedSpot, casts_shadows: bool) {
+        self.position.push(r.position);
+        self.direction.push(r.direction);
+        self.cos_inner.push(r.cos_inner);
+        self.cos_outer.push(r.cos_outer);
+        self.rgb.push(r.intensity.rgb);
+        self.scale.push(r.intensity.scale);
+        self.radiometric.push(r.intensity.radiometric);
+        self.spectrum.push(r.intensity.spectrum);
+        self.casts_shadows.push(casts_shadows);
+        self.owner.push(owner);
+    }
+    fn set(&mut self, i: usize, r: ResolvedSpot, casts_shadows: bool) {
+        self.position[i] = r.position;
+        self.direction[i] = r.direction;
+        self.cos_inner[i] = r.cos_inner;
+        self.cos_outer[i] = r.cos_outer;
+        self.rgb[i] = r.intensity.rgb;
+        self.scale[i] = r.intensity.scale;
+        self.radiometric[i] = r.intensity.radiometric;
+        self.spectrum[i] = r.intensity.spectrum;
+        self.casts_shadows[i] = casts_shadows;
+    }
+    fn swap_remove(&mut self, i: usize) {
+        self.position.swap_remove(i);
+        self.direction.swap_remove(i);
+        self.cos_inner.swap_remove(i);
+        self.cos_outer.swap_remove(i);
+        self.rgb.swap_remove(i);
+        self.scale.swap_remove(i);
+        self.radiometric.swap_remove(i);
+        self.spectrum.swap_remove(i);
+        self.casts_shadows.swap_remove(i);
+        self.owner.swap_remove(i);
+    }
+    fn owner(&self, i: usize) -> bevy_ecs::entity::Entity {
+        self.owner[i]
+    }
+}

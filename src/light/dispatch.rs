@@ -1,0 +1,129 @@
+//! One `match` per Light operation over the `LightTable`'s blocks.
+
+use glam::{Vec2, Vec3};
+
+use super::table::LightTable;
+use super::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext};
+
+impl LightTable {
+    /// Sample_Li of light `id` at `ctx` with uniform numbers `u`.
+    #[inline]
+    pub fn sample_li(&self, id: LightId, ctx: &LightSampleContext, u: Vec2, query: ColorQuery) -> Option<LiSample> {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => self.points.sample_li(i, ctx, query),
+            LightKind::Spot => self.spots.sample_li(i, ctx, query),
+            LightKind::Distant => self.distant.items[i].sample_li(ctx, u, query),
+            LightKind::UniformInfinite => self.uniform_infinite.items[i].sample_li(ctx, u, query),
+            LightKind::ImageInfinite if self.mis_compensation => {
+                self.image_infinite.items[i].sample_li_mis(ctx, u, query)
+            }
+            LightKind::ImageInfinite => self.image_infinite.items[i].sample_li(ctx, u, query),
+            other => unreachable!("no block for {other:?}"),
+        }
+    }
+
+    /// Pdf_Li: solid-angle density with which `sample_li` returns `wi` (0 for delta lights).
+    pub fn pdf_li(&self, id: LightId, ctx: &LightSampleContext, wi: Vec3) -> f32 {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point | LightKind::Spot => 0.0,
+            LightKind::Distant => self.distant.items[i].pdf_li(wi),
+            LightKind::UniformInfinite => self.uniform_infinite.items[i].pdf_li(ctx, wi),
+            LightKind::ImageInfinite if self.mis_compensation => self.image_infinite.items[i].pdf_li_mis(wi),
+            LightKind::ImageInfinite => self.image_infinite.items[i].pdf_li(wi),
+            other => unreachable!("no block for {other:?}"),
+        }
+    }
+
+    /// The emission flags of light `id`.
+    pub fn flags(&self, id: LightId) -> LightFlags {
+        match id.kind {
+            LightKind::Distant => self.distant.items[id.row as usize].flags(),
+            kind => kind.flags(),
+        }
+    }
+
+    /// Radiant power of light `id`, W.
+    pub fn phi(&self, id: LightId) -> f32 {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => self.points.phi(i),
+            LightKind::Spot => self.spots.phi(i),
+            LightKind::Distant => self.distant.items[i].phi(),
+            LightKind::UniformInfinite => self.uniform_infinite.items[i].phi(),
+            LightKind::ImageInfinite => self.image_infinite.items[i].phi(),
+            other => unreachable!("no block for {other:?}"),
+        }
+    }
+
+    /// Luminous power of light `id`, lm: its radiant power times its spectrum's efficacy.
+    pub fn luminous_power(&self, id: LightId) -> f32 {
+        let i = id.row as usize;
+        let (rgb_y, radiometric) = match id.kind {
+            LightKind::Point => (self.points.rgb[i].y, self.points.radiometric[i]),
+            LightKind::Spot => (self.spots.rgb[i].y, self.spots.radiometric[i]),
+            LightKind::Distant => {
+                let e = &self.distant.items[i].irradiance;
+                (e.rgb.y, e.radiometric)
+            }
+            LightKind::UniformInfinite => {
+                let e = &self.uniform_infinite.items[i].radiance;
+                (e.rgb.y, e.radiometric)
+            }
+            LightKind::ImageInfinite => return self.image_infinite.items[i].luminous_phi().max(0.0),
+            other => unreachable!("no block for {other:?}"),
+        };
+        if radiometric > 0.0 { (self.phi(id) * rgb_y / radiometric).max(0.0) } else { 0.0 }
+    }
+
+    /// Bounds for light BVHs; None for lights at infinity (distant, infinite), which samplers
+    /// handle outside the tree.
+    pub fn bounds(&self, id: LightId) -> Option<super::LightBounds> {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => Some(self.points.get(i).bounds()),
+            LightKind::Spot => Some(self.spots.get(i).bounds()),
+            LightKind::Distant => None,
+            LightKind::UniformInfinite | LightKind::ImageInfinite => None,
+            other => unreachable!("no block for {other:?}"),
+        }
+    }
+
+    /// Whether shadow rays are traced for light `id`.
+    pub fn casts_shadows(&self, id: LightId) -> bool {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => self.points.casts_shadows[i],
+            LightKind::Spot => self.spots.casts_shadows[i],
+            LightKind::Distant => self.distant.casts_shadows[i],
+            LightKind::UniformInfinite => self.uniform_infinite.casts_shadows[i],
+            LightKind::ImageInfinite => self.image_infinite.casts_shadows[i],
+            other => unreachable!("no block for {other:?}"),
+        }
+    }
+}
+
+impl LightTable {
+    /// Ids of the lights seen by rays that escape the scene (infinite lights, distant lights with
+    /// an angular size).
+    pub fn escape_lights(&self) -> impl Iterator<Item = LightId> + '_ {
+        self.ids().filter(|&id| self.flags(id).contains(LightFlags::INFINITE))
+    }
+
+    /// Radiance arriving along an escaping ray with direction `wi` from light `id` (zero unless
+    /// the light is at infinity and covers `wi`).
+    pub fn le(&self, id: LightId, wi: Vec3, query: ColorQuery) -> crate::spectrum::SampledSpectrum {
+        match id.kind {
+            LightKind::Distant => self.distant.items[id.row as usize].le(wi, query),
+            LightKind::UniformInfinite => self.uniform_infinite.items[id.row as usize].le(wi, query),
+            LightKind::ImageInfinite => self.image_infinite.items[id.row as usize].le(wi, query),
+            _ => Default::default(),
+        }
+    }
+
+    /// True when some light is not a delta light, so BSDF sampling can find it (MIS pays off).
+    pub fn has_non_delta_lights(&self) -> bool {
+        self.ids().any(|id| !self.flags(id).is_delta())
+    }
+}

@@ -1,0 +1,52 @@
+//! Lights chosen in proportion to their luminous power (lm), through an alias table: O(1) per
+//! sample. pbrt-v4 weighs by radiometric power over visible wavelengths; luminous power is the
+//! same idea weighted by what the eye (and the photometric image) sees.
+
+use std::collections::HashMap;
+
+use crate::light::{LightId, LightTable};
+use crate::sampling::AliasTable;
+
+/// Power-proportional choice. Zero-power lights are never chosen.
+#[derive(Clone, Debug, Default)]
+pub struct PowerSampler {
+    ids: Vec<LightId>,
+    alias: AliasTable,
+    index_of: HashMap<LightId, u32>,
+    generation: u64,
+}
+
+impl PowerSampler {
+    /// Over the lights of `table`.
+    pub fn build(table: &LightTable) -> Self {
+        let ids: Vec<LightId> = table.ids().collect();
+        let weights: Vec<f32> = ids.iter().map(|&id| table.luminous_power(id)).collect();
+        let index_of = ids.iter().enumerate().map(|(i, &id)| (id, i as u32)).collect();
+        Self { alias: AliasTable::new(&weights), ids, index_of, generation: table.generation }
+    }
+
+    /// Rebuilds the alias table when powers changed (lights added, removed, or re-powered); a
+    /// table where lights only moved keeps its alias table.
+    pub fn update(&mut self, table: &LightTable) -> &'static str {
+        if self.generation == table.generation {
+            return "up to date";
+        }
+        if !table.powers_changed && self.ids.len() == table.len() {
+            self.generation = table.generation;
+            return "lights moved, powers unchanged: alias table kept";
+        }
+        *self = Self::build(table);
+        "powers changed: alias table rebuilt"
+    }
+
+    /// A light and its probability.
+    #[inline]
+    pub fn sample(&self, u: f32) -> Option<(LightId, f32)> {
+        self.alias.sample(u).map(|(i, pmf)| (self.ids[i], pmf))
+    }
+
+    /// Probability of choosing `light`.
+    pub fn pmf(&self, light: LightId) -> f32 {
+        self.index_of.get(&light).map_or(0.0, |&i| self.alias.pmf(i as usize))
+    }
+}

@@ -1,0 +1,74 @@
+//! Pinhole cameras: the glTF perspective camera (looking along its local -Z, +Y up) and a framing
+//! camera for scenes that have none.
+
+use bevy_ecs::component::Component;
+use glam::{Vec2, Vec3};
+
+use crate::geometry::Transform;
+use crate::geometry::ray::Ray;
+
+/// A perspective camera at its entity's `Transform`, looking along local -Z.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Vertical field of view, radians. Defaults to 45 degrees.
+    pub yfov: f32,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self { yfov: 45f32.to_radians() }
+    }
+}
+
+/// A camera fixed for one image: generates primary rays per pixel.
+#[derive(Clone, Copy, Debug)]
+pub struct PinholeCamera {
+    origin: Vec3,
+    right: Vec3,
+    up: Vec3,
+    forward: Vec3,
+    tan_half_y: f32,
+    width: u32,
+    height: u32,
+}
+
+impl PinholeCamera {
+    /// The camera at `transform` rendering a `width` x `height` image.
+    pub fn new(camera: &Camera, transform: &Transform, width: u32, height: u32) -> Self {
+        let r = transform.rotation;
+        Self {
+            origin: transform.translation,
+            right: (r * Vec3::X).normalize(),
+            up: (r * Vec3::Y).normalize(),
+            forward: (r * Vec3::NEG_Z).normalize(),
+            tan_half_y: (0.5 * camera.yfov.clamp(1e-4, 3.1)).tan(),
+            width: width.max(1),
+            height: height.max(1),
+        }
+    }
+
+    /// A camera that frames the sphere (`center`, `radius`) from a direction above and in front.
+    pub fn framing(center: Vec3, radius: f32, width: u32, height: u32) -> (Camera, Transform) {
+        let camera = Camera::default();
+        let dist = radius.max(1e-3) / (0.5 * camera.yfov).sin() * 1.1;
+        let dir = Vec3::new(0.0, 0.35, 1.0).normalize();
+        let transform = Transform::from_translation(center + dir * dist).looking_to(-dir, Vec3::Y);
+        let _ = (width, height);
+        (camera, transform)
+    }
+
+    /// The ray through image position `pixel + offset` (pixel (0, 0) at the top left; `offset`
+    /// in [0, 1)^2 within the pixel).
+    pub fn ray(&self, x: u32, y: u32, offset: Vec2) -> Ray {
+        let aspect = self.width as f32 / self.height as f32;
+        let sx = ((x as f32 + offset.x) / self.width as f32 * 2.0 - 1.0) * self.tan_half_y * aspect;
+        let sy = (1.0 - (y as f32 + offset.y) / self.height as f32 * 2.0) * self.tan_half_y;
+        let dir = (self.forward + self.right * sx + self.up * sy).normalize();
+        Ray::new(self.origin, dir)
+    }
+
+    /// Image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+}

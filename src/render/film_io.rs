@@ -1,0 +1,144 @@
+//! Images out: the film as linear OpenEXR (exact), Radiance HDR, or tone-mapped 8-bit sRGB PNG.
+//!
+//! Pixels are linear sRGB (Rec. 709 primaries), row-major, row 0 at the top, `width * height` of them.
+//! - EXR: 32-bit float R, G, B, ZIP (lossless) compression; values are written unchanged, non-finite ones
+//!   included, so a broken render can be inspected. Reading the file back gives the same bits.
+//! - HDR: Radiance RGBE (8-bit shared exponent, about 1% precision); negative and NaN values become 0.
+//! - PNG: `exposure` stops (scale 2^exposure), then Reinhard's operator on luminance (Reinhard et al. 2002,
+//!   "Photographic Tone Reproduction for Digital Images", eq. 3: L_d = L / (1 + L), applied as a common scale to
+//!   R, G and B so hue is kept), channels clipped to [0, 1], then the sRGB transfer function (IEC 61966-2-1).
+//!
+//! Files are encoded in memory and written in one call, so an encoding error leaves no partial file.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::scene::image::LUMINANCE_WEIGHTS;
+use crate::spectrum::color::srgb_encode;
+
+/// What [`write_image`] accepts, for error messages.
+pub const WRITE_FORMATS: &str = ".exr (linear f32), .hdr (linear RGBE), .png (tone-mapped 8-bit sRGB)";
+
+/// Why an image could not be written. `what` names the file.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum ImageIoError {
+    #[error("{what}: unknown image extension {given:?}; accepted: {WRITE_FORMATS}")]
+    UnknownExtension { what: String, given: String },
+    #[error("{what}: {len} pixels given for a {width} x {height} image")]
+    SizeMismatch { what: String, width: usize, height: usize, len: usize },
+    #[error("{what}: cannot write a {width} x {height} image (zero or too large a size)")]
+    BadSize { what: String, width: usize, height: usize },
+    #[error("{what}: {format} encoding failed: {msg}")]
+    Encode { what: String, format: &'static str, msg: String },
+    #[error("{what}: cannot write: {msg}")]
+    Io { what: String, msg: String },
+}
+
+/// Writes linear RGB as a 32-bit float OpenEXR with lossless (ZIP) compression.
+pub fn write_exr(path: &Path, width: usize, height: usize, rgb: &[Vec3]) -> Result<(), ImageIoError> {
+    let what = path.display().to_string();
+    check_dimensions(&what, width, height, rgb, usize::MAX)?;
+    let bytes = encode_exr(width, height, rgb).map_err(|msg| ImageIoError::Encode {
+        what: what.clone(),
+        format: "OpenEXR",
+        msg,
+    })?;
+    write_file(path, &what, &bytes)
+}
+
+/// Writes a tone-mapped 8-bit sRGB PNG; `exposure` is in stops (0 = unchanged). See the module docs.
+pub fn write_png(path: &Path, width: usize, height: usize, rgb: &[Vec3], exposure: f32) -> Result<(), ImageIoError> {
+    use image::ImageEncoder;
+    let what = path.display().to_string();
+    check_dimensions(&what, width, height, rgb, u32::MAX as usize)?;
+    let scale = exposure.exp2();
+    let data: Vec<u8> = rgb.iter().flat_map(|&c| tone_map_srgb8(c, scale)).collect();
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes)
+        .write_image(&data, width as u32, height as u32, image::ExtendedColorType::Rgb8)
+        .map_err(|e| ImageIoError::Encode { what: what.clone(), format: "PNG", msg: e.to_string() })?;
+    write_file(path, &what, &bytes)
+}
+
+/// Writes a Radiance RGBE (.hdr) file; negative and NaN values are written as 0.
+pub fn write_hdr(path: &Path, width: usize, height: usize, rgb: &[Vec3]) -> Result<(), ImageIoError> {
+    let what = path.display().to_string();
+    check_dimensions(&what, width, height, rgb, usize::MAX)?;
+    let clean = |v: f32| if v.is_nan() { 0.0 } else { v.clamp(0.0, f32::MAX) };
+    let pixels: Vec<image::Rgb<f32>> = rgb.iter().map(|c| image::Rgb([clean(c.x), clean(c.y), clean(c.z)])).collect();
+    let mut bytes = Vec::new();
+    image::codecs::hdr::HdrEncoder::new(&mut bytes)
+        .encode(&pixels, width, height)
+        .map_err(|e| ImageIoError::Encode { what: what.clone(), format: "Radiance HDR", msg: e.to_string() })?;
+    write_file(path, &what, &bytes)
+}
+
+/// Writes by extension: .exr, .hdr or .png (`exposure`, in stops, is used by PNG only).
+pub fn write_image(path: &Path, width: usize, height: usize, rgb: &[Vec3], exposure: f32) -> Result<(), ImageIoError> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    match ext.as_str() {
+        "exr" => write_exr(path, width, height, rgb),
+        "hdr" => write_hdr(path, width, height, rgb),
+        "png" => write_png(path, width, height, rgb, exposure),
+        _ => Err(ImageIoError::UnknownExtension { what: path.display().to_string(), given: ext }),
+    }
+}
+
+/// One linear pixel to 8-bit sRGB: scale by `exposure_scale`, Reinhard on luminance, clip, sRGB OETF.
+/// NaN must not reach here (debug builds assert); it and negative values give 0.
+pub fn tone_map_srgb8(linear: Vec3, exposure_scale: f32) -> [u8; 3] {
+    debug_assert!(!linear.is_nan(), "NaN pixel {linear} reached the PNG writer");
+    let c = Vec3::from_array(linear.to_array().map(|v| if v.is_nan() { 0.0 } else { v.max(0.0) })) * exposure_scale;
+    let lum = c.dot(LUMINANCE_WEIGHTS);
+    // Reinhard et al. 2002 eq. 3 on luminance; an infinite luminance maps to white.
+    let mapped = if lum.is_finite() { c / (1.0 + lum) } else { Vec3::ONE };
+    mapped.to_array().map(|v| (srgb_encode(v as f64) * 255.0).round() as u8)
+}
+
+fn encode_exr(width: usize, height: usize, rgb: &[Vec3]) -> Result<Vec<u8>, String> {
+    use exr::prelude::{Encoding, Image, SpecificChannels, WritableImage};
+    let channels = SpecificChannels::rgb(|exr::math::Vec2(x, y): exr::math::Vec2<usize>| {
+        let p = rgb[y * width + x];
+        (p.x, p.y, p.z)
+    });
+    let image = Image::from_encoded_channels((width, height), Encoding::SMALL_LOSSLESS, channels);
+    let mut bytes = Vec::new();
+    image.write().to_buffered(Cursor::new(&mut bytes)).map_err(|e| e.to_string())?;
+    Ok(bytes)
+}
+
+fn check_dimensions(
+    what: &str,
+    width: usize,
+    height: usize,
+    rgb: &[Vec3],
+    max_side: usize,
+) -> Result<(), ImageIoError> {
+    if width == 0 || height == 0 || width > max_side || height > max_side {
+        return Err(ImageIoError::BadSize { what: what.into(), width, height });
+    }
+    if width.checked_mul(height) != Some(rgb.len()) {
+        return Err(ImageIoError::SizeMismatch { what: what.into(), width, height, len: rgb.len() });
+    }
+    Ok(())
+}
+
+fn write_file(path: &Path, what: &str, bytes: &[u8]) -> Result<(), ImageIoError> {
+    std::fs::write(path, bytes).map_err(|e| ImageIoError::Io { what: what.into(), msg: e.to_string() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tone_map_fixed_points() {
+        assert_eq!(tone_map_srgb8(Vec3::ZERO, 1.0), [0, 0, 0]);
+        // Luminance 1 maps to 0.5 linear grey, sRGB 188 (0.7354 * 255).
+        assert_eq!(tone_map_srgb8(Vec3::ONE, 1.0), [188, 188, 188]);
+        assert_eq!(tone_map_srgb8(Vec3::splat(f32::INFINITY), 1.0), [255, 255, 255]);
+        assert_eq!(tone_map_srgb8(Vec3::new(-1.0, 0.0, 0.0), 1.0), [0, 0, 0]);
+    }
+}

@@ -1,0 +1,7 @@
+//! Rendering: camera, materials and BSDFs, the direct-lighting renderer, film and image output.
+pub mod bsdf;
+pub mod camera;
+pub mod film;
+pub mod film_io;
+pub mod material;
+pub mod renderer;

@@ -1,0 +1,255 @@
+//! The batch renderer: camera rays -> closest hits -> the light system (via the `ShadingBatch`
+//! and one run of the schedule) -> MIS with BSDF sampling -> film. It never bypasses the light
+//! system: light selection, Sample_Li and shadow rays all happen in the ECS systems.
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::camera::{Camera, PinholeCamera};
+use super::film::Film;
+use super::material::Material;
+use crate::geometry::{Hit, Ray, SceneBvh, closest_hits};
+use crate::light::{ColorQuery, LightSampleContext, LightTable};
+use crate::light_sampler::LightSampler;
+use crate::rng::SampleStream;
+use crate::shading::{ColorMode, DirectLighting, SceneBounds, Settings, ShadingBatch};
+use crate::spectrum::{SampledSpectrum, SampledWavelengths, color};
+use crate::systems::GeometryIndex;
+
+/// Camera samples per batch handed to the light system.
+const BATCH_SAMPLES: usize = 1 << 16;
+/// Salt that keeps the renderer's random dimensions apart from the light systems'.
+const RENDER_SALT: u64 = 0x5eed_ca3e_7a11_0b0e;
+
+/// What to render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    /// Multiple importance sampling between light and BSDF sampling (else light sampling only).
+    pub mis: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self { width: 256, height: 256, spp: 16, mis: true }
+    }
+}
+
+/// Counts of a finished render.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    pub seconds: f64,
+    pub camera_samples: u64,
+    pub shadow_rays: u64,
+    pub bsdf_rays: u64,
+}
+
+/// The power heuristic (beta = 2) weight of a strategy with pdf `a` against one with pdf `b`.
+#[inline]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && a2.is_finite() {
+        a2 / (a2 + b2)
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// Photometric linear sRGB of a 4-lane value in the given mode.
+fn to_rgb(v: SampledSpectrum, wavelengths: Option<&SampledWavelengths>) -> Vec3 {
+    match wavelengths {
+        None => Vec3::new(v.0[0], v.0[1], v.0[2]),
+        Some(w) => color::xyz_to_srgb(w.to_xyz(v).as_dvec3()).as_vec3(),
+    }
+}
+
+/// Everything about a camera sample that the shading pass needs.
+#[derive(Clone, Copy)]
+struct CameraSample {
+    pixel: u32,
+    sample: u32,
+    ray: Ray,
+    hit: Option<Hit>,
+    wavelengths: Option<SampledWavelengths>,
+}
+
+/// The camera of the world (the first `Camera` with a `Transform`), or one framing the scene.
+fn find_camera(world: &mut World, width: u32, height: u32) -> PinholeCamera {
+    let mut q = world.query::<(&Camera, &crate::geometry::Transform)>();
+    if let Some((c, t)) = q.iter(world).next() {
+        return PinholeCamera::new(c, t, width, height);
+    }
+    let s = world.resource::<SceneBounds>().sphere;
+    let (c, t) = PinholeCamera::framing(s.center, s.radius, width, height);
+    PinholeCamera::new(&c, &t, width, height)
+}
+
+/// Renders the world's scene. The world must have had `LightingPlugin::build` applied to it and
+/// `schedule`; `Settings` choose colour mode, light sampler and selection.
+pub fn render(
+    world: &mut World,
+    schedule: &mut Schedule,
+    opts: &RenderOptions,
+    mut progress: impl FnMut(f32),
+) -> (Film, RenderStats) {
+    let start = std::time::Instant::now();
+    world.resource_mut::<Settings>().mis = opts.mis;
+    // One update brings the BVH and light tables up to date before cameras are placed.
+    world.resource_mut::<ShadingBatch>().clear();
+    schedule.run(world);
+    let camera = find_camera(world, opts.width, opts.height);
+    let materials: Vec<Material> = {
+        let entities = world.resource::<GeometryIndex>().entities.clone();
+        entities.iter().map(|&e| world.get::<Material>(e).cloned().unwrap_or_default()).collect()
+    };
+    let settings = world.resource::<Settings>().clone();
+    let spectral = settings.color_mode == ColorMode::Spectral;
+    let seed = settings.seed ^ RENDER_SALT;
+
+    let mut film = Film::new(opts.width, opts.height);
+    let mut stats = RenderStats::default();
+    let total = opts.width as usize * opts.height as usize * opts.spp as usize;
+    let mut samples: Vec<CameraSample> = Vec::with_capacity(BATCH_SAMPLES.min(total));
+    let mut rays: Vec<Ray> = Vec::new();
+    let mut hits: Vec<Option<Hit>> = Vec::new();
+    let mut contributions: Vec<Vec3> = Vec::new();
+    let mut first = 0usize;
+    while first < total {
+        let last = (first + BATCH_SAMPLES).min(total);
+        // Sample index s of pixel p is camera sample p * spp + s: a pixel's samples are adjacent.
+        samples.clear();
+        samples.extend((first..last).map(|k| {
+            let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
+            let mut rng = SampleStream::new(seed, pixel, sample);
+            let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
+            let wavelengths = spectral.then(|| SampledWavelengths::sample_visible(rng.next_f32()));
+            CameraSample { pixel, sample, ray, hit: None, wavelengths }
+        }));
+        rays.clear();
+        rays.extend(samples.iter().map(|s| s.ray));
+        closest_hits(world.resource::<SceneBvh>(), &rays, &mut hits);
+        for (s, h) in samples.iter_mut().zip(&hits) {
+            s.hit = *h;
+        }
+        // Points on surfaces go to the light system; normals face the viewer.
+        let shaded: Vec<usize> = (0..samples.len()).filter(|&i| samples[i].hit.is_some()).collect();
+        {
+            let mut batch = world.resource_mut::<ShadingBatch>();
+            batch.clear();
+            for &i in &shaded {
+                let (s, h) = (&samples[i], samples[i].hit.unwrap());
+                let flip = if h.ng.dot(s.ray.dir) > 0.0 { -1.0 } else { 1.0 };
+                let ns = if h.ns.dot(h.ng) * flip < 0.0 { h.ng * flip } else { h.ns * flip };
+                batch.push_with_error(h.p, h.p_error, h.ng * flip, ns, s.pixel, s.sample);
+                if let Some(w) = s.wavelengths {
+                    batch.wavelengths.push(w);
+                }
+            }
+        }
+        schedule.run(world);
+        stats.shadow_rays += world.resource::<crate::systems::ShadowRays>().len() as u64;
+
+        let world_ref = &*world;
+        let shade = ShadeContext {
+            table: world_ref.resource::<LightTable>(),
+            sampler: world_ref.resource::<LightSampler>(),
+            lighting: world_ref.resource::<DirectLighting>(),
+            batch: world_ref.resource::<ShadingBatch>(),
+            bvh: world_ref.resource::<SceneBvh>(),
+            materials: &materials,
+            seed,
+            mis: opts.mis,
+            all_lights: settings.selection == crate::shading::LightSelection::All,
+        };
+        let escape_ids: Vec<_> = shade.table.escape_lights().collect();
+        contributions.clear();
+        contributions.resize(samples.len(), Vec3::ZERO);
+        // Escaped camera rays see the infinite lights directly.
+        for (c, s) in contributions.iter_mut().zip(&samples).filter(|(_, s)| s.hit.is_none()) {
+            let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
+            let le = escape_ids
+                .iter()
+                .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.ray.dir, query)));
+            *c = to_rgb(le, s.wavelengths.as_ref());
+        }
+        let shaded_values: Vec<(Vec3, bool)> =
+            shaded.par_iter().enumerate().map(|(j, &i)| shade.shade(j, &samples[i], &escape_ids)).collect();
+        for (&i, (rgb, traced)) in shaded.iter().zip(shaded_values) {
+            contributions[i] = rgb;
+            stats.bsdf_rays += traced as u64;
+        }
+        for (s, c) in samples.iter().zip(&contributions) {
+            film.add(s.pixel, *c);
+        }
+        stats.camera_samples += samples.len() as u64;
+        first = last;
+        progress(first as f32 / total as f32);
+    }
+    stats.seconds = start.elapsed().as_secs_f64();
+    (film, stats)
+}
+
+/// Read-only state for shading one batch in parallel.
+struct ShadeContext<'a> {
+    table: &'a LightTable,
+    sampler: &'a LightSampler,
+    lighting: &'a DirectLighting,
+    batch: &'a ShadingBatch,
+    bvh: &'a SceneBvh,
+    materials: &'a [Material],
+    seed: u64,
+    mis: bool,
+    /// Every light is sampled for every point (pmf 1) rather than one chosen by the sampler.
+    all_lights: bool,
+}
+
+impl ShadeContext<'_> {
+    /// Direct light at batch point `j` (camera sample `s`): the light system's samples weighted by
+    /// MIS, plus one BSDF sample toward non-delta lights. Returns RGB and whether a ray was traced.
+    fn shade(&self, j: usize, s: &CameraSample, escape_ids: &[crate::light::LightId]) -> (Vec3, bool) {
+        let hit = s.hit.expect("shaded samples have hits");
+        let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
+        let wo = -s.ray.dir.normalize();
+        let ns = self.batch.shading_normal[j];
+        let material = self.materials.get(hit.material as usize).cloned().unwrap_or_default();
+        let bsdf = material.bsdf(hit.uv, ns, query);
+        let mut l = SampledSpectrum::default();
+        for e in self.lighting.entries(j) {
+            let (li, wi, pdf) = (self.lighting.radiance[e], self.lighting.wi[e], self.lighting.pdf[e]);
+            if pdf <= 0.0 {
+                continue;
+            }
+            let f = bsdf.f(wo, wi);
+            let w = if self.lighting.delta[e] || !self.mis { 1.0 } else { power_heuristic(pdf, bsdf.pdf(wo, wi)) };
+            l = l.add(f.mul(li).scale(wi.dot(ns).abs() * w / pdf));
+        }
+        let mut traced = false;
+        if self.mis && !escape_ids.is_empty() {
+            let mut rng = SampleStream::new(self.seed, s.pixel, s.sample).at_dimension(16);
+            if let Some(bs) = bsdf.sample(wo, rng.next_f32(), rng.next_2d()) {
+                traced = true;
+                let from = crate::geometry::SurfacePoint { p: hit.p, p_error: hit.p_error, n: self.batch.normal[j] };
+                let ray = from.spawn_ray(bs.wi);
+                if self.bvh.closest_hit(&ray).is_none() {
+                    let ctx = LightSampleContext { p: hit.p, n: self.batch.normal[j], ns };
+                    for &id in escape_ids {
+                        let le = self.table.le(id, bs.wi, query);
+                        if le.0.iter().all(|&v| v == 0.0) {
+                            continue;
+                        }
+                        let pmf = if self.all_lights { 1.0 } else { self.sampler.pmf(&ctx, id) };
+                        let light_pdf = pmf * self.table.pdf_li(id, &ctx, bs.wi);
+                        let w = power_heuristic(bs.pdf, light_pdf);
+                        l = l.add(bs.f.mul(le).scale(bs.wi.dot(ns).abs() * w / bs.pdf));
+                    }
+                }
+            }
+        }
+        (to_rgb(l, s.wavelengths.as_ref()), traced)
+    }
+}

@@ -1,0 +1,441 @@
+//! Images in: OpenEXR, Radiance HDR, PNG and JPEG as linear RGB, for environment maps, light images and glTF
+//! textures.
+//!
+//! # Validation policy
+//!
+//! Environment maps and light images become sampling distributions and emitted radiance, so bad pixels are not
+//! let through silently:
+//! - NaN or +/-Inf in any channel: the load fails with [`ImageError::NonFinite`], naming the file, the first bad
+//!   pixel (x, y) in row-major order and how many pixels are bad (pbrt-v4 `lights.cpp` likewise refuses light
+//!   images with NaN or infinite pixels).
+//! - Negative values (only EXR can hold them): clamped to 0, counted, and reported in [`LoadedImage::warnings`]
+//!   for the caller to print.
+//! - Missing, unreadable, empty (zero-byte), zero-size, truncated or corrupt files and unknown formats each give an
+//!   [`ImageError`] naming the file. Images over [`MAX_PIXELS`] pixels are refused before their pixels are decoded.
+//!
+//! Loading never panics; a panic inside a third-party decoder is caught and reported as [`ImageError::Decode`].
+//!
+//! # Colour
+//!
+//! EXR and HDR pixels are taken as linear. PNG and JPEG (8 or 16 bit) are decoded with the sRGB transfer function
+//! (IEC 61966-2-1) whatever gamma or ICC profile they carry; alpha is dropped and grey is replicated to RGB.
+//! An EXR's first layer (part) with R, G and B channels is read (or, failing that, its first with a Y channel, as
+//! grey); f16, f32 and u32 samples, scan-line or tiled, are all accepted.
+//!
+//! # Equirectangular (lat-long) maps
+//!
+//! In kelvin's frame (+Y up, right-handed), for `uv` in [0,1]^2 with v = 0 on the top row:
+//! - v = 0 is the zenith (+Y), v = 0.5 the horizon, v = 1 the nadir (-Y): polar angle theta = pi v.
+//! - u = 0.5 (the image centre) looks along +X, u = 0.75 along +Z, u = 0 and 1 along -X, and u = 0.25 along -Z
+//!   (glTF forward: what a default glTF camera sees): azimuth phi = 2 pi (u - 0.5), measured from +X toward +Z.
+//!
+//! This is the mapping of three.js (`equirectUv`), the Khronos glTF Sample Viewer (`panorama_to_cubemap`) and
+//! Blender's environment texture once Blender's Z-up frame is turned to glTF's Y-up one (as its glTF exporter
+//! does), so an HDRI shows the same way in kelvin as in those viewers.
+
+use std::f32::consts::{PI, TAU};
+use std::io::Cursor;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+
+/// The largest image accepted, in pixels (2^28, e.g. 23170 x 23170; 3 GiB as linear f32 RGB).
+pub const MAX_PIXELS: usize = 1 << 28;
+
+/// Rec. 709 / sRGB luminance weights: the Y row of the sRGB-to-XYZ matrix (IEC 61966-2-1), as in
+/// [`crate::spectrum::color::SRGB_TO_XYZ`].
+pub const LUMINANCE_WEIGHTS: Vec3 = Vec3::new(0.2126729, 0.7151522, 0.0721750);
+
+/// What [`load_image`] and [`load_image_from_bytes`] accept, for error messages.
+pub const IMAGE_FORMATS: &str = ".exr, .hdr, .png, .jpg / .jpeg (or the MIME types image/png, image/jpeg)";
+
+/// A linear RGB image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    /// Width in pixels, at least 1.
+    pub width: usize,
+    /// Height in pixels, at least 1.
+    pub height: usize,
+    /// `width * height` linear RGB pixels, row-major, row 0 at the top.
+    pub pixels: Vec<Vec3>,
+}
+
+/// A loaded image with what the validation policy changed (see the module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadedImage {
+    /// The pixels, all finite and non-negative.
+    pub image: RgbImage,
+    /// Human-readable notes (e.g. "clamped 12 negative pixels to 0"), each naming the file.
+    pub warnings: Vec<String>,
+}
+
+/// Why an image could not be loaded. `what` names the file (or the in-memory source).
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum ImageError {
+    #[error("{what}: file not found")]
+    NotFound { what: String },
+    #[error("{what}: cannot read: {msg}")]
+    Io { what: String, msg: String },
+    #[error("{what}: unknown image format {given:?}; accepted: {IMAGE_FORMATS}")]
+    UnknownFormat { what: String, given: String },
+    #[error("{what}: empty (zero bytes)")]
+    Empty { what: String },
+    #[error("{what}: corrupt or truncated {format} data: {msg}")]
+    Decode { what: String, format: &'static str, msg: String },
+    #[error("{what}: image has zero size ({width} x {height})")]
+    ZeroSize { what: String, width: usize, height: usize },
+    #[error("{what}: image too large ({width} x {height} pixels; at most {MAX_PIXELS} pixels accepted)")]
+    TooLarge { what: String, width: usize, height: usize },
+    #[error("{what}: no R, G, B or Y channels in any EXR layer (found: {channels})")]
+    NoColorChannels { what: String, channels: String },
+    #[error("{what}: {msg}")]
+    Unsupported { what: String, msg: String },
+    #[error(
+        "{what}: {count} pixel(s) with NaN or infinite values, first at (x {x}, y {y}) = {value}; \
+         not usable as a light or environment map"
+    )]
+    NonFinite { what: String, x: usize, y: usize, value: String, count: usize },
+}
+
+/// The formats kelvin reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// OpenEXR, linear.
+    Exr,
+    /// Radiance RGBE, linear.
+    Hdr,
+    /// PNG, sRGB-encoded.
+    Png,
+    /// JPEG, sRGB-encoded.
+    Jpeg,
+}
+
+impl ImageFormat {
+    /// From a file extension or MIME type, case-insensitive: "exr", ".hdr", "png", "jpg", "jpeg", "image/png", ...
+    pub fn from_hint(hint: &str) -> Option<Self> {
+        let h = hint.trim().to_ascii_lowercase();
+        let h = h.strip_prefix("image/").unwrap_or(&h);
+        let h = h.strip_prefix('.').unwrap_or(h);
+        match h {
+            "exr" | "x-exr" => Some(Self::Exr),
+            "hdr" | "vnd.radiance" => Some(Self::Hdr),
+            "png" => Some(Self::Png),
+            "jpg" | "jpeg" => Some(Self::Jpeg),
+            _ => None,
+        }
+    }
+
+    /// The format's name in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Exr => "OpenEXR",
+            Self::Hdr => "Radiance HDR",
+            Self::Png => "PNG",
+            Self::Jpeg => "JPEG",
+        }
+    }
+}
+
+impl RgbImage {
+    /// The pixel at column `x`, row `y` (row 0 at the top). Panics if `x >= width` or `y >= height`.
+    pub fn get(&self, x: usize, y: usize) -> Vec3 {
+        assert!(x < self.width && y < self.height, "pixel ({x}, {y}) outside {}x{}", self.width, self.height);
+        self.pixels[y * self.width + x]
+    }
+
+    /// Luminance (Rec. 709 Y) of pixel (x, y); in cd/m^2 when the image is photometric (see DESIGN.md).
+    pub fn luminance(&self, x: usize, y: usize) -> f32 {
+        self.get(x, y).dot(LUMINANCE_WEIGHTS)
+    }
+
+    /// Bilinear lookup at `uv` in [0,1]^2 (v = 0 at the top), pixel centres at ((x + 0.5) / w, (y + 0.5) / h).
+    /// u wraps around (the lat-long seam) and v is clamped (the poles). Non-finite `uv` gives a defined pixel,
+    /// never a panic.
+    pub fn bilinear(&self, uv: Vec2) -> Vec3 {
+        debug_assert!(uv.is_finite(), "bilinear lookup at non-finite uv {uv}");
+        let (w, h) = (self.width as i64, self.height as i64);
+        let fx = uv.x * self.width as f32 - 0.5;
+        let fy = uv.y * self.height as f32 - 0.5;
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (tx, ty) = (fx - x0, fy - y0);
+        // Float-to-int casts saturate (NaN -> 0), so any uv gives an index in range after wrap / clamp.
+        let col = |i: i64| (i.rem_euclid(w)) as usize;
+        let row = |j: i64| j.clamp(0, h - 1) as usize;
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let (c0, c1) = (col(x0), col(x0.saturating_add(1)));
+        let (r0, r1) = (row(y0), row(y0.saturating_add(1)));
+        let px = |c: usize, r: usize| self.pixels[r * self.width + c];
+        let top = px(c0, r0).lerp(px(c1, r0), tx);
+        let bottom = px(c0, r1).lerp(px(c1, r1), tx);
+        let out = top.lerp(bottom, ty);
+        if out.is_finite() { out } else { px(c0, r0) }
+    }
+
+    /// Sum of all pixels' luminance divided by the pixel count (an unweighted mean, not solid-angle weighted).
+    pub fn mean_luminance(&self) -> f64 {
+        let sum: f64 = self.pixels.iter().map(|p| p.dot(LUMINANCE_WEIGHTS) as f64).sum();
+        sum / self.pixels.len().max(1) as f64
+    }
+
+    /// The largest pixel luminance.
+    pub fn max_luminance(&self) -> f32 {
+        self.pixels.iter().map(|p| p.dot(LUMINANCE_WEIGHTS)).fold(0.0, f32::max)
+    }
+}
+
+/// The sRGB decoding function (IEC 61966-2-1): encoded value in [0, 1] to linear, the inverse of
+/// [`crate::spectrum::color::srgb_encode`]. Inputs outside [0, 1] are clamped; NaN gives 0.
+pub fn srgb_decode(encoded: f64) -> f64 {
+    let c = if encoded.is_nan() { 0.0 } else { encoded.clamp(0.0, 1.0) };
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+/// The direction (unit, +Y up) of a lat-long map at `uv` (v = 0 at the top); see the module docs.
+pub fn lat_long_direction(uv: Vec2) -> Vec3 {
+    let phi = TAU * (uv.x - 0.5);
+    let theta = PI * uv.y;
+    let (sin_theta, cos_theta) = theta.sin_cos();
+    let (sin_phi, cos_phi) = phi.sin_cos();
+    Vec3::new(sin_theta * cos_phi, cos_theta, sin_theta * sin_phi)
+}
+
+/// The lat-long `uv` (u in [0, 1), v in [0, 1], v = 0 at the top) of direction `dir`, the inverse of
+/// [`lat_long_direction`]. `dir` need not be normalised; at the poles (and for a zero `dir`) u is 0.5.
+pub fn direction_to_lat_long(dir: Vec3) -> Vec2 {
+    let d = dir.normalize_or_zero();
+    if d == Vec3::ZERO {
+        return Vec2::new(0.5, 0.5);
+    }
+    // atan2 rather than acos(y): acos loses precision near the poles in f32.
+    let theta = (d.x * d.x + d.z * d.z).sqrt().atan2(d.y);
+    let phi = d.z.atan2(d.x); // in [-pi, pi]
+    let u = 0.5 + phi / TAU;
+    // atan2 may return exactly +pi, giving u = 1; keep u in [0, 1) so it indexes the first column.
+    Vec2::new(if u >= 1.0 { u - 1.0 } else { u }, theta / PI)
+}
+
+/// Loads an image file; the format comes from the extension (see the module docs for the checks made).
+pub fn load_image(path: &Path) -> Result<LoadedImage, ImageError> {
+    let what = path.display().to_string();
+    let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    // Check the extension first so a typo in it is reported as such even when the file is missing.
+    if ImageFormat::from_hint(&ext).is_none() {
+        return Err(ImageError::UnknownFormat { what, given: ext });
+    }
+    let bytes = std::fs::read(path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::NotFound => ImageError::NotFound { what: what.clone() },
+        _ => ImageError::Io { what: what.clone(), msg: e.to_string() },
+    })?;
+    load_image_from_bytes(&bytes, &ext, &what)
+}
+
+/// Loads an image held in memory (glTF embedded textures, fuzzing). `format_hint` is an extension or MIME type
+/// (see [`ImageFormat::from_hint`]); `what` names the source in errors and warnings.
+pub fn load_image_from_bytes(bytes: &[u8], format_hint: &str, what: &str) -> Result<LoadedImage, ImageError> {
+    let format = ImageFormat::from_hint(format_hint)
+        .ok_or_else(|| ImageError::UnknownFormat { what: what.into(), given: format_hint.into() })?;
+    if bytes.is_empty() {
+        return Err(ImageError::Empty { what: what.into() });
+    }
+    let decoded = catch_unwind(AssertUnwindSafe(|| match format {
+        ImageFormat::Exr => decode_exr(bytes, what),
+        ImageFormat::Hdr => decode_with_image_crate(bytes, image::ImageFormat::Hdr, format, what),
+        ImageFormat::Png => decode_with_image_crate(bytes, image::ImageFormat::Png, format, what),
+        ImageFormat::Jpeg => decode_with_image_crate(bytes, image::ImageFormat::Jpeg, format, what),
+    }))
+    .unwrap_or_else(|_| {
+        Err(ImageError::Decode { what: what.into(), format: format.name(), msg: "the decoder panicked".into() })
+    })?;
+    validate(decoded, what)
+}
+
+/// Checks the size, rejects non-finite pixels and clamps negative ones (the module's validation policy).
+fn validate(image: RgbImage, what: &str) -> Result<LoadedImage, ImageError> {
+    check_size(image.width, image.height, what)?;
+    if image.pixels.len() != image.width * image.height {
+        return Err(ImageError::Unsupported {
+            what: what.into(),
+            msg: format!("{} pixels decoded for a {} x {} image", image.pixels.len(), image.width, image.height),
+        });
+    }
+    let mut bad = image.pixels.iter().enumerate().filter(|(_, p)| !p.is_finite());
+    if let Some((first, p)) = bad.next() {
+        return Err(ImageError::NonFinite {
+            what: what.into(),
+            x: first % image.width,
+            y: first / image.width,
+            value: format!("({}, {}, {})", p.x, p.y, p.z),
+            count: 1 + bad.count(),
+        });
+    }
+    let mut image = image;
+    let mut negative = 0usize;
+    for p in &mut image.pixels {
+        if p.cmplt(Vec3::ZERO).any() {
+            negative += 1;
+            *p = p.max(Vec3::ZERO);
+        }
+    }
+    let mut warnings = Vec::new();
+    if negative > 0 {
+        warnings.push(format!("{what}: clamped {negative} pixel(s) with negative values to 0"));
+    }
+    Ok(LoadedImage { image, warnings })
+}
+
+fn check_size(width: usize, height: usize, what: &str) -> Result<(), ImageError> {
+    if width == 0 || height == 0 {
+        return Err(ImageError::ZeroSize { what: what.into(), width, height });
+    }
+    if width.checked_mul(height).is_none_or(|n| n > MAX_PIXELS) {
+        return Err(ImageError::TooLarge { what: what.into(), width, height });
+    }
+    Ok(())
+}
+
+/// PNG, JPEG and HDR through the `image` crate, with allocation limits so a hostile header cannot exhaust memory.
+fn decode_with_image_crate(
+    bytes: &[u8],
+    crate_format: image::ImageFormat,
+    format: ImageFormat,
+    what: &str,
+) -> Result<RgbImage, ImageError> {
+    let decode_error = |e: image::ImageError| match e {
+        image::ImageError::Limits(_) => ImageError::Unsupported {
+            what: what.into(),
+            msg: format!("image too large to decode ({e}); at most {MAX_PIXELS} pixels accepted"),
+        },
+        _ => ImageError::Decode { what: what.into(), format: format.name(), msg: e.to_string() },
+    };
+    let mut reader = image::ImageReader::with_format(Cursor::new(bytes), crate_format);
+    let mut limits = image::Limits::default();
+    // Four f32 channels per pixel is the largest decoded form.
+    limits.max_alloc = Some(MAX_PIXELS as u64 * 16);
+    reader.limits(limits.clone());
+    let (w, h) = reader.into_dimensions().map_err(decode_error)?;
+    check_size(w as usize, h as usize, what)?;
+    let mut reader = image::ImageReader::with_format(Cursor::new(bytes), crate_format);
+    reader.limits(limits);
+    let img = reader.decode().map_err(decode_error)?;
+    let (width, height) = (img.width() as usize, img.height() as usize);
+    check_size(width, height, what)?;
+    let pixels = match format {
+        ImageFormat::Hdr => img.into_rgb32f().pixels().map(|p| Vec3::from_array(p.0)).collect(),
+        _ if img.color().bytes_per_pixel() / img.color().channel_count() == 1 => {
+            let lut: Vec<f32> = (0..=255u8).map(|v| srgb_decode(v as f64 / 255.0) as f32).collect();
+            let rgb = img.into_rgb8();
+            rgb.pixels().map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize])).collect()
+        }
+        _ => {
+            let decode = |v: u16| srgb_decode(v as f64 / 65535.0) as f32;
+            img.into_rgb16().pixels().map(|p| Vec3::new(decode(p[0]), decode(p[1]), decode(p[2]))).collect()
+        }
+    };
+    Ok(RgbImage { width, height, pixels })
+}
+
+/// OpenEXR through the `exr` crate: headers are checked before any pixel is decoded.
+fn decode_exr(bytes: &[u8], what: &str) -> Result<RgbImage, ImageError> {
+    use exr::prelude::{FlatSamples, ReadChannels, ReadLayers};
+    let decode_error =
+        |e: exr::error::Error| ImageError::Decode { what: what.into(), format: "OpenEXR", msg: e.to_string() };
+
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(decode_error)?;
+    for header in &meta.headers {
+        check_size(header.layer_size.0, header.layer_size.1, what)?;
+    }
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(decode_error)?;
+
+    let names = |layer: &exr::prelude::Layer<exr::prelude::AnyChannels<FlatSamples>>| -> Vec<String> {
+        layer.channel_data.list.iter().map(|c| c.name.to_string()).collect()
+    };
+    // The first layer with R, G and B; else the first with Y (grey).
+    let choice = image
+        .layer_data
+        .iter()
+        .find_map(|l| pick_channels(&names(l), &["R", "G", "B"]).map(|i| (l, i)))
+        .or_else(|| image.layer_data.iter().find_map(|l| pick_channels(&names(l), &["Y"]).map(|i| (l, i))));
+    let Some((layer, indices)) = choice else {
+        let channels = image.layer_data.iter().flat_map(names).collect::<Vec<_>>().join(", ");
+        return Err(ImageError::NoColorChannels { what: what.into(), channels });
+    };
+
+    let (width, height) = (layer.size.0, layer.size.1);
+    check_size(width, height, what)?;
+    let n = width * height;
+    let mut planes = Vec::with_capacity(indices.len());
+    for &i in &indices {
+        let channel = &layer.channel_data.list[i];
+        if channel.sample_data.len() != n {
+            return Err(ImageError::Unsupported {
+                what: what.into(),
+                msg: format!("EXR channel {} is subsampled ({:?}); not supported", channel.name, channel.sampling),
+            });
+        }
+        planes.push(channel.sample_data.values_as_f32().collect::<Vec<f32>>());
+    }
+    let pixels = match planes.as_slice() {
+        [r, g, b, ..] => (0..n).map(|i| Vec3::new(r[i], g[i], b[i])).collect(),
+        [y, ..] => y.iter().map(|&v| Vec3::splat(v)).collect(),
+        [] => Vec::new(), // pick_channels never returns no channel; validate() would reject this
+    };
+    Ok(RgbImage { width, height, pixels })
+}
+
+/// Indices of the wanted channels (e.g. R, G, B) among `names`, all from one channel-name layer: the unprefixed
+/// ones ("R") first, then the alphabetically first prefix ("diffuse.R"). Channel names compare case-insensitively.
+fn pick_channels(names: &[String], wanted: &[&str]) -> Option<Vec<usize>> {
+    let split = |name: &str| match name.rsplit_once('.') {
+        Some((prefix, base)) => (prefix.to_string(), base.to_ascii_uppercase()),
+        None => (String::new(), name.to_ascii_uppercase()),
+    };
+    let mut prefixes: Vec<String> = names.iter().map(|n| split(n).0).collect();
+    prefixes.sort();
+    prefixes.dedup(); // "" sorts first
+    prefixes.iter().find_map(|prefix| {
+        wanted
+            .iter()
+            .map(|w| names.iter().position(|n| split(n) == (prefix.clone(), w.to_string())))
+            .collect::<Option<Vec<usize>>>()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spectrum::color::srgb_encode;
+
+    #[test]
+    fn srgb_decode_inverts_encode() {
+        for i in 0..=1000 {
+            let x = i as f64 / 1000.0;
+            assert!((srgb_decode(srgb_encode(x)) - x).abs() < 1e-12, "x = {x}");
+        }
+        // 50% grey in 8 bit (128/255) is 21.586% linear (IEC 61966-2-1).
+        assert!((srgb_decode(128.0 / 255.0) - 0.2158605).abs() < 1e-6);
+    }
+
+    #[test]
+    fn pick_channels_prefers_unprefixed_then_first_prefix() {
+        let names: Vec<String> = ["A", "B", "G", "R", "diffuse.B", "diffuse.G", "diffuse.R"].map(String::from).into();
+        assert_eq!(pick_channels(&names, &["R", "G", "B"]), Some(vec![3, 2, 1]));
+        let names: Vec<String> = ["a.R", "a.G", "b.R", "b.G", "b.B"].map(String::from).into();
+        assert_eq!(pick_channels(&names, &["R", "G", "B"]), Some(vec![2, 3, 4]));
+        assert_eq!(pick_channels(&names, &["Y"]), None);
+    }
+
+    #[test]
+    fn format_hints() {
+        assert_eq!(ImageFormat::from_hint("image/jpeg"), Some(ImageFormat::Jpeg));
+        assert_eq!(ImageFormat::from_hint(".EXR"), Some(ImageFormat::Exr));
+        assert_eq!(ImageFormat::from_hint("tiff"), None);
+    }
+}

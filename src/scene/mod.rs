@@ -1,0 +1,4 @@
+//! Loading: glTF scenes, environment maps, light images and textures, and IES photometric profiles,
+//! each with clear errors.
+pub mod ies;
+pub mod image;

@@ -1,0 +1,224 @@
+//! The light system's inputs and outputs as resources: the points to shade, the settings, and the
+//! direct lighting written back per point, plus the report of which systems ran.
+
+use bevy_ecs::resource::Resource;
+use glam::Vec3;
+
+use crate::light::LightId;
+use crate::spectrum::{SampledSpectrum, SampledWavelengths};
+
+/// RGB (linear sRGB, photometric) or spectral (sampled wavelengths per point).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ColorMode {
+    #[default]
+    Rgb,
+    Spectral,
+}
+
+/// How a light is chosen for each sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LightSamplerKind {
+    /// Every light equally likely.
+    Uniform,
+    /// Proportional to emitted power (alias table).
+    #[default]
+    Power,
+    /// Light BVH with orientation-cone importance (Conty & Kulla 2018).
+    Bvh,
+}
+
+/// Whether each point gets one sampled light or every light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LightSelection {
+    /// One light per point, chosen by the light sampler (pdf includes its pmf).
+    #[default]
+    OneSampled,
+    /// Every light, each with its own sample (pmf 1).
+    All,
+}
+
+/// What the light system computes and how.
+#[derive(Resource, Clone, Debug, PartialEq)]
+pub struct Settings {
+    pub color_mode: ColorMode,
+    pub light_sampler: LightSamplerKind,
+    pub selection: LightSelection,
+    /// Trace shadow rays (when there is geometry that can occlude).
+    pub shadows: bool,
+    /// Light samples per point per update.
+    pub samples_per_point: u32,
+    /// Seed of the counter-based random numbers.
+    pub seed: u64,
+    /// The caller combines light samples with BSDF samples by MIS, so image lights may sample
+    /// their MIS-compensated tables. Set false when light samples are used alone.
+    pub mis: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            color_mode: ColorMode::Rgb,
+            light_sampler: LightSamplerKind::Power,
+            selection: LightSelection::OneSampled,
+            shadows: true,
+            samples_per_point: 1,
+            seed: 0,
+            mis: true,
+        }
+    }
+}
+
+/// Points to shade, as columns. All columns have `len()` entries; `wavelengths` is filled in
+/// spectral mode only. The caller (a renderer's camera rays or an app's G-buffer) writes it.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct ShadingBatch {
+    /// World positions, m.
+    pub position: Vec<Vec3>,
+    /// Per-axis error bound of each position (for robust shadow-ray offsets; see
+    /// `geometry::ray`). `push` fills a conservative bound for points of unknown origin.
+    pub position_error: Vec<Vec3>,
+    /// Geometric normals (unit), or zero for points not on a surface.
+    pub normal: Vec<Vec3>,
+    /// Shading normals (unit); the geometric normal where absent.
+    pub shading_normal: Vec<Vec3>,
+    /// Pixel (or any stable point id) and sample index, the keys of the random numbers.
+    pub pixel: Vec<u32>,
+    pub sample: Vec<u32>,
+    /// Wavelengths per point, spectral mode only.
+    pub wavelengths: Vec<SampledWavelengths>,
+}
+
+impl ShadingBatch {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+    /// True with no points.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+    /// Empties every column, keeping capacity.
+    pub fn clear(&mut self) {
+        self.position.clear();
+        self.position_error.clear();
+        self.normal.clear();
+        self.shading_normal.clear();
+        self.pixel.clear();
+        self.sample.clear();
+        self.wavelengths.clear();
+    }
+    /// Appends a point on a surface whose position error is unknown (an app's G-buffer).
+    pub fn push(&mut self, position: Vec3, normal: Vec3, pixel: u32, sample: u32) {
+        let error = crate::geometry::SurfacePoint::from_point(position, normal).p_error;
+        self.push_with_error(position, error, normal, normal, pixel, sample);
+    }
+
+    /// Appends a point with a known position error bound and separate shading normal (a ray hit).
+    pub fn push_with_error(
+        &mut self,
+        position: Vec3,
+        error: Vec3,
+        normal: Vec3,
+        shading: Vec3,
+        pixel: u32,
+        sample: u32,
+    ) {
+        self.position.push(position);
+        self.position_error.push(error);
+        self.normal.push(normal);
+        self.shading_normal.push(shading);
+        self.pixel.push(pixel);
+        self.sample.push(sample);
+    }
+}
+
+/// Direct light per point in compressed rows: point `i` owns entries
+/// `offsets[i]..offsets[i + 1]` (one per sample in one-light mode, one per light and sample in
+/// all-lights mode). An entry's `radiance` is zero when the light sample failed or is occluded.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct DirectLighting {
+    pub offsets: Vec<u32>,
+    /// Incident radiance Li (visibility applied), in the batch's colour mode.
+    pub radiance: Vec<SampledSpectrum>,
+    /// Unit direction toward the light.
+    pub wi: Vec<Vec3>,
+    /// Solid-angle pdf times the light's selection probability (delta lights: the pmf alone).
+    pub pdf: Vec<f32>,
+    /// Which light.
+    pub light: Vec<LightId>,
+    /// True for delta lights (no MIS with BSDF sampling).
+    pub delta: Vec<bool>,
+    /// True where a shadow ray found an occluder.
+    pub occluded: Vec<bool>,
+}
+
+impl DirectLighting {
+    /// Entries of point `i`.
+    pub fn entries(&self, i: usize) -> std::ops::Range<usize> {
+        self.offsets[i] as usize..self.offsets[i + 1] as usize
+    }
+    /// Number of entries.
+    pub fn len(&self) -> usize {
+        self.wi.len()
+    }
+    /// True with no entries.
+    pub fn is_empty(&self) -> bool {
+        self.wi.is_empty()
+    }
+    /// Empties every column, keeping capacity.
+    pub fn clear(&mut self) {
+        self.offsets.clear();
+        self.radiance.clear();
+        self.wi.clear();
+        self.pdf.clear();
+        self.light.clear();
+        self.delta.clear();
+        self.occluded.clear();
+    }
+}
+
+/// One line of the run report: a system and whether it ran this update, and why.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RunEntry {
+    pub system: &'static str,
+    pub ran: bool,
+    pub why: String,
+}
+
+/// Which systems ran in the last update and why each skipped one was skipped, plus warnings
+/// (lights rejected for bad parameters, and so on).
+#[derive(Resource, Clone, Debug, Default)]
+pub struct RunReport {
+    pub entries: Vec<RunEntry>,
+    pub warnings: Vec<String>,
+}
+
+impl RunReport {
+    /// Records a decision.
+    pub fn record(&mut self, system: &'static str, ran: bool, why: impl Into<String>) {
+        self.entries.push(RunEntry { system, ran, why: why.into() });
+    }
+    /// Did `system` run in the last update?
+    pub fn ran(&self, system: &str) -> bool {
+        self.entries.iter().any(|e| e.system == system && e.ran)
+    }
+}
+
+impl std::fmt::Display for RunReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for e in &self.entries {
+            writeln!(f, "{:<28} {:<8} {}", e.system, if e.ran { "ran" } else { "skipped" }, e.why)?;
+        }
+        for w in &self.warnings {
+            writeln!(f, "warning: {w}")?;
+        }
+        Ok(())
+    }
+}
+
+/// The scene's bounding sphere (geometry and lights), which distant and infinite lights need to
+/// place their far sample points and to compute their power.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq)]
+pub struct SceneBounds {
+    pub sphere: crate::light::SceneSphere,
+}

@@ -1,0 +1,132 @@
+//! What happens each update: bevy_ecs systems that turn the world into flat tables and batched
+//! work, and the plugin that schedules them.
+//!
+//! The chain, set by set (each set's doc says what holds after it):
+//! update the scene BVH -> build env-map tables -> sync lights -> update the light sampler ->
+//! sample lights for the shading batch -> trace shadow rays -> write direct lighting.
+
+mod env_tables;
+mod geometry;
+mod plan;
+mod sample;
+mod shadows;
+mod sync_lights;
+
+use bevy_ecs::prelude::*;
+
+use crate::light::LightTable;
+use crate::light_sampler::LightSampler;
+use crate::shading::{DirectLighting, RunReport, SceneBounds, Settings, ShadingBatch};
+
+pub use env_tables::{EnvTables, build_env_tables, plan_env_tables};
+pub use geometry::{BvhWork, GeometryIndex, plan_bvh, update_scene_bvh};
+pub use plan::Work;
+pub use sample::{ShadowRays, sample_direct_lighting};
+pub use shadows::trace_shadow_rays;
+pub use sync_lights::{
+    remove_lights, sync_distant_lights, sync_image_infinite_lights, sync_point_lights, sync_spot_lights,
+    sync_uniform_infinite_lights,
+};
+
+/// The light system's sets, in order.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub enum LightingSet {
+    /// After this set, the `SceneBvh` and `SceneBounds` match the geometry entities.
+    UpdateBvh,
+    /// After this set, every image infinite light has sampling tables for its current image.
+    BuildEnvTables,
+    /// After this set, every added, changed or removed light is reflected in the `LightTable`.
+    SyncLights,
+    /// After this set, the light sampler matches the `LightTable`.
+    UpdateSampler,
+    /// After this set, `DirectLighting` holds one unoccluded light sample per point (or per point
+    /// and light) and `ShadowRays` the segments to test.
+    SampleLights,
+    /// After this set, every shadow ray has an occluded flag.
+    TraceShadows,
+    /// After this set, `DirectLighting` has visibility applied and is ready to read.
+    WriteResults,
+}
+
+/// Adds kelvin's resources to a `World` and its systems to a `Schedule`: the one entry an app
+/// needs to embed the light system.
+pub struct LightingPlugin;
+
+impl LightingPlugin {
+    /// Inserts the resources (keeping any the app already inserted, such as `Settings`) and adds
+    /// the systems and their order to `schedule`.
+    pub fn build(world: &mut World, schedule: &mut Schedule) {
+        world.init_resource::<Settings>();
+        world.init_resource::<LightTable>();
+        world.init_resource::<LightSampler>();
+        world.init_resource::<ShadingBatch>();
+        world.init_resource::<DirectLighting>();
+        world.init_resource::<ShadowRays>();
+        world.init_resource::<RunReport>();
+        world.init_resource::<Work>();
+        world.init_resource::<SceneBounds>();
+        world.init_resource::<crate::geometry::SceneBvh>();
+        world.init_resource::<GeometryIndex>();
+        world.init_resource::<EnvTables>();
+
+        schedule.configure_sets(
+            (
+                LightingSet::UpdateBvh,
+                // Independent of geometry; image lights need their tables before they are synced.
+                LightingSet::BuildEnvTables,
+                // Distant and infinite lights read the scene bounds the BVH step computes.
+                LightingSet::SyncLights,
+                // The sampler weighs lights by power, so it reads the synced table.
+                LightingSet::UpdateSampler,
+                // Light selection uses the updated sampler.
+                LightingSet::SampleLights,
+                // Shadow rays are the segments the sampling step produced.
+                LightingSet::TraceShadows,
+                // Visibility is applied once every ray is traced.
+                LightingSet::WriteResults,
+            )
+                .chain(),
+        );
+        schedule.add_systems(
+            (plan::begin_update, plan_bvh, update_scene_bvh.run_if(plan::planned(|w| w.bvh != BvhWork::None)))
+                .chain()
+                .in_set(LightingSet::UpdateBvh),
+        );
+        schedule.add_systems(
+            (
+                // Removals first: an entity whose light changed kind is removed, then re-added.
+                remove_lights,
+                (
+                    sync_point_lights,
+                    sync_spot_lights,
+                    sync_distant_lights,
+                    sync_uniform_infinite_lights,
+                    sync_image_infinite_lights,
+                ),
+            )
+                .chain()
+                .in_set(LightingSet::SyncLights),
+        );
+        schedule.add_systems(
+            (plan_env_tables, build_env_tables.run_if(plan::planned(|w| w.env_tables)))
+                .chain()
+                .in_set(LightingSet::BuildEnvTables),
+        );
+        schedule.add_systems(
+            (plan::plan_sampler, sample::update_light_sampler.run_if(plan::planned(|w| w.sampler)))
+                .chain()
+                .in_set(LightingSet::UpdateSampler),
+        );
+        schedule.add_systems(
+            (plan::plan_sampling, sample_direct_lighting.run_if(plan::planned(|w| w.sampling)))
+                .chain()
+                .in_set(LightingSet::SampleLights),
+        );
+        schedule.add_systems(
+            (shadows::plan_shadows, trace_shadow_rays.run_if(plan::planned(|w| w.shadows)))
+                .chain()
+                .in_set(LightingSet::TraceShadows),
+        );
+        schedule.add_systems(sample::apply_visibility.in_set(LightingSet::WriteResults));
+    }
+}

@@ -1,0 +1,187 @@
+//! Choosing lights and evaluating Sample_Li for the whole shading batch (rayon over chunks), the
+//! shadow rays that follow, and applying their answers.
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::light::{ColorQuery, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
+use crate::light_sampler::LightSampler;
+use crate::rng::SampleStream;
+use crate::shading::{ColorMode, DirectLighting, LightSelection, RunReport, Settings, ShadingBatch};
+use crate::spectrum::SampledSpectrum;
+
+/// Points per parallel task.
+const CHUNK: usize = 1024;
+
+/// Shadow-ray segments from shading points to sampled light points, and their answers.
+/// Invariant: all columns have the same length; `entry` indexes `DirectLighting`.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct ShadowRays {
+    /// Segment start (the shading point), its error bound and geometric normal, for the offset.
+    pub origin: Vec<Vec3>,
+    pub origin_error: Vec<Vec3>,
+    pub origin_normal: Vec<Vec3>,
+    /// Segment end (the light point) and the light's surface normal there (zero if none).
+    pub target: Vec<Vec3>,
+    pub target_normal: Vec<Vec3>,
+    /// True for lights at infinity (distant, infinite): the ray leaves along `target - origin`.
+    pub to_infinity: Vec<bool>,
+    /// The `DirectLighting` entry each ray belongs to.
+    pub entry: Vec<u32>,
+    /// Answers, filled by the trace step.
+    pub occluded: Vec<bool>,
+}
+
+impl ShadowRays {
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.origin.len()
+    }
+    /// True with no rays.
+    pub fn is_empty(&self) -> bool {
+        self.origin.is_empty()
+    }
+    fn clear(&mut self) {
+        self.origin.clear();
+        self.origin_error.clear();
+        self.origin_normal.clear();
+        self.target.clear();
+        self.target_normal.clear();
+        self.to_infinity.clear();
+        self.entry.clear();
+        self.occluded.clear();
+    }
+}
+
+/// Rebuilds or refreshes the light sampler (rebuild on a kind change or changed powers).
+pub fn update_light_sampler(
+    table: Res<LightTable>,
+    settings: Res<Settings>,
+    mut sampler: ResMut<LightSampler>,
+    mut report: ResMut<RunReport>,
+) {
+    let what = if sampler.kind() != settings.light_sampler {
+        *sampler = LightSampler::build(settings.light_sampler, &table);
+        "built"
+    } else {
+        sampler.update(&table)
+    };
+    report.record("light_sampler", true, what);
+}
+
+/// Entries per point under `settings` for a table of `n_lights` lights.
+fn entries_per_point(settings: &Settings, n_lights: usize) -> usize {
+    let spp = settings.samples_per_point.max(1) as usize;
+    match settings.selection {
+        LightSelection::OneSampled => spp,
+        LightSelection::All => spp * n_lights,
+    }
+}
+
+/// For every point of the batch, chooses lights and evaluates Sample_Li, writing one
+/// `DirectLighting` entry per sample (unoccluded), then lists the shadow rays to trace.
+pub fn sample_direct_lighting(
+    batch: Res<ShadingBatch>,
+    table: Res<LightTable>,
+    sampler: Res<LightSampler>,
+    settings: Res<Settings>,
+    mut out: ResMut<DirectLighting>,
+    mut rays: ResMut<ShadowRays>,
+) {
+    let n = batch.len();
+    let k = entries_per_point(&settings, table.len());
+    let all_ids: Vec<LightId> =
+        if settings.selection == LightSelection::All { table.ids().collect() } else { Vec::new() };
+    let out = &mut *out;
+    out.clear();
+    out.offsets.extend((0..=n).map(|i| (i * k) as u32));
+    out.radiance.resize(n * k, SampledSpectrum::default());
+    out.wi.resize(n * k, Vec3::ZERO);
+    out.pdf.resize(n * k, 0.0);
+    out.light.resize(n * k, LightId { kind: LightKind::Point, row: 0 });
+    out.delta.resize(n * k, false);
+    out.occluded.resize(n * k, false);
+    let mut p_light = vec![Vec3::ZERO; n * k];
+    let mut n_light = vec![Vec3::ZERO; n * k];
+
+    let spp = settings.samples_per_point.max(1);
+    let chunk = CHUNK * k.max(1);
+    (
+        out.radiance.par_chunks_mut(chunk),
+        out.wi.par_chunks_mut(chunk),
+        out.pdf.par_chunks_mut(chunk),
+        out.light.par_chunks_mut(chunk),
+        out.delta.par_chunks_mut(chunk),
+        p_light.par_chunks_mut(chunk),
+        n_light.par_chunks_mut(chunk),
+    )
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(c, (radiance, wi, pdf, light, delta, pl, nl))| {
+            let first_point = c * CHUNK;
+            for e in 0..radiance.len() {
+                let i = first_point + e / k;
+                let slot = e % k;
+                let ctx = LightSampleContext { p: batch.position[i], n: batch.normal[i], ns: batch.shading_normal[i] };
+                let query = match settings.color_mode {
+                    ColorMode::Rgb => ColorQuery::Rgb,
+                    ColorMode::Spectral => ColorQuery::Spectral(&batch.wavelengths[i]),
+                };
+                let (s, light_index) = match settings.selection {
+                    LightSelection::OneSampled => (slot as u32, None),
+                    LightSelection::All => ((slot / all_ids.len()) as u32, Some(slot % all_ids.len())),
+                };
+                let mut rng = SampleStream::new(settings.seed, batch.pixel[i], batch.sample[i] * spp + s);
+                let chosen = match light_index {
+                    Some(j) => Some((all_ids[j], 1.0)),
+                    None => sampler.sample(&ctx, rng.next_f32()),
+                };
+                let Some((id, pmf)) = chosen else { continue };
+                light[e] = id;
+                let u = rng.at_dimension(1 + 2 * light_index.unwrap_or(0) as u32).next_2d();
+                if let Some(ls) = table.sample_li(id, &ctx, u, query)
+                    && ls.pdf > 0.0
+                    && ls.radiance.is_finite()
+                {
+                    radiance[e] = ls.radiance;
+                    wi[e] = ls.wi;
+                    pdf[e] = ls.pdf * pmf;
+                    delta[e] = table.flags(id).is_delta();
+                    pl[e] = ls.p_light;
+                    nl[e] = ls.n_light;
+                }
+            }
+        });
+
+    rays.clear();
+    if !settings.shadows {
+        return;
+    }
+    for e in 0..n * k {
+        let r = &out.radiance[e];
+        if out.pdf[e] > 0.0 && r.0.iter().any(|&v| v > 0.0) && table.casts_shadows(out.light[e]) {
+            let i = e / k;
+            let flags = table.flags(out.light[e]);
+            rays.origin.push(batch.position[i]);
+            rays.origin_error.push(batch.position_error[i]);
+            rays.origin_normal.push(batch.normal[i]);
+            rays.target.push(p_light[e]);
+            rays.target_normal.push(n_light[e]);
+            rays.to_infinity.push(flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION));
+            rays.entry.push(e as u32);
+        }
+    }
+    let count = rays.len();
+    rays.occluded.resize(count, false);
+}
+
+/// Zeroes the radiance of entries whose shadow ray was blocked.
+pub fn apply_visibility(rays: Res<ShadowRays>, mut out: ResMut<DirectLighting>) {
+    for (&e, &blocked) in rays.entry.iter().zip(&rays.occluded) {
+        if blocked {
+            out.radiance[e as usize] = SampledSpectrum::default();
+            out.occluded[e as usize] = true;
+        }
+    }
+}

@@ -1,0 +1,52 @@
+//! Tracing the batched shadow rays as any-hit queries against the scene BVH.
+
+use bevy_ecs::prelude::*;
+
+use crate::geometry::{SceneBvh, SurfacePoint, occluded};
+use crate::shading::{RunReport, Settings};
+
+use super::{ShadowRays, Work};
+
+/// Shadow rays are traced only when asked for, when there are rays and when some geometry can
+/// occlude them.
+pub fn plan_shadows(
+    settings: Res<Settings>,
+    rays: Res<ShadowRays>,
+    bvh: Res<SceneBvh>,
+    mut work: ResMut<Work>,
+    mut report: ResMut<RunReport>,
+) {
+    let (run, why) = if !settings.shadows {
+        (false, "shadows are off in Settings".to_string())
+    } else if rays.is_empty() {
+        (false, "no shadow rays (no samples, or every light has casts_shadows = false)".to_string())
+    } else if bvh.primitive_count() == 0 {
+        (false, "no occluding geometry".to_string())
+    } else {
+        (true, format!("{} rays against {} primitives", rays.len(), bvh.primitive_count()))
+    };
+    work.shadows = run;
+    report.record("trace_shadow_rays", run, why);
+}
+
+/// Builds offset segments (off the shading surface and off the light's surface) and traces them
+/// in parallel; fills `ShadowRays::occluded`.
+pub fn trace_shadow_rays(
+    mut rays: ResMut<ShadowRays>,
+    bvh: Res<SceneBvh>,
+    mut segments: Local<Vec<crate::geometry::Ray>>,
+) {
+    let r = &mut *rays;
+    segments.clear();
+    segments.extend((0..r.origin.len()).map(|i| {
+        let from = SurfacePoint { p: r.origin[i], p_error: r.origin_error[i], n: r.origin_normal[i] };
+        if r.to_infinity[i] {
+            from.spawn_ray((r.target[i] - r.origin[i]).normalize())
+        } else if r.target_normal[i] == glam::Vec3::ZERO {
+            from.spawn_ray_to_point(r.target[i])
+        } else {
+            from.spawn_ray_to(&SurfacePoint::from_point(r.target[i], r.target_normal[i]))
+        }
+    }));
+    occluded(&bvh, &segments, &mut r.occluded);
+}

@@ -1,0 +1,92 @@
+//! The light system in a World: spawn lights, shade a batch, read DirectLighting.
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+use kelvin::geometry::Transform;
+use kelvin::light::{Amount, LightTable, PointLight, SpotLight};
+use kelvin::shading::{DirectLighting, LightSelection, RunReport, Settings, ShadingBatch};
+use kelvin::systems::LightingPlugin;
+
+fn world_and_schedule() -> (World, Schedule) {
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    LightingPlugin::build(&mut world, &mut schedule);
+    (world, schedule)
+}
+
+#[test]
+fn point_light_gives_inverse_square_luminance_in_rgb_mode() {
+    let (mut world, mut schedule) = world_and_schedule();
+    world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.0, 2.0, 0.0))));
+    world.resource_mut::<ShadingBatch>().push(Vec3::ZERO, Vec3::Y, 0, 0);
+    schedule.run(&mut world);
+    let out = world.resource::<DirectLighting>();
+    assert_eq!(out.len(), 1);
+    let y = out.radiance[0].0[1] * 0.7152 + out.radiance[0].0[0] * 0.2126 + out.radiance[0].0[2] * 0.0722;
+    assert!((y - 25.0).abs() < 0.05, "Y = {y}, expected I / h^2 = 25 cd/m^2 per sr");
+    assert!((out.wi[0] - Vec3::Y).length() < 1e-6 && out.delta[0] && (out.pdf[0] - 1.0).abs() < 1e-6);
+    assert!(world.resource::<RunReport>().ran("sample_direct_lighting"));
+}
+
+#[test]
+fn all_lights_mode_gives_one_entry_per_light_and_removal_keeps_the_table_dense() {
+    let (mut world, mut schedule) = world_and_schedule();
+    world.resource_mut::<Settings>().selection = LightSelection::All;
+    let a = world.spawn((PointLight::candela(10.0), Transform::from_translation(Vec3::Y))).id();
+    let _b = world.spawn((PointLight::candela(20.0), Transform::from_translation(Vec3::Y * 2.0))).id();
+    let spot = SpotLight { amount: Amount::Candela(5.0), ..Default::default() };
+    world.spawn((spot, Transform::from_translation(Vec3::Y).looking_to(Vec3::NEG_Y, Vec3::Z)));
+    world.resource_mut::<ShadingBatch>().push(Vec3::ZERO, Vec3::Y, 0, 0);
+    schedule.run(&mut world);
+    assert_eq!(world.resource::<DirectLighting>().len(), 3);
+    world.despawn(a);
+    schedule.run(&mut world);
+    let table = world.resource::<LightTable>();
+    assert_eq!(table.len(), 2);
+    assert_eq!(table.points.len(), 1);
+    assert_eq!(world.resource::<DirectLighting>().len(), 2);
+}
+
+#[test]
+fn invalid_spot_angles_are_reported_not_panicking() {
+    let (mut world, mut schedule) = world_and_schedule();
+    let bad = SpotLight { inner_angle: 1.0, outer_angle: 0.5, ..Default::default() };
+    world.spawn((bad, Transform::default()));
+    schedule.run(&mut world);
+    assert!(world.resource::<LightTable>().is_empty());
+    let report = world.resource::<RunReport>();
+    assert!(report.warnings.iter().any(|w| w.contains("inner_angle")), "{report}");
+}
+
+#[test]
+fn occluders_block_shadow_rays_and_the_bvh_follows_moving_geometry() {
+    use kelvin::geometry::{Rectangle, Sphere};
+    let (mut world, mut schedule) = world_and_schedule();
+    world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.0, 4.0, 0.0))));
+    let floor = Transform::from_translation(Vec3::ZERO).looking_to(Vec3::NEG_Y, Vec3::Z); // +Z (front) -> +Y
+    world.spawn((Rectangle { half_size: glam::Vec2::splat(10.0) }, floor));
+    let ball = world.spawn((Sphere { radius: 0.5 }, Transform::from_translation(Vec3::new(0.0, 2.0, 0.0)))).id();
+    world.resource_mut::<ShadingBatch>().push(Vec3::ZERO, Vec3::Y, 0, 0);
+    world.resource_mut::<ShadingBatch>().push(Vec3::new(3.0, 0.0, 0.0), Vec3::Y, 1, 0);
+    schedule.run(&mut world);
+    let out = world.resource::<DirectLighting>();
+    assert!(out.occluded[0] && out.radiance[0].0[1] == 0.0, "the ball shadows the point below it");
+    assert!(!out.occluded[1] && out.radiance[1].0[1] > 0.0, "the floor never shadows itself");
+    assert!(world.resource::<RunReport>().ran("trace_shadow_rays"));
+
+    // Move the ball away: a refit, and the shadow is gone.
+    world.get_mut::<Transform>(ball).unwrap().translation.x = 5.0;
+    schedule.run(&mut world);
+    let report = world.resource::<RunReport>();
+    assert!(report.ran("update_scene_bvh") && report.entries.iter().any(|e| e.system == "bvh_refit"), "{report}");
+    assert!(!world.resource::<DirectLighting>().occluded[0]);
+
+    // Lights that cast no shadows trace no rays.
+    let mut lights = world.query::<&mut PointLight>();
+    for mut l in lights.iter_mut(&mut world) {
+        l.casts_shadows = false;
+    }
+    schedule.run(&mut world);
+    let report = world.resource::<RunReport>();
+    assert!(!report.ran("trace_shadow_rays") && !report.ran("update_scene_bvh"), "{report}");
+}

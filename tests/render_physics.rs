@@ -1,0 +1,65 @@
+//! Rendered pixels against closed forms: photometric units end to end (Y in cd/m^2).
+
+use bevy_ecs::prelude::*;
+use glam::{Vec2, Vec3};
+use kelvin::geometry::{Rectangle, Transform};
+use kelvin::light::{Amount, DistantLight, PointLight};
+use kelvin::render::camera::Camera;
+use kelvin::render::material::Material;
+use kelvin::render::renderer::{RenderOptions, render};
+use kelvin::shading::{ColorMode, Settings};
+use kelvin::systems::LightingPlugin;
+
+fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// A Lambertian floor (albedo `rho`, specular 0) at y = 0 seen from straight above.
+fn floor_scene(mode: ColorMode, rho: f32) -> (World, Schedule) {
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    world.insert_resource(Settings { color_mode: mode, ..Default::default() });
+    LightingPlugin::build(&mut world, &mut schedule);
+    let up = Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z); // local +Z -> world +Y
+    world.spawn((Rectangle { half_size: Vec2::splat(50.0) }, up, Material::lambertian(Vec3::splat(rho))));
+    let cam = Transform::from_translation(Vec3::new(0.0, 1.0, 0.0)).looking_to(Vec3::NEG_Y, Vec3::Z);
+    world.spawn((Camera { yfov: 0.01 }, cam));
+    (world, schedule)
+}
+
+fn centre_luminance(world: &mut World, schedule: &mut Schedule, spp: u32) -> f32 {
+    let opts = RenderOptions { width: 5, height: 5, spp, mis: true };
+    let (film, _) = render(world, schedule, &opts, |_| {});
+    luminance(film.pixel(2, 2))
+}
+
+#[test]
+fn point_light_over_lambertian_floor_gives_rho_over_pi_i_over_h2() {
+    let (rho, i, h) = (0.5f32, 100.0f32, 2.0f32);
+    let want = rho / std::f32::consts::PI * i / (h * h);
+    for mode in [ColorMode::Rgb, ColorMode::Spectral] {
+        let (mut world, mut schedule) = floor_scene(mode, rho);
+        world.spawn((PointLight::candela(i), Transform::from_translation(Vec3::new(0.0, h, 0.0))));
+        let spp = if mode == ColorMode::Rgb { 1 } else { 4096 };
+        let got = centre_luminance(&mut world, &mut schedule, spp);
+        eprintln!("{mode:?}: {got} cd/m^2, expected {want}");
+        let tol = if mode == ColorMode::Rgb { 1e-3 } else { 0.02 };
+        assert!((got / want - 1.0).abs() < tol, "{mode:?}: {got} vs {want}");
+    }
+}
+
+#[test]
+fn directional_light_gives_rho_over_pi_e_cos_theta() {
+    let (rho, e) = (0.8f32, 1000.0f32);
+    let theta = 60f32.to_radians();
+    let want = rho / std::f32::consts::PI * e * theta.cos();
+    let (mut world, mut schedule) = floor_scene(ColorMode::Rgb, rho);
+    let dir = Vec3::new(theta.sin(), -theta.cos(), 0.0);
+    world.spawn((
+        DistantLight { amount: Amount::Lux(e), ..Default::default() },
+        Transform::default().looking_to(dir, Vec3::Y),
+    ));
+    let got = centre_luminance(&mut world, &mut schedule, 1);
+    eprintln!("directional: {got} cd/m^2, expected {want}");
+    assert!((got / want - 1.0).abs() < 1e-3, "{got} vs {want}");
+}
