@@ -7,9 +7,9 @@ use std::sync::Arc;
 
 use glam::{Quat, Vec2, Vec3};
 use kelvin::geometry::Transform;
-use kelvin::light::area::ShapeSample;
+use kelvin::light::area::{ShapeSample, sphere_from_point_light};
 use kelvin::light::{
-    Amount, AreaLight, AreaShape, ColorQuery, LightError, LightSampleContext, LightTexture, ResolvedArea,
+    Amount, AreaLight, AreaShape, ColorQuery, LightError, LightSampleContext, LightTexture, PointLight, ResolvedArea,
 };
 use kelvin::sampling::sample_uniform_sphere;
 use kelvin::spectrum::SampledWavelengths;
@@ -226,4 +226,22 @@ fn bad_input_gives_clear_errors() {
     assert!(l.resolve_rectangle(1.0, 1.0, &flat).is_err());
     let nan = Transform { translation: Vec3::NAN, ..t };
     assert!(l.resolve_sphere(1.0, &nan).is_err());
+}
+
+#[test]
+fn point_light_with_radius_is_a_sphere_of_the_same_power_and_far_intensity() {
+    let p = PointLight { radius: 0.05, ..PointLight::candela(200.0) };
+    let t = Transform::from_translation(Vec3::new(1.0, 2.0, 3.0));
+    let s = sphere_from_point_light(&p, &t).unwrap().unwrap();
+    let point = p.resolve(&t).unwrap();
+    assert!((s.phi() - point.phi()).abs() <= 1e-5 * point.phi());
+    // 10 m away, facing it: E = pi L (r/d)^2 = I / d^2.
+    let ctx = LightSampleContext::on_surface(Vec3::new(1.0, 12.0, 3.0), Vec3::NEG_Y);
+    let mut rng = Rng::new(21);
+    assert_mc(
+        "(d) point light with radius 5 cm at 10 m vs I/d^2",
+        &irradiance(&s, &ctx, 10_000, &mut rng),
+        200.0 / 100.0,
+    );
+    assert!(sphere_from_point_light(&PointLight::candela(1.0), &t).unwrap().is_none());
 }

@@ -14,7 +14,7 @@ use bevy_ecs::component::Component;
 use glam::{Vec2, Vec3};
 
 use super::emitter::check_amount;
-use super::{Amount, ColorQuery, Emitter, LiSample, LightBounds, LightError, LightSampleContext, Quantity};
+use super::{Amount, ColorQuery, Emitter, LiSample, LightBounds, LightError, LightSampleContext, PointLight, Quantity};
 use crate::geometry::Transform;
 use crate::spectrum::{SampledSpectrum, Spectrum};
 
@@ -283,6 +283,18 @@ impl AreaLight {
         let triangles = shapes.into_iter().map(|s| self.resolved(s, radiance.clone())).collect();
         Ok(ResolvedMesh { triangles, skipped_degenerate: skipped })
     }
+}
+
+/// The sphere area light of a [`PointLight`] with a positive radius (None for radius 0): one-sided,
+/// radiance I / (pi r^2), so its power (4 pi I) and its intensity far away match the point form.
+pub fn sphere_from_point_light(light: &PointLight, transform: &Transform) -> Result<Option<ResolvedArea>, LightError> {
+    let point = light.resolve(transform)?;
+    if light.radius == 0.0 {
+        return Ok(None);
+    }
+    let shape = AreaShape::Sphere { center: point.position, radius: light.radius };
+    let radiance = point.intensity.scaled(1.0 / (PI * light.radius * light.radius));
+    Ok(Some(ResolvedArea::new(shape, radiance, false, None)))
 }
 
 /// Non-finite, zero-area or so thin (|e1 x e2| <= 1e-6 |e1| |e2|) that its normal is noise.
