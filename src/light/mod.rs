@@ -5,6 +5,7 @@
 //! functions on that form. A light is `(LightKind, index)` into per-kind tables; one `match` per
 //! operation, no trait objects on hot paths.
 
+pub mod area;
 mod dispatch;
 pub mod distant;
 pub mod emitter;
@@ -19,6 +20,7 @@ use glam::Vec3;
 
 use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 
+pub use area::{AreaLight, AreaShape, LightTexture, ResolvedArea, ResolvedMesh};
 pub use distant::{DistantLight, ResolvedDistant};
 pub use emitter::{Amount, Emitter, LightError, Quantity};
 pub use goniometric::{GonioProfile, GoniometricLight, ResolvedGoniometric};
