@@ -24,8 +24,8 @@ pub use plan::Work;
 pub use sample::{ShadowRays, sample_direct_lighting};
 pub use shadows::trace_shadow_rays;
 pub use sync_lights::{
-    remove_lights, sync_distant_lights, sync_goniometric_lights, sync_image_infinite_lights, sync_point_lights,
-    sync_projection_lights, sync_spot_lights, sync_uniform_infinite_lights,
+    remove_lights, sync_area_lights, sync_distant_lights, sync_goniometric_lights, sync_image_infinite_lights,
+    sync_point_lights, sync_projection_lights, sync_spot_lights, sync_uniform_infinite_lights,
 };
 
 /// The light system's sets, in order.
@@ -100,6 +100,7 @@ impl LightingPlugin {
                     sync_point_lights,
                     sync_spot_lights,
                     sync_distant_lights,
+                    sync_area_lights,
                     sync_projection_lights,
                     sync_goniometric_lights,
                     sync_uniform_infinite_lights,

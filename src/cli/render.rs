@@ -134,7 +134,8 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
 
 /// Exposure (stops) that maps the log-average luminance to 18% grey.
 fn auto_exposure(rgb: &[glam::Vec3]) -> f32 {
-    let ys: Vec<f64> = rgb.iter().map(|c| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64).filter(|y| *y > 0.0).collect();
+    let ys: Vec<f64> =
+        rgb.iter().map(|c| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64).filter(|y| *y > 0.0).collect();
     if ys.is_empty() {
         return 0.0;
     }
@@ -168,7 +169,9 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let (width, height) = args.size;
     let opts = RenderOptions { width, height, spp: args.spp.max(1), mis: !args.no_mis };
     let bar = ProgressBar::new(1000);
-    bar.set_style(ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta}").expect("valid template"));
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta}").expect("valid template"),
+    );
     let (film, stats) = render(&mut world, &mut schedule, &opts, |f| bar.set_position((f * 1000.0) as u64));
     bar.finish_and_clear();
     if args.report {

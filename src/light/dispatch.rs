@@ -21,7 +21,7 @@ impl LightTable {
             LightKind::ImageInfinite => self.image_infinite.items[i].sample_li(ctx, u, query),
             LightKind::Projection => self.projection.items[i].sample_li(ctx, query),
             LightKind::Goniometric => self.goniometric.items[i].sample_li(ctx, query),
-            other => unreachable!("no block for {other:?}"),
+            LightKind::Area => self.area.items[i].light.sample_li(ctx, u, query),
         }
     }
 
@@ -34,7 +34,7 @@ impl LightTable {
             LightKind::UniformInfinite => self.uniform_infinite.items[i].pdf_li(ctx, wi),
             LightKind::ImageInfinite if self.mis_compensation => self.image_infinite.items[i].pdf_li_mis(wi),
             LightKind::ImageInfinite => self.image_infinite.items[i].pdf_li(wi),
-            other => unreachable!("no block for {other:?}"),
+            LightKind::Area => self.area.items[i].light.pdf_li(ctx, wi),
         }
     }
 
@@ -57,7 +57,7 @@ impl LightTable {
             LightKind::ImageInfinite => self.image_infinite.items[i].phi(),
             LightKind::Projection => self.projection.items[i].phi(),
             LightKind::Goniometric => self.goniometric.items[i].phi(),
-            other => unreachable!("no block for {other:?}"),
+            LightKind::Area => self.area.items[i].light.phi(),
         }
     }
 
@@ -67,6 +67,10 @@ impl LightTable {
         let (rgb_y, radiometric) = match id.kind {
             LightKind::Point => (self.points.rgb[i].y, self.points.radiometric[i]),
             LightKind::Spot => (self.spots.rgb[i].y, self.spots.radiometric[i]),
+            LightKind::Area => {
+                let e = &self.area.items[i].light.radiance;
+                (e.rgb.y, e.radiometric)
+            }
             LightKind::Projection => {
                 let e = &self.projection.items[i].intensity;
                 (e.rgb.y, e.radiometric)
@@ -84,7 +88,6 @@ impl LightTable {
                 (e.rgb.y, e.radiometric)
             }
             LightKind::ImageInfinite => return self.image_infinite.items[i].luminous_phi().max(0.0),
-            other => unreachable!("no block for {other:?}"),
         };
         if radiometric > 0.0 { (self.phi(id) * rgb_y / radiometric).max(0.0) } else { 0.0 }
     }
@@ -100,7 +103,7 @@ impl LightTable {
             LightKind::UniformInfinite | LightKind::ImageInfinite => None,
             LightKind::Projection => Some(self.projection.items[i].bounds()),
             LightKind::Goniometric => Some(self.goniometric.items[i].bounds()),
-            other => unreachable!("no block for {other:?}"),
+            LightKind::Area => Some(self.area.items[i].light.bounds()),
         }
     }
 
@@ -115,7 +118,7 @@ impl LightTable {
             LightKind::ImageInfinite => self.image_infinite.casts_shadows[i],
             LightKind::Projection => self.projection.casts_shadows[i],
             LightKind::Goniometric => self.goniometric.casts_shadows[i],
-            other => unreachable!("no block for {other:?}"),
+            LightKind::Area => self.area.casts_shadows[i],
         }
     }
 }

@@ -9,7 +9,7 @@ use bevy_ecs::entity::Entity;
 use bevy_ecs::resource::Resource;
 
 use super::{
-    LightKind, ResolvedDistant, ResolvedGoniometric, ResolvedImageInfinite, ResolvedProjection,
+    LightKind, ResolvedArea, ResolvedDistant, ResolvedGoniometric, ResolvedImageInfinite, ResolvedProjection,
     ResolvedUniformInfinite, point::PointColumns, spot::SpotColumns,
 };
 
@@ -34,6 +34,14 @@ impl<T> Default for Rows<T> {
     fn default() -> Self {
         Self { items: Vec::new(), owner: Vec::new(), casts_shadows: Vec::new() }
     }
+}
+
+/// One emitting shape of an area light: a sphere, disk or rectangle (primitive 0), or one
+/// triangle of a mesh (its index in the mesh).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AreaRow {
+    pub light: ResolvedArea,
+    pub primitive: u32,
 }
 
 /// Operations every block supports, so the table's bookkeeping is written once.
@@ -77,6 +85,7 @@ impl<T> Block for Rows<T> {
 pub struct LightTable {
     pub points: PointColumns,
     pub spots: SpotColumns,
+    pub area: Rows<AreaRow>,
     pub projection: Rows<ResolvedProjection>,
     pub goniometric: Rows<ResolvedGoniometric>,
     pub distant: Rows<ResolvedDistant>,
@@ -105,6 +114,10 @@ macro_rules! for_block {
                 let $b = &mut $table.spots;
                 $body
             }
+            LightKind::Area => {
+                let $b = &mut $table.area;
+                $body
+            }
             LightKind::Projection => {
                 let $b = &mut $table.projection;
                 $body
@@ -125,7 +138,6 @@ macro_rules! for_block {
                 let $b = &mut $table.image_infinite;
                 $body
             }
-            other => unreachable!("no block for {other:?}"),
         }
     };
 }
@@ -135,6 +147,9 @@ impl LightTable {
     pub fn len(&self) -> usize {
         self.points.len()
             + self.spots.len()
+            + self.area.len()
+            + self.projection.len()
+            + self.goniometric.len()
             + self.distant.len()
             + self.uniform_infinite.len()
             + self.image_infinite.len()
@@ -156,6 +171,7 @@ impl LightTable {
         let block = |kind, n: usize| (0..n as u32).map(move |row| LightId { kind, row });
         block(LightKind::Point, self.points.len())
             .chain(block(LightKind::Spot, self.spots.len()))
+            .chain(block(LightKind::Area, self.area.len()))
             .chain(block(LightKind::Projection, self.projection.len()))
             .chain(block(LightKind::Goniometric, self.goniometric.len()))
             .chain(block(LightKind::Distant, self.distant.len()))
@@ -168,12 +184,12 @@ impl LightTable {
         match id.kind {
             LightKind::Point => self.points.owner(i),
             LightKind::Spot => self.spots.owner(i),
+            LightKind::Area => self.area.owner(i),
             LightKind::Projection => self.projection.owner(i),
             LightKind::Goniometric => self.goniometric.owner(i),
             LightKind::Distant => self.distant.owner(i),
             LightKind::UniformInfinite => self.uniform_infinite.owner(i),
             LightKind::ImageInfinite => self.image_infinite.owner(i),
-            other => unreachable!("no block for {other:?}"),
         }
     }
 
@@ -195,6 +211,47 @@ impl LightTable {
     /// See [`Self::upsert_point`].
     pub fn upsert_distant(&mut self, entity: Entity, row: ResolvedDistant, casts_shadows: bool, power_changed: bool) {
         self.upsert(entity, LightKind::Distant, power_changed, |t| &mut t.distant, row, casts_shadows);
+    }
+
+    /// Inserts or replaces the area-light rows of `entity` (one per emitting shape or triangle,
+    /// in increasing `primitive` order): in place when the count is unchanged (a moving light).
+    pub fn upsert_area(&mut self, entity: Entity, rows: Vec<AreaRow>, casts_shadows: bool, power_changed: bool) {
+        self.generation += 1;
+        let same = self
+            .rows_of
+            .get(&entity)
+            .is_some_and(|ids| ids.len() == rows.len() && ids.iter().all(|id| id.kind == LightKind::Area));
+        if same {
+            let ids = self.rows_of[&entity].clone();
+            for (id, row) in ids.iter().zip(rows) {
+                self.area.set(id.row as usize, row, casts_shadows);
+            }
+            self.moved = true;
+            self.powers_changed |= power_changed;
+            return;
+        }
+        self.remove(entity);
+        if rows.is_empty() {
+            return;
+        }
+        let first = self.area.len() as u32;
+        let n = rows.len() as u32;
+        for row in rows {
+            self.area.push(entity, row, casts_shadows);
+        }
+        self.rows_of.insert(entity, (first..first + n).map(|row| LightId { kind: LightKind::Area, row }).collect());
+        self.powers_changed = true;
+    }
+
+    /// The area light on `entity`'s `primitive` (its triangle index, 0 for shapes), if any.
+    pub fn area_light_at(&self, entity: Entity, primitive: u32) -> Option<LightId> {
+        let ids = self.rows_of.get(&entity)?;
+        let k = ids
+            .binary_search_by_key(&primitive, |id| {
+                if id.kind == LightKind::Area { self.area.items[id.row as usize].primitive } else { u32::MAX }
+            })
+            .ok()?;
+        Some(ids[k])
     }
 
     /// See [`Self::upsert_point`].

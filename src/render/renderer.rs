@@ -161,12 +161,14 @@ pub fn render(
             lighting: world_ref.resource::<DirectLighting>(),
             batch: world_ref.resource::<ShadingBatch>(),
             bvh: world_ref.resource::<SceneBvh>(),
+            geometry: world_ref.resource::<GeometryIndex>(),
             materials: &materials,
             seed,
             mis: opts.mis,
             all_lights: settings.selection == crate::shading::LightSelection::All,
         };
         let escape_ids: Vec<_> = shade.table.escape_lights().collect();
+        let bsdf_sampling = opts.mis && shade.table.has_non_delta_lights();
         contributions.clear();
         contributions.resize(samples.len(), Vec3::ZERO);
         // Escaped camera rays see the infinite lights directly.
@@ -177,8 +179,11 @@ pub fn render(
                 .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.ray.dir, query)));
             *c = to_rgb(le, s.wavelengths.as_ref());
         }
-        let shaded_values: Vec<(Vec3, bool)> =
-            shaded.par_iter().enumerate().map(|(j, &i)| shade.shade(j, &samples[i], &escape_ids)).collect();
+        let shaded_values: Vec<(Vec3, bool)> = shaded
+            .par_iter()
+            .enumerate()
+            .map(|(j, &i)| shade.shade(j, &samples[i], &escape_ids, bsdf_sampling))
+            .collect();
         for (&i, (rgb, traced)) in shaded.iter().zip(shaded_values) {
             contributions[i] = rgb;
             stats.bsdf_rays += traced as u64;
@@ -201,6 +206,7 @@ struct ShadeContext<'a> {
     lighting: &'a DirectLighting,
     batch: &'a ShadingBatch,
     bvh: &'a SceneBvh,
+    geometry: &'a GeometryIndex,
     materials: &'a [Material],
     seed: u64,
     mis: bool,
@@ -211,14 +217,29 @@ struct ShadeContext<'a> {
 impl ShadeContext<'_> {
     /// Direct light at batch point `j` (camera sample `s`): the light system's samples weighted by
     /// MIS, plus one BSDF sample toward non-delta lights. Returns RGB and whether a ray was traced.
-    fn shade(&self, j: usize, s: &CameraSample, escape_ids: &[crate::light::LightId]) -> (Vec3, bool) {
+    /// The area light `hit` landed on and its radiance toward `w` (unit, away from the surface).
+    fn emitted(&self, hit: &Hit, w: Vec3, query: ColorQuery) -> Option<(crate::light::LightId, SampledSpectrum)> {
+        let entity = *self.geometry.entities.get(hit.instance as usize)?;
+        let id = self.table.area_light_at(entity, hit.id.primitive)?;
+        let light = &self.table.area.items[id.row as usize].light;
+        Some((id, light.radiance(hit.p, hit.ng, hit.uv, w, query)))
+    }
+
+    fn shade(
+        &self,
+        j: usize,
+        s: &CameraSample,
+        escape_ids: &[crate::light::LightId],
+        bsdf_sampling: bool,
+    ) -> (Vec3, bool) {
         let hit = s.hit.expect("shaded samples have hits");
         let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
         let wo = -s.ray.dir.normalize();
         let ns = self.batch.shading_normal[j];
         let material = self.materials.get(hit.material as usize).cloned().unwrap_or_default();
         let bsdf = material.bsdf(hit.uv, ns, query);
-        let mut l = SampledSpectrum::default();
+        // Light the camera sees on emitters directly.
+        let mut l = self.emitted(&hit, wo, query).map_or(SampledSpectrum::default(), |(_, le)| le);
         for e in self.lighting.entries(j) {
             let (li, wi, pdf) = (self.lighting.radiance[e], self.lighting.wi[e], self.lighting.pdf[e]);
             if pdf <= 0.0 {
@@ -229,21 +250,26 @@ impl ShadeContext<'_> {
             l = l.add(f.mul(li).scale(wi.dot(ns).abs() * w / pdf));
         }
         let mut traced = false;
-        if self.mis && !escape_ids.is_empty() {
+        if bsdf_sampling {
             let mut rng = SampleStream::new(self.seed, s.pixel, s.sample).at_dimension(16);
             if let Some(bs) = bsdf.sample(wo, rng.next_f32(), rng.next_2d()) {
                 traced = true;
                 let from = crate::geometry::SurfacePoint { p: hit.p, p_error: hit.p_error, n: self.batch.normal[j] };
                 let ray = from.spawn_ray(bs.wi);
-                if self.bvh.closest_hit(&ray).is_none() {
-                    let ctx = LightSampleContext { p: hit.p, n: self.batch.normal[j], ns };
+                let ctx = LightSampleContext { p: hit.p, n: self.batch.normal[j], ns };
+                let pmf = |id| if self.all_lights { 1.0 } else { self.sampler.pmf(&ctx, id) };
+                if let Some(h2) = self.bvh.closest_hit(&ray) {
+                    if let Some((id, le)) = self.emitted(&h2, -bs.wi, query) {
+                        let w = power_heuristic(bs.pdf, pmf(id) * self.table.pdf_li(id, &ctx, bs.wi));
+                        l = l.add(bs.f.mul(le).scale(bs.wi.dot(ns).abs() * w / bs.pdf));
+                    }
+                } else {
                     for &id in escape_ids {
                         let le = self.table.le(id, bs.wi, query);
                         if le.0.iter().all(|&v| v == 0.0) {
                             continue;
                         }
-                        let pmf = if self.all_lights { 1.0 } else { self.sampler.pmf(&ctx, id) };
-                        let light_pdf = pmf * self.table.pdf_li(id, &ctx, bs.wi);
+                        let light_pdf = pmf(id) * self.table.pdf_li(id, &ctx, bs.wi);
                         let w = power_heuristic(bs.pdf, light_pdf);
                         l = l.add(bs.f.mul(le).scale(bs.wi.dot(ns).abs() * w / bs.pdf));
                     }

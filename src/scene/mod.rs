@@ -3,3 +3,4 @@
 pub mod gltf;
 pub mod ies;
 pub mod image;
+pub mod spawn;

@@ -85,7 +85,9 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
             report.meshes += 1;
             report.triangles += mesh_component.triangle_count();
             let mut entity = world.spawn((mesh_component, Transform::IDENTITY, material));
-            if let Some(area) = prim.material.and_then(|i| scene.materials.get(i)).and_then(|m| emissive_light(m, scene)) {
+            if let Some(area) =
+                prim.material.and_then(|i| scene.materials.get(i)).and_then(|m| emissive_light(m, scene))
+            {
                 entity.insert(area);
                 report.emissive_meshes += 1;
             }

@@ -46,6 +46,20 @@ pub struct AreaLight {
     pub texture: Option<Arc<LightTexture>>,
 }
 
+impl AreaLight {
+    /// The light of a glTF emissive surface: `amount` in nits, the colour's spectrum, and an
+    /// optional emissive texture (linear RGB) tinting it.
+    pub fn emissive(
+        amount: Amount,
+        spectrum: Spectrum,
+        texture: Option<Arc<crate::scene::image::RgbImage>>,
+        two_sided: bool,
+    ) -> Self {
+        let texture = texture.and_then(|t| LightTexture::new(t.width, t.height, t.pixels.clone()).ok()).map(Arc::new);
+        Self { amount, spectrum, two_sided, casts_shadows: true, texture }
+    }
+}
+
 impl Default for AreaLight {
     fn default() -> Self {
         Self {
@@ -129,6 +143,8 @@ pub struct ResolvedArea {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResolvedMesh {
     pub triangles: Vec<ResolvedArea>,
+    /// Index in the mesh of each of `triangles` (degenerate ones are missing).
+    pub primitives: Vec<u32>,
     /// Triangles skipped for zero area, collinear or non-finite vertices.
     pub skipped_degenerate: usize,
 }
@@ -261,6 +277,7 @@ impl AreaLight {
             return Err(invalid(format!("mesh has {} uvs for {} positions", uvs.len(), positions.len())));
         }
         let mut shapes = Vec::with_capacity(indices.len() / 3);
+        let mut primitives = Vec::with_capacity(indices.len() / 3);
         let mut skipped = 0;
         for (t, tri) in indices.chunks_exact(3).enumerate() {
             if let Some(&i) = tri.iter().find(|&&i| i as usize >= positions.len()) {
@@ -277,11 +294,12 @@ impl AreaLight {
                 continue;
             }
             shapes.push(AreaShape::Triangle { p, uv });
+            primitives.push(t as u32);
         }
         let total: f64 = shapes.iter().map(|s| s.area() as f64).sum();
         let radiance = if shapes.is_empty() { Emitter::black() } else { self.radiance_emitter(total as f32)? };
         let triangles = shapes.into_iter().map(|s| self.resolved(s, radiance.clone())).collect();
-        Ok(ResolvedMesh { triangles, skipped_degenerate: skipped })
+        Ok(ResolvedMesh { triangles, primitives, skipped_degenerate: skipped })
     }
 }
 
