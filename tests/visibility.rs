@@ -68,7 +68,8 @@ fn random_scene<'a>(rng: &mut Rng, meshes: &'a [Mesh]) -> Vec<GeometryInstance<'
             }
             _ => Rectangle { half_size: Vec2::new(rng.range(0.1, 0.7), rng.range(0.1, 0.7)) }.into(),
         };
-        let scale = if matches!(shape, Shape::Sphere(_)) { Vec3::splat(rng.range(0.5, 2.0)) } else { rng.vec(0.5, 2.0) };
+        let scale =
+            if matches!(shape, Shape::Sphere(_)) { Vec3::splat(rng.range(0.5, 2.0)) } else { rng.vec(0.5, 2.0) };
         let t = Transform { translation: rng.vec(-6.0, 6.0), rotation: rng.rotation(), scale };
         out.push(instance(GeometryRef::Shape(shape), t, out.len() as u32));
     }
@@ -209,10 +210,8 @@ fn segments_ending_on_area_lights_are_unoccluded() {
         for (k, &(geometry, p, rotation, scale)) in lights.iter().enumerate() {
             let floor = Transform::from_translation(offset);
             let light = Transform { translation: offset + p, rotation, scale };
-            let bvh = SceneBvh::build(&[
-                instance(GeometryRef::Mesh(&floor_mesh), floor, 0),
-                instance(geometry, light, 1),
-            ]);
+            let bvh =
+                SceneBvh::build(&[instance(GeometryRef::Mesh(&floor_mesh), floor, 0), instance(geometry, light, 1)]);
             let mut rng = Rng(42 + k as u64);
             let (mut tested, mut blocked, mut naive) = (0, 0, 0);
             for _ in 0..2000 {
@@ -264,11 +263,16 @@ fn bad_input_is_an_error_or_a_report_never_a_panic() {
         instance(GeometryRef::Mesh(&flat), squash, 1),
         instance(GeometryRef::Mesh(&flat), nan_t, 2),
         instance(GeometryRef::Shape(Sphere { radius: f32::NAN }.into()), Transform::IDENTITY, 3),
-        instance(GeometryRef::Shape(Sphere { radius: 1.0 }.into()), Transform { scale: Vec3::new(1.0, 2.0, 1.0), ..Default::default() }, 4),
+        instance(
+            GeometryRef::Shape(Sphere { radius: 1.0 }.into()),
+            Transform { scale: Vec3::new(1.0, 2.0, 1.0), ..Default::default() },
+            4,
+        ),
     ];
     let mut bvh = SceneBvh::build(&scene);
     assert_eq!(bvh.primitive_count(), 1);
-    let degenerate: Vec<(u32, u32)> = bvh.report().degenerate_triangles.iter().map(|g| (g.entity_index, g.primitive)).collect();
+    let degenerate: Vec<(u32, u32)> =
+        bvh.report().degenerate_triangles.iter().map(|g| (g.entity_index, g.primitive)).collect();
     assert_eq!(degenerate, vec![(0, 1), (0, 2), (0, 3), (1, 0)]);
     let skipped: Vec<String> = bvh.report().skipped_instances.iter().map(|e| e.to_string()).collect();
     assert_eq!(skipped.len(), 3, "{skipped:?}");
@@ -297,7 +301,6 @@ fn bad_input_is_an_error_or_a_report_never_a_panic() {
     assert!(bvh.update_transforms(&[(2, Transform::IDENTITY)]).is_ok(), "instance 2 becomes valid: rebuild");
     assert_eq!(bvh.primitive_count(), 2);
 }
-
 
 #[test]
 fn closest_hit_reports_normals_uvs_and_ids() {

@@ -30,11 +30,11 @@ use obvhs::ploc::PlocBuilder;
 use obvhs::{BvhBuildParams, PerComponent};
 use std::collections::HashMap;
 
+use super::GeometryError;
 use super::mesh::Mesh;
 use super::shapes::{PlacedShape, Shape};
 use super::transform::Transform;
 use super::triangle::is_degenerate;
-use super::GeometryError;
 
 /// Rebuild after refits once the tree's SAH cost has grown by this factor since the last build.
 pub const REBUILD_COST_RATIO: f32 = 1.5;
@@ -126,8 +126,16 @@ pub struct SceneBvh {
     /// Leaf slot data, in `cwbvh.primitive_indices` order (slot -> input primitive).
     pub(crate) leaf: Vec<LeafPrim>,
     slot_of_prim: Vec<u32>,
+    /// Exact (unquantised) box of every node, kept for incremental refits.
     node_bounds: Vec<Aabb>,
+    /// Parent of every node (the root is its own parent) and the node holding each leaf slot.
+    parent: Vec<u32>,
+    slot_node: Vec<u32>,
+    /// Refit scratch: nodes whose boxes must be recomputed.
+    dirty: Vec<bool>,
     params: BvhBuildParams,
+    /// Sum of node half-areas now and right after the last build.
+    area_sum: f64,
     built_cost: f32,
     cost: f32,
     report: BuildReport,
@@ -144,10 +152,7 @@ fn affine(t: &Transform) -> Affine3A {
 }
 
 fn mesh_transform_ok(t: &Transform) -> bool {
-    t.translation.is_finite()
-        && t.scale.is_finite()
-        && t.rotation.is_finite()
-        && t.rotation.length_squared() > 0.0
+    t.translation.is_finite() && t.scale.is_finite() && t.rotation.is_finite() && t.rotation.length_squared() > 0.0
 }
 
 impl SceneBvh {
@@ -193,6 +198,10 @@ impl SceneBvh {
             leaf: Vec::new(),
             slot_of_prim: Vec::new(),
             node_bounds: Vec::new(),
+            parent: Vec::new(),
+            slot_node: Vec::new(),
+            dirty: Vec::new(),
+            area_sum: 0.0,
             params: BvhBuildParams { pre_split: false, ..params },
             built_cost: 0.0,
             cost: 0.0,
@@ -317,6 +326,12 @@ impl SceneBvh {
         for (slot, &p) in self.cwbvh.primitive_indices.iter().enumerate() {
             self.slot_of_prim[p as usize] = slot as u32;
         }
+        self.link_nodes();
+        self.dirty.clear();
+        self.dirty.resize(self.cwbvh.nodes.len(), true);
+        self.node_bounds.clear();
+        self.node_bounds.resize(self.cwbvh.nodes.len(), Aabb::empty());
+        self.area_sum = 0.0;
         self.cost = self.refit_nodes(false);
         self.built_cost = self.cost;
     }
@@ -383,9 +398,15 @@ impl SceneBvh {
                             let c = if v[0].is_finite() { v[0] } else { t.translation };
                             v = [c; 3];
                         }
-                        self.leaf[self.slot_of_prim[p as usize] as usize].v = v;
+                        let slot = self.slot_of_prim[p as usize];
+                        self.leaf[slot as usize].v = v;
+                        mark_dirty(&mut self.dirty, &self.parent, self.slot_node[slot as usize]);
                     }
                 }
+            }
+            if let Source::Shape(_) = rec.source {
+                let slot = self.slot_of_prim[rec.prims.start as usize];
+                mark_dirty(&mut self.dirty, &self.parent, self.slot_node[slot as usize]);
             }
         }
         self.cost = self.refit_nodes(true);
@@ -409,15 +430,35 @@ impl SceneBvh {
         }
     }
 
-    /// Recomputes every node's exact box bottom-up and, if `requantize`, re-quantises its
-    /// children as obvhs's BVH2 -> CWBVH conversion does (Ylitie et al. 2017, section 3.2).
-    /// Returns the SAH-style cost: the sum of node surface areas over the root's.
+    /// Fills `parent` and `slot_node` from the CWBVH's child links.
+    fn link_nodes(&mut self) {
+        let nodes = &self.cwbvh.nodes;
+        self.parent.clear();
+        self.parent.resize(nodes.len(), 0);
+        self.slot_node.clear();
+        self.slot_node.resize(self.leaf.len(), 0);
+        for (i, node) in nodes.iter().enumerate() {
+            for ch in (0..8).filter(|&ch| !node.is_child_empty(ch)) {
+                if node.is_leaf(ch) {
+                    let (start, count) = node.child_primitives(ch);
+                    self.slot_node[start as usize..(start + count) as usize].fill(i as u32);
+                } else {
+                    self.parent[node.child_node_index(ch) as usize] = i as u32;
+                }
+            }
+        }
+    }
+
+    /// Recomputes the exact box of every dirty node bottom-up (children always follow their
+    /// parent in `nodes`) and, if `requantize`, re-quantises its children as obvhs's BVH2 ->
+    /// CWBVH conversion does (Ylitie et al. 2017, section 3.2). Clears the dirty flags. Returns
+    /// the SAH-style cost: the sum of node surface areas over the root's.
     fn refit_nodes(&mut self, requantize: bool) -> f32 {
         let n = self.cwbvh.nodes.len();
-        self.node_bounds.clear();
-        self.node_bounds.resize(n, Aabb::empty());
-        let mut area_sum = 0.0f64;
         for i in (0..n).rev() {
+            if !std::mem::take(&mut self.dirty[i]) {
+                continue;
+            }
             let node = self.cwbvh.nodes[i];
             let mut child = [Aabb::empty(); 8];
             let mut total = Aabb::empty();
@@ -434,17 +475,21 @@ impl SceneBvh {
                 };
                 total = total.union(child_box);
             }
+            let old = self.node_bounds[i];
+            if old.valid() {
+                self.area_sum -= old.half_area() as f64;
+            }
+            self.area_sum += total.half_area() as f64;
             self.node_bounds[i] = total;
             if requantize {
                 quantize_node(&mut self.cwbvh.nodes[i], &total, &child);
             }
-            area_sum += total.half_area() as f64;
         }
         if n > 0 {
             self.cwbvh.total_aabb = self.node_bounds[0];
         }
         let root = self.node_bounds.first().map_or(0.0, |b| b.half_area() as f64);
-        if root > 0.0 { (area_sum / root) as f32 } else { 0.0 }
+        if root > 0.0 { (self.area_sum / root) as f32 } else { 0.0 }
     }
 
     /// Input index of the primitive in leaf slot `slot` (stable across refits; the tie-breaker
@@ -470,6 +515,17 @@ impl SceneBvh {
             Source::Mesh(m) => Some(&self.meshes[m as usize]),
             Source::Shape(_) => None,
         }
+    }
+}
+
+/// Flags `node` and its ancestors up to the first already-flagged one.
+fn mark_dirty(dirty: &mut [bool], parent: &[u32], mut node: u32) {
+    while !dirty[node as usize] {
+        dirty[node as usize] = true;
+        if node == 0 {
+            break;
+        }
+        node = parent[node as usize];
     }
 }
 
@@ -528,13 +584,31 @@ mod tests {
     fn refit_without_motion_reproduces_the_converted_tree() {
         let mesh = Mesh::uv_sphere(1.0, 8, 6);
         let inst = scene(&mesh);
-        // The build keeps obvhs's quantisation; a refit without motion must reproduce it bit for bit.
+        // The build keeps obvhs's quantisation; refitting every instance in place re-quantises
+        // every node and must reproduce it bit for bit.
         let bvh = SceneBvh::build(&inst);
         let mut again = bvh.clone();
-        assert_eq!(again.refit(&[]), Ok(1.0));
+        let all: Vec<(u32, Transform)> = inst.iter().enumerate().map(|(i, g)| (i as u32, g.transform)).collect();
+        assert_eq!(again.refit(&all), Ok(1.0));
+        assert!(again.dirty.iter().all(|d| !d));
         assert_eq!(bvh.cwbvh.nodes, again.cwbvh.nodes);
         assert_eq!(bvh.meshes.len(), 1, "instances of one mesh share its copy");
         assert_eq!(bvh.primitive_count(), 20 * mesh.triangle_count() + 1);
+    }
+
+    #[test]
+    fn partial_refit_equals_full_refit() {
+        let mesh = Mesh::uv_sphere(1.0, 8, 6);
+        let inst = scene(&mesh);
+        let mut bvh = SceneBvh::build(&inst);
+        let moved = [(3, Transform::from_translation(Vec3::new(9.0, 4.0, 1.0))), (20, Transform::IDENTITY)];
+        let partial = bvh.refit(&moved).unwrap();
+        let mut full = bvh.clone();
+        let all: Vec<(u32, Transform)> =
+            (0..inst.len() as u32).map(|i| (i, full.instances[i as usize].transform)).collect();
+        let ratio = full.refit(&all).unwrap();
+        assert_eq!(bvh.cwbvh.nodes, full.cwbvh.nodes);
+        assert!((partial - ratio).abs() < 1e-5 && partial > 1.0, "{partial} vs {ratio}");
     }
 
     #[test]
@@ -557,7 +631,10 @@ mod tests {
         let bvh = SceneBvh::build(&inst);
         assert_eq!(bvh.primitive_count(), 1);
         assert_eq!(bvh.report().degenerate_triangles, vec![GeometryId { entity_index: 3, primitive: 1 }]);
-        assert!(matches!(bvh.report().skipped_instances[..], [GeometryError::Instance { instance: 1, entity_index: 4, .. }]));
+        assert!(matches!(
+            bvh.report().skipped_instances[..],
+            [GeometryError::Instance { instance: 1, entity_index: 4, .. }]
+        ));
     }
 
     #[test]
@@ -568,10 +645,14 @@ mod tests {
         let small = [(2, Transform::from_translation(Vec3::new(6.0, 0.5, 0.0)))];
         assert!(matches!(bvh.update_transforms(&small), Ok(UpdateKind::Refitted { .. })));
         // Scatter everything far apart in a different order: the old topology is now poor.
-        let scatter: Vec<(u32, Transform)> =
-            (0..20).map(|i| (i, Transform::from_translation(Vec3::new(0.0, ((i * 7) % 20) as f32 * 50.0, 0.0)))).collect();
+        let scatter: Vec<(u32, Transform)> = (0..20)
+            .map(|i| (i, Transform::from_translation(Vec3::new(0.0, ((i * 7) % 20) as f32 * 50.0, 0.0))))
+            .collect();
         assert_eq!(bvh.update_transforms(&scatter), Ok(UpdateKind::Rebuilt));
         assert!((bvh.cost_ratio() - 1.0).abs() < 1e-6);
-        assert!(matches!(bvh.update_transforms(&[(99, Transform::IDENTITY)]), Err(GeometryError::UnknownInstance { .. })));
+        assert!(matches!(
+            bvh.update_transforms(&[(99, Transform::IDENTITY)]),
+            Err(GeometryError::UnknownInstance { .. })
+        ));
     }
 }

@@ -388,9 +388,12 @@ mod tests {
 
     #[test]
     fn areas_follow_scale() {
-        let t = Transform { scale: Vec3::new(2.0, 3.0, 0.0), rotation: Quat::from_rotation_x(0.7), ..Default::default() };
+        let t =
+            Transform { scale: Vec3::new(2.0, 3.0, 0.0), rotation: Quat::from_rotation_x(0.7), ..Default::default() };
         let r = placed(Rectangle::from_size(Vec2::new(1.0, 2.0)), t);
-        assert!((r.area() - 12.0).abs() < 1e-5 && (Rectangle::from_size(Vec2::new(1.0, 2.0)).area(&t) - 12.0).abs() < 1e-5);
+        assert!(
+            (r.area() - 12.0).abs() < 1e-5 && (Rectangle::from_size(Vec2::new(1.0, 2.0)).area(&t) - 12.0).abs() < 1e-5
+        );
         let s = placed(Sphere { radius: 1.0 }, Transform { scale: Vec3::splat(2.0), ..Default::default() });
         assert!((s.area() - 16.0 * std::f32::consts::PI).abs() < 1e-4);
     }
@@ -402,7 +405,9 @@ mod tests {
             rotation: Quat::from_euler(glam::EulerRot::XYZ, 0.3, 1.1, -0.4),
             scale: Vec3::new(1.5, 0.5, 1.0),
         };
-        for shape in [Shape::Disk(Disk { radius: 2.0, inner_radius: 0.5 }), Shape::Rectangle(Rectangle::from_size(Vec2::ONE))] {
+        for shape in
+            [Shape::Disk(Disk { radius: 2.0, inner_radius: 0.5 }), Shape::Rectangle(Rectangle::from_size(Vec2::ONE))]
+        {
             let ps = placed(shape, t);
             for i in 0..50 {
                 let u = Vec2::new((i as f32 * 0.618).fract(), (i as f32 * 0.414).fract());

@@ -246,7 +246,17 @@ impl SceneBvh {
             // Same inputs, same arithmetic: this reproduces the hit found during traversal.
             if let Some(h) = shape.intersect(ray, best.t) {
                 let sp = h.point;
-                return Hit { t: h.t, p: sp.p, p_error: sp.p_error, ng: sp.n, ns: sp.n, uv: h.uv, id, material, instance };
+                return Hit {
+                    t: h.t,
+                    p: sp.p,
+                    p_error: sp.p_error,
+                    ng: sp.n,
+                    ns: sp.n,
+                    uv: h.uv,
+                    id,
+                    material,
+                    instance,
+                };
             }
         }
         let (v, b) = (&leaf.v, best.b);
@@ -297,7 +307,8 @@ mod tests {
     #[test]
     fn occluder_right_next_to_the_origin_is_found() {
         // obvhs's stock node test would cull boxes closer than t = 1e-4.
-        let tri = Mesh::from_triangles(&[[Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]]);
+        let tri =
+            Mesh::from_triangles(&[[Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]]);
         let tri = tri.unwrap();
         let bvh = SceneBvh::build(&[GeometryInstance {
             geometry: GeometryRef::Mesh(&tri),
