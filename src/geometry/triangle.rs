@@ -100,7 +100,7 @@ impl ShearedRay {
 
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
-        if !(t <= t_max) {
+        if t.is_nan() || t > t_max {
             return None;
         }
 
@@ -136,7 +136,8 @@ fn swizzle(v: Vec3, kz: u8) -> Vec3 {
 /// vertex. Such triangles are left out of the scene BVH.
 pub(crate) fn is_degenerate(v: &[Vec3; 3]) -> bool {
     let n = (v[1] - v[0]).cross(v[2] - v[0]);
-    !(n.length_squared() > 0.0) || !n.is_finite() || !(v[0].is_finite() && v[1].is_finite() && v[2].is_finite())
+    let proper = n.length_squared() > 0.0 && n.is_finite() && v.iter().all(|p| p.is_finite());
+    !proper
 }
 
 #[cfg(test)]
