@@ -4,7 +4,7 @@
 //! Traversal uses obvhs's `traverse!` loop with our own node test. obvhs's node test clamps box
 //! entry to t >= 1e-4 (which would drop occluders right next to a shadow-ray origin) and replaces
 //! tiny direction components by +-1/f32::EPSILON; ours honours t in [0, t_max] exactly and pads
-//! each slab by a bound on its own rounding (see [`NODE_PAD`]), so it never culls a box the exact
+//! each slab by a bound on its own rounding (see `NODE_PAD`), so it never culls a box the exact
 //! ray meets. With primitive tests shared between the two paths, BVH queries then return exactly
 //! what testing every primitive returns (closest-hit ties go to the lowest input primitive index).
 
