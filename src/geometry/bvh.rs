@@ -16,9 +16,9 @@
 //!
 //! **Refit, not rebuild, when only transforms change** (`refit.rs`). A refit rewrites the moved
 //! instances' world triangles and re-quantises only the nodes on their paths to the root, keeping
-//! the topology. Measured with `benches/visibility.rs` (1,042 objects, 100k triangles, 2 busy
-//! cores): refit 0.1 ms when 1% of the objects move and 4-12 ms when all move, against 50-110 ms
-//! for a rebuild. Small motions barely hurt the tree (SAH-style cost x1.05 after every object
+//! the topology. Measured with `benches/visibility.rs` (1,042 objects, 100k triangles, 2 cores
+//! shared with other builds): refit 0.05 ms when 1% of the objects move and 4.4 ms when all move,
+//! against 53 ms for a rebuild (0.9 s for 1M triangles). Small motions barely hurt the tree (SAH-style cost x1.05 after every object
 //! moved by up to 1 m), but objects that jump across the scene wreck it (cost x41, incoherent
 //! any-hit ~20x slower than a fresh build). So [`SceneBvh::update_transforms`] refits, tracks that
 //! cost (sum of node surface areas over the root's) and rebuilds once it passes
