@@ -2,12 +2,13 @@
 //!
 //! - [`Mesh`], [`Sphere`], [`Disk`], [`Rectangle`]: geometry components, placed by a [`Transform`].
 //! - [`SceneBvh`]: one CWBVH (obvhs) over every world-space triangle and analytic shape; see
-//!   `bvh.rs` for the build / refit choices and their measured costs.
+//!   `bvh.rs` for the build / refit choices and their measured costs, `refit.rs` for updates.
 //! - [`occluded`] and [`closest_hits`]: batched any-hit and closest-hit queries (rayon).
 //! - [`offset_ray_origin`], [`SurfacePoint`]: robust shadow-ray endpoints with stated error bounds.
 pub mod bvh;
 pub mod mesh;
 pub mod ray;
+mod refit;
 pub mod shapes;
 pub mod transform;
 mod triangle;
