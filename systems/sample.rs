@@ -42,7 +42,8 @@ impl ShadowRays {
     pub fn is_empty(&self) -> bool {
         self.origin.is_empty()
     }
-    fn clear(&mut self) {
+    /// Empties every column, keeping capacity.
+    pub fn clear(&mut self) {
         self.origin.clear();
         self.origin_error.clear();
         self.origin_normal.clear();

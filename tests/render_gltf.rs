@@ -43,11 +43,17 @@ fn every_real_gltf_scene_renders() {
         let mut schedule = Schedule::default();
         LightingPlugin::build(&mut world, &mut schedule);
         let report = spawn_gltf(&mut world, &scene);
-        let (film, stats) = render(&mut world, &mut schedule, &RenderOptions { width: 24, height: 16, spp: 2, mis: true }, |_| {});
+        let (film, stats) =
+            render(&mut world, &mut schedule, &RenderOptions { width: 24, height: 16, spp: 2, mis: true }, |_| {});
         let lights = world.resource::<LightTable>().entity_count();
         eprintln!(
             "{file}: {} meshes, {} triangles, {} emissive, {} lights spawned, {lights} in the table, {} warnings, {:.3} s",
-            report.meshes, report.triangles, report.emissive_meshes, report.lights, report.warnings.len(), stats.seconds
+            report.meshes,
+            report.triangles,
+            report.emissive_meshes,
+            report.lights,
+            report.warnings.len(),
+            stats.seconds
         );
         assert!(film.pixels().iter().all(|p| p.is_finite() && p.min_element() >= 0.0), "{file}: non-finite pixel");
         assert!(lights >= min_lights, "{file}: {lights} lights, expected at least {min_lights}");

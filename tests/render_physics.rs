@@ -118,7 +118,11 @@ fn rectangle_area_light_matches_the_view_factor() {
     let want = (rho * l) as f64 * view_factor_centered(a as f64, b as f64, h as f64);
     let (mut world, mut schedule) = floor_scene(ColorMode::Rgb, rho);
     let down = Transform::from_translation(Vec3::new(0.0, h, 0.0)).looking_to(Vec3::Y, Vec3::Z); // front -> -Y
-    world.spawn((Rectangle { half_size: Vec2::new(a / 2.0, b / 2.0) }, down, AreaLight { amount: Amount::Nits(l), ..Default::default() }));
+    world.spawn((
+        Rectangle { half_size: Vec2::new(a / 2.0, b / 2.0) },
+        down,
+        AreaLight { amount: Amount::Nits(l), ..Default::default() },
+    ));
     // The camera sits below the emitter, looking down at the floor's centre.
     let mut cams = world.query_filtered::<&mut Transform, With<Camera>>();
     for mut t in cams.iter_mut(&mut world) {
