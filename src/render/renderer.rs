@@ -6,7 +6,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::camera::{Camera, PinholeCamera};
+use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::film::Film;
 use super::material::Material;
 use crate::geometry::{Hit, Ray, SceneBvh, closest_hits};
@@ -89,12 +89,39 @@ fn find_camera(world: &mut World, width: u32, height: u32) -> PinholeCamera {
     PinholeCamera::new(&c, &t, width, height)
 }
 
-/// Renders the world's scene. The world must have had `LightingPlugin::build` applied to it and
-/// `schedule`; `Settings` choose colour mode, light sampler and selection.
+/// Renders the world's scene through its camera (the first `Camera`, or one framing the scene).
+/// The world must have had `LightingPlugin::build` applied to it and `schedule`; `Settings`
+/// choose colour mode, light sampler and selection.
 pub fn render(
     world: &mut World,
     schedule: &mut Schedule,
     opts: &RenderOptions,
+    progress: impl FnMut(f32),
+) -> (Film, RenderStats) {
+    render_with(world, schedule, opts, None, progress)
+}
+
+/// Renders a lat-long radiance map seen from `origin` (an environment camera): a `width` x
+/// `height` image whose pixels are radiance (nit) along `lat_long_direction`, ready to light
+/// another scene as an `ImageInfiniteLight` (with scale 1 and a white spectrum).
+pub fn render_environment(
+    world: &mut World,
+    schedule: &mut Schedule,
+    origin: Vec3,
+    opts: &RenderOptions,
+) -> (crate::scene::image::RgbImage, RenderStats) {
+    let model = CameraModel::LatLong { origin, width: opts.width, height: opts.height };
+    let (film, stats) = render_with(world, schedule, opts, Some(model), |_| {});
+    let (width, height) = (opts.width as usize, opts.height as usize);
+    (crate::scene::image::RgbImage { width, height, pixels: film.pixels() }, stats)
+}
+
+/// Renders through `camera`, or the world's camera when None.
+pub fn render_with(
+    world: &mut World,
+    schedule: &mut Schedule,
+    opts: &RenderOptions,
+    camera: Option<CameraModel>,
     mut progress: impl FnMut(f32),
 ) -> (Film, RenderStats) {
     let start = std::time::Instant::now();
@@ -102,7 +129,7 @@ pub fn render(
     // One update brings the BVH and light tables up to date before cameras are placed.
     world.resource_mut::<ShadingBatch>().clear();
     schedule.run(world);
-    let camera = find_camera(world, opts.width, opts.height);
+    let camera = camera.unwrap_or_else(|| CameraModel::Pinhole(find_camera(world, opts.width, opts.height)));
     let materials: Vec<Material> = {
         let entities = world.resource::<GeometryIndex>().entities.clone();
         entities.iter().map(|&e| world.get::<Material>(e).cloned().unwrap_or_default()).collect()
