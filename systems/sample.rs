@@ -57,7 +57,7 @@ impl ShadowRays {
 
 /// Rebuilds or refreshes the light sampler (rebuild on a kind change or changed powers).
 pub fn update_light_sampler(
-    table: Res<LightTable>,
+    mut table: ResMut<LightTable>,
     settings: Res<Settings>,
     mut sampler: ResMut<LightSampler>,
     mut report: ResMut<RunReport>,
@@ -68,6 +68,8 @@ pub fn update_light_sampler(
     } else {
         sampler.update(&table)
     };
+    // The sampler has caught up; clearing the flags is bookkeeping, not a change to the table.
+    table.bypass_change_detection().clear_change_flags();
     report.record("light_sampler", true, what);
 }
 
