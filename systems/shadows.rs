@@ -36,17 +36,21 @@ pub fn trace_shadow_rays(
     bvh: Res<SceneBvh>,
     mut segments: Local<Vec<crate::geometry::Ray>>,
 ) {
+    use rayon::prelude::*;
     let r = &mut *rays;
     segments.clear();
-    segments.extend((0..r.origin.len()).map(|i| {
-        let from = SurfacePoint { p: r.origin[i], p_error: r.origin_error[i], n: r.origin_normal[i] };
-        if r.to_infinity[i] {
-            from.spawn_ray((r.target[i] - r.origin[i]).normalize())
-        } else if r.target_normal[i] == glam::Vec3::ZERO {
-            from.spawn_ray_to_point(r.target[i])
-        } else {
-            from.spawn_ray_to(&SurfacePoint::from_point(r.target[i], r.target_normal[i]))
-        }
-    }));
+    (0..r.origin.len())
+        .into_par_iter()
+        .map(|i| {
+            let from = SurfacePoint { p: r.origin[i], p_error: r.origin_error[i], n: r.origin_normal[i] };
+            if r.to_infinity[i] {
+                from.spawn_ray((r.target[i] - r.origin[i]).normalize())
+            } else if r.target_normal[i] == glam::Vec3::ZERO {
+                from.spawn_ray_to_point(r.target[i])
+            } else {
+                from.spawn_ray_to(&SurfacePoint::from_point(r.target[i], r.target_normal[i]))
+            }
+        })
+        .collect_into_vec(&mut segments);
     occluded(&bvh, &segments, &mut r.occluded);
 }

@@ -68,6 +68,9 @@ fn to_rgb(v: SampledSpectrum, wavelengths: Option<&SampledWavelengths>) -> Vec3 
     }
 }
 
+/// The material of geometry that has none.
+static DEFAULT_MATERIAL: std::sync::LazyLock<Material> = std::sync::LazyLock::new(Material::default);
+
 /// Everything about a camera sample that the shading pass needs.
 #[derive(Clone, Copy)]
 struct CameraSample {
@@ -150,13 +153,16 @@ pub fn render_with(
         let last = (first + BATCH_SAMPLES).min(total);
         // Sample index s of pixel p is camera sample p * spp + s: a pixel's samples are adjacent.
         samples.clear();
-        samples.extend((first..last).map(|k| {
-            let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
-            let mut rng = SampleStream::new(seed, pixel, sample);
-            let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
-            let wavelengths = spectral.then(|| SampledWavelengths::sample_visible(rng.next_f32()));
-            CameraSample { pixel, sample, ray, hit: None, wavelengths }
-        }));
+        (first..last)
+            .into_par_iter()
+            .map(|k| {
+                let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
+                let mut rng = SampleStream::new(seed, pixel, sample);
+                let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
+                let wavelengths = spectral.then(|| SampledWavelengths::sample_visible(rng.next_f32()));
+                CameraSample { pixel, sample, ray, hit: None, wavelengths }
+            })
+            .collect_into_vec(&mut samples);
         rays.clear();
         rays.extend(samples.iter().map(|s| s.ray));
         closest_hits(world.resource::<SceneBvh>(), &rays, &mut hits);
@@ -263,8 +269,10 @@ impl ShadeContext<'_> {
         let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
         let wo = -s.ray.dir.normalize();
         let ns = self.batch.shading_normal[j];
-        let material = self.materials.get(hit.material as usize).cloned().unwrap_or_default();
-        let bsdf = material.bsdf(hit.uv, ns, query);
+        let bsdf = match self.materials.get(hit.material as usize) {
+            Some(m) => m.bsdf(hit.uv, ns, query),
+            None => DEFAULT_MATERIAL.bsdf(hit.uv, ns, query),
+        };
         // Light the camera sees on emitters directly.
         let mut l = self.emitted(&hit, wo, query).map_or(SampledSpectrum::default(), |(_, le)| le);
         for e in self.lighting.entries(j) {
