@@ -112,6 +112,26 @@ fn huge_but_finite_vertices_are_left_out_of_the_bvh() {
     assert!(MAX_COORDINATE >= 1e9, "the limit must stay far beyond real scenes");
 }
 
+/// gltf_import crash 2 (the target's invariant check): a primitive whose triangles using a NaN vertex were dropped
+/// kept the NaN vertex itself, against `PrimitiveData::positions`' "all finite"; `spawn_gltf` then refused the whole
+/// mesh (`Mesh::new` rejects any non-finite vertex) instead of the documented fallback (only those triangles
+/// dropped). Fixed in src/scene/gltf/mesh.rs: such vertices are moved onto a kept one.
+#[test]
+fn nan_vertex_drops_only_its_triangles_through_spawn() {
+    let mut positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z, Vec3::new(f32::NAN, 1.0, 1.0), Vec3::ONE];
+    let gltf = mesh_gltf(&positions, &[0, 1, 2, 3, 4, 5]);
+    let scene = load_gltf_from_bytes(&gltf, None, "nan.gltf").unwrap();
+    let prim = &scene.meshes[0].primitives[0];
+    assert_eq!(prim.indices, vec![0, 1, 2]);
+    assert!(prim.positions.iter().all(|p| p.is_finite()), "{:?}", prim.positions);
+    let (_, report) = import_and_run(&gltf, "nan.gltf").unwrap();
+    assert_eq!((report.meshes, report.triangles), (1, 1), "{:?}", report.warnings);
+    // An infinite vertex is handled the same way.
+    positions[4] = Vec3::new(0.0, f32::INFINITY, 0.0);
+    let (_, report) = import_and_run(&mesh_gltf(&positions, &[0, 1, 2, 3, 4, 5]), "inf.gltf").unwrap();
+    assert_eq!((report.meshes, report.triangles), (1, 1), "{:?}", report.warnings);
+}
+
 /// Every file under tests/fuzz_cases/<target>/ goes through its target's path without a panic.
 #[test]
 fn saved_fuzz_cases_replay_without_panics() {
