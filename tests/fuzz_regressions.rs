@@ -132,6 +132,29 @@ fn nan_vertex_drops_only_its_triangles_through_spawn() {
     assert_eq!((report.meshes, report.triangles), (1, 1), "{:?}", report.warnings);
 }
 
+/// ies_parse crash 1 (tests/fuzz_cases/ies_parse/candela_1e81.ies): a candela value of 1.1e81 parses (finite in
+/// f64) and integrates to a finite f64 flux, but the resolved light's f32 power was infinite. Fixed in
+/// src/light/goniometric.rs: `resolve` refuses profiles whose flux could exceed f32, and any infinite power.
+#[test]
+fn ies_profile_too_bright_for_f32_is_refused_by_resolve() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_cases/ies_parse/candela_1e81.ies");
+    let profile = IesProfile::from_file(&path).expect("a valid LM-63 file");
+    assert!(profile.integrated_flux_lm().is_finite() && profile.max_candela() > 1e80);
+    let err = GoniometricLight::from_ies(Arc::new(profile)).resolve(&Transform::IDENTITY).unwrap_err();
+    assert!(err.to_string().contains("too large for f32"), "{err}");
+    // Spawned from a scene it is reported, not panicking: the sync step drops it with a warning.
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    LightingPlugin::build(&mut world, &mut schedule);
+    let light = GoniometricLight::from_ies(Arc::new(IesProfile::from_file(&path).unwrap()));
+    world.spawn((light, Transform::IDENTITY));
+    world.resource_mut::<ShadingBatch>().push(Vec3::ZERO, Vec3::Y, 0, 0);
+    schedule.run(&mut world);
+    assert!(world.resource::<kelvin::light::LightTable>().is_empty());
+    let report = world.resource::<kelvin::shading::RunReport>();
+    assert!(report.warnings.iter().any(|w| w.contains("too large for f32")), "{:?}", report.warnings);
+}
+
 /// Every file under tests/fuzz_cases/<target>/ goes through its target's path without a panic.
 #[test]
 fn saved_fuzz_cases_replay_without_panics() {
