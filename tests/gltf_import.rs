@@ -467,6 +467,8 @@ fn nan_vertices_drop_their_triangles() {
     let scene = load_ok(&dir.join("nan.gltf"));
     assert_eq!(scene.meshes[0].primitives[0].indices, vec![0, 1, 2]);
     assert!(scene.warnings.iter().any(|w| w.contains("1 triangle(s) with NaN")), "{:?}", scene.warnings);
+    // The unused NaN vertex is replaced, so every position is finite as documented.
+    assert!(scene.meshes[0].primitives[0].positions.iter().all(|p| p.is_finite()));
 }
 
 #[test]

@@ -73,7 +73,8 @@ pub struct GeometryInstance<'a> {
 pub struct BuildReport {
     /// Instances left out entirely (bad transform or shape size); the error says which and why.
     pub skipped_instances: Vec<GeometryError>,
-    /// Triangles left out because they have zero area (in local or world space).
+    /// Triangles left out because they have zero area (in local or world space) or a world-space
+    /// vertex that is not finite or beyond [`crate::geometry::MAX_COORDINATE`].
     pub degenerate_triangles: Vec<GeometryId>,
 }
 

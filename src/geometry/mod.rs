@@ -19,6 +19,7 @@ pub use mesh::Mesh;
 pub use ray::{Ray, SHADOW_EPSILON, SurfacePoint, offset_ray_origin, triangle_surface_point};
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};
 pub use transform::Transform;
+pub use triangle::MAX_COORDINATE;
 pub use visibility::{Hit, closest_hits, occluded};
 
 use glam::Vec3;

@@ -132,11 +132,18 @@ fn swizzle(v: Vec3, kz: u8) -> Vec3 {
     }
 }
 
-/// Whether a triangle has zero area in f32 (repeated or collinear vertices), or a non-finite
-/// vertex. Such triangles are left out of the scene BVH.
+/// Largest usable world coordinate, metres (1e9 km). Beyond about 1e19 the BVH builder's surface
+/// areas overflow f32 and obvhs breaks (found by fuzzing the glTF import); 1e12 leaves room for
+/// sums over millions of nodes.
+pub const MAX_COORDINATE: f32 = 1e12;
+
+/// Whether a triangle has zero area in f32 (repeated or collinear vertices), or a vertex that is
+/// not finite or lies beyond [`MAX_COORDINATE`] on some axis. Such triangles are left out of the
+/// scene BVH and of area lights.
 pub(crate) fn is_degenerate(v: &[Vec3; 3]) -> bool {
     let n = (v[1] - v[0]).cross(v[2] - v[0]);
-    let proper = n.length_squared() > 0.0 && n.is_finite() && v.iter().all(|p| p.is_finite());
+    let in_range = v.iter().all(|p| p.abs().max_element() <= MAX_COORDINATE);
+    let proper = n.length_squared() > 0.0 && n.is_finite() && in_range;
     !proper
 }
 
@@ -185,6 +192,8 @@ mod tests {
         assert!(is_degenerate(&[p, p, Vec3::ZERO]));
         assert!(is_degenerate(&[Vec3::ZERO, p, 2.0 * p]));
         assert!(is_degenerate(&[Vec3::ZERO, Vec3::X, Vec3::new(f32::NAN, 0.0, 0.0)]));
+        // Finite normal, but a vertex far beyond MAX_COORDINATE (BVH areas would overflow).
+        assert!(is_degenerate(&[Vec3::ZERO, Vec3::X, Vec3::new(0.0, 1.0, 1e38)]));
         assert!(!is_degenerate(&TRI));
     }
 }

@@ -100,7 +100,16 @@ impl GoniometricLight {
         let amount =
             check_amount(self.amount, LIGHT, "amount", &[Quantity::Intensity, Quantity::Power], "cd, W/sr, lm or W")?;
         let (unit_power, sampler) = match &self.profile {
-            GonioProfile::Ies(ies) => ies_sampler(ies),
+            GonioProfile::Ies(ies) => {
+                // Values are used as f32: a profile whose flux could exceed f32 is refused (found by fuzzing).
+                if !(ies.max_candela() * 4.0 * PI64 <= f32::MAX as f64) {
+                    return Err(LightError::Invalid {
+                        light: LIGHT,
+                        msg: format!("IES candela values up to {:e} cd are too large for f32", ies.max_candela()),
+                    });
+                }
+                ies_sampler(ies)
+            }
             GonioProfile::EqualAreaImage(image) => {
                 check_image(image, LIGHT)?;
                 if image.width != image.height {
@@ -126,14 +135,19 @@ impl GoniometricLight {
         if amount.quantity() == Quantity::Power {
             intensity = intensity.scaled(if unit_power > 0.0 { (1.0 / unit_power) as f32 } else { 0.0 });
         }
-        Ok(ResolvedGoniometric {
+        let resolved = ResolvedGoniometric {
             position: transform.translation,
             rotation: transform.rotation.normalize(),
             profile: self.profile.clone(),
             intensity,
             unit_power,
             sampler,
-        })
+        };
+        let phi = resolved.phi();
+        if !phi.is_finite() {
+            return Err(LightError::Invalid { light: LIGHT, msg: format!("power {phi} W overflows f32") });
+        }
+        Ok(resolved)
     }
 }
 

@@ -54,7 +54,7 @@ fn read_primitive(
         warnings.push(pointer, "no POSITION attribute; primitive skipped");
         return Ok(None);
     };
-    let positions: Vec<Vec3> =
+    let mut positions: Vec<Vec3> =
         read_vectors::<3>(doc, position_accessor, "POSITION")?.into_iter().map(Vec3::from_array).collect();
     let n = positions.len();
     if n == 0 {
@@ -115,6 +115,10 @@ fn read_primitive(
         warnings.push(pointer, "no triangles; primitive skipped");
         return Ok(None);
     }
+    // Non-finite vertices are now unused; move them onto a kept vertex so that every position is finite (a mesh
+    // with one NaN vertex is refused whole downstream) without stretching the mesh's bounds.
+    let anchor = positions[indices[0] as usize];
+    positions.iter_mut().filter(|p| !p.is_finite()).for_each(|p| *p = anchor);
 
     let material = primitive.material.map(|m| m.value()).filter(|&m| {
         let exists = m < doc.root.materials.len();
