@@ -1,8 +1,8 @@
 //! Environment-map sampling tables: built once per image change, never per frame.
 
-use std::collections::HashMap;
 use std::sync::Arc;
 
+use bevy_ecs::entity::EntityHashMap;
 use bevy_ecs::prelude::*;
 
 use crate::light::{EnvMapTables, ImageInfiniteLight};
@@ -13,7 +13,7 @@ use super::Work;
 /// Sampling tables of each image infinite light, by entity.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct EnvTables {
-    pub by_entity: HashMap<Entity, Arc<EnvMapTables>>,
+    pub by_entity: EntityHashMap<Arc<EnvMapTables>>,
 }
 
 /// Tables are built only when an image infinite light exists and was added or changed.

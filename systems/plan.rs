@@ -67,6 +67,8 @@ pub fn plan_sampling(
     settings: Res<Settings>,
     mut work: ResMut<Work>,
     mut report: ResMut<RunReport>,
+    mut out: ResMut<crate::shading::DirectLighting>,
+    mut rays: ResMut<super::ShadowRays>,
 ) {
     let (run, why) = if batch.is_empty() {
         (false, "shading batch is empty".to_string())
@@ -81,4 +83,10 @@ pub fn plan_sampling(
     };
     work.sampling = run;
     report.record("sample_direct_lighting", run, why);
+    if !run {
+        // Every point gets no entries: nothing from an earlier update may linger.
+        out.clear();
+        out.offsets.resize(batch.len() + 1, 0);
+        rays.clear();
+    }
 }

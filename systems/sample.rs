@@ -42,7 +42,8 @@ impl ShadowRays {
     pub fn is_empty(&self) -> bool {
         self.origin.is_empty()
     }
-    fn clear(&mut self) {
+    /// Empties every column, keeping capacity.
+    pub fn clear(&mut self) {
         self.origin.clear();
         self.origin_error.clear();
         self.origin_normal.clear();
@@ -56,7 +57,7 @@ impl ShadowRays {
 
 /// Rebuilds or refreshes the light sampler (rebuild on a kind change or changed powers).
 pub fn update_light_sampler(
-    table: Res<LightTable>,
+    mut table: ResMut<LightTable>,
     settings: Res<Settings>,
     mut sampler: ResMut<LightSampler>,
     mut report: ResMut<RunReport>,
@@ -67,6 +68,8 @@ pub fn update_light_sampler(
     } else {
         sampler.update(&table)
     };
+    // The sampler has caught up; clearing the flags is bookkeeping, not a change to the table.
+    table.bypass_change_detection().clear_change_flags();
     report.record("light_sampler", true, what);
 }
 

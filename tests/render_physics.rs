@@ -139,3 +139,36 @@ fn point_light_answer_is_the_same_under_strategy_precision_and_offset_knobs() {
         assert!((got / want - 1.0).abs() < 1e-3, "{strategy:?} {precision:?} {offset:?}: {got} vs {want}");
     }
 }
+
+/// View factor from a differential area to a parallel rectangle centred above it (a x b at
+/// height h): four corner rectangles (Howell's catalogue, configuration B-3).
+fn view_factor_centered(a: f64, b: f64, h: f64) -> f64 {
+    let corner = |x: f64, y: f64| {
+        let (x, y) = (x / h, y / h);
+        let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+        (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
+    };
+    4.0 * corner(a / 2.0, b / 2.0)
+}
+
+#[test]
+fn rectangle_area_light_matches_the_view_factor() {
+    use kelvin::light::AreaLight;
+    let (rho, l, h, a, b) = (0.6f32, 500.0f32, 1.0f32, 1.2f32, 0.8f32);
+    let want = (rho * l) as f64 * view_factor_centered(a as f64, b as f64, h as f64);
+    let (mut world, mut schedule) = floor_scene(ColorMode::Rgb, rho);
+    let down = Transform::from_translation(Vec3::new(0.0, h, 0.0)).looking_to(Vec3::Y, Vec3::Z); // front -> -Y
+    world.spawn((
+        Rectangle { half_size: Vec2::new(a / 2.0, b / 2.0) },
+        down,
+        AreaLight { amount: Amount::Nits(l), ..Default::default() },
+    ));
+    // The camera sits below the emitter, looking down at the floor's centre.
+    let mut cams = world.query_filtered::<&mut Transform, With<Camera>>();
+    for mut t in cams.iter_mut(&mut world) {
+        t.translation.y = 0.5;
+    }
+    let (mean, se) = centre_stats(&mut world, &mut schedule, 16, 16, 3, Strategy::Mis);
+    eprintln!("rectangle light: {mean:.4} +- {se:.4} cd/m^2, view factor gives {want:.4}");
+    assert!((mean - want).abs() <= 3.0 * se + 2e-3 * want, "{mean} +- {se} vs {want}");
+}

@@ -8,8 +8,9 @@ use bevy_ecs::prelude::*;
 use indicatif::{ProgressBar, ProgressStyle};
 use kelvin::geometry::Transform;
 use kelvin::light::ImageInfiniteLight;
+use kelvin::render::camera::CameraModel;
 use kelvin::render::film_io::{write_exr, write_png};
-use kelvin::render::renderer::{RenderOptions, Strategy, render};
+use kelvin::render::renderer::{RenderOptions, Strategy, render_with};
 use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, RunReport, Settings};
 use kelvin::systems::LightingPlugin;
 
@@ -68,9 +69,21 @@ pub struct RenderArgs {
     /// PNG exposure in stops; automatic (mean log luminance to 18% grey) when absent.
     #[arg(long)]
     exposure: Option<f32>,
+    /// Render a lat-long radiance map seen from this point (an environment camera), e.g. 0,1,0,
+    /// instead of the scene's camera; the EXR can light another scene with --env.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point)]
+    environment_at: Option<glam::Vec3>,
     /// Print which systems ran and why others were skipped.
     #[arg(long)]
     report: bool,
+}
+
+fn parse_point(s: &str) -> Result<glam::Vec3, String> {
+    let v: Vec<f32> = s.split(',').filter_map(|c| c.trim().parse().ok()).collect();
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err(format!("'{s}': expected three numbers X,Y,Z")),
+    }
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -177,7 +190,9 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     bar.set_style(
         ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta}").expect("valid template"),
     );
-    let (film, stats) = render(&mut world, &mut schedule, &opts, |f| bar.set_position((f * 1000.0) as u64));
+    let camera = args.environment_at.map(|origin| CameraModel::LatLong { origin, width, height });
+    let (film, stats) =
+        render_with(&mut world, &mut schedule, &opts, camera, |f| bar.set_position((f * 1000.0) as u64));
     bar.finish_and_clear();
     if args.report {
         eprint!("{}", world.resource::<RunReport>());

@@ -122,6 +122,20 @@ impl LightFlags {
 }
 
 impl LightKind {
+    /// Position of this kind's block in `LightTable::ids` order.
+    pub const fn order(self) -> usize {
+        match self {
+            Self::Point => 0,
+            Self::Spot => 1,
+            Self::Area => 2,
+            Self::Projection => 3,
+            Self::Goniometric => 4,
+            Self::Distant => 5,
+            Self::UniformInfinite => 6,
+            Self::ImageInfinite => 7,
+        }
+    }
+
     /// The flags of this kind. A distant light with an angular diameter is not delta: see
     /// [`ResolvedDistant::flags`].
     pub const fn flags(self) -> LightFlags {

@@ -231,3 +231,18 @@ impl crate::light::table::Block for PointColumns {
         self.owner[i]
     }
 }
+
+impl PointColumns {
+    /// Sample_Li of light `row` for a batch of points in RGB mode (the SoA batch form): writes the
+    /// direction toward the light and the radiance I / r^2 per point (zero at the light itself).
+    pub fn sample_li_batch_rgb(&self, row: usize, positions: &[Vec3], wi: &mut [Vec3], radiance: &mut [Vec3]) {
+        let (p, rgb) = (self.position[row], self.rgb[row]);
+        for ((x, w), l) in positions.iter().zip(wi.iter_mut()).zip(radiance.iter_mut()) {
+            let d = p - *x;
+            let r2 = d.length_squared();
+            let inv_r2 = if r2 > 0.0 { 1.0 / r2 } else { 0.0 };
+            *w = d * inv_r2.sqrt();
+            *l = rgb * inv_r2;
+        }
+    }
+}

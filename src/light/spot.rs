@@ -299,3 +299,19 @@ impl crate::light::table::Block for SpotColumns {
         self.owner[i]
     }
 }
+
+impl SpotColumns {
+    /// Sample_Li of light `row` for a batch of points in RGB mode (the SoA batch form): direction
+    /// toward the light and radiance I falloff / r^2 per point.
+    pub fn sample_li_batch_rgb(&self, row: usize, positions: &[Vec3], wi: &mut [Vec3], radiance: &mut [Vec3]) {
+        let (p, dir, rgb) = (self.position[row], self.direction[row], self.rgb[row]);
+        let (c0, c1) = (self.cos_outer[row], self.cos_inner[row]);
+        for ((x, w), l) in positions.iter().zip(wi.iter_mut()).zip(radiance.iter_mut()) {
+            let d = p - *x;
+            let r2 = d.length_squared();
+            let inv_r = if r2 > 0.0 { r2.sqrt().recip() } else { 0.0 };
+            *w = d * inv_r;
+            *l = rgb * (smooth_step(-w.dot(dir), c0, c1) * inv_r * inv_r);
+        }
+    }
+}

@@ -3,9 +3,7 @@
 //! kinds are rows of their resolved form. Rows stay dense: removal swap-removes and fixes the
 //! entity -> rows map.
 
-use std::collections::HashMap;
-
-use bevy_ecs::entity::Entity;
+use bevy_ecs::entity::{Entity, EntityHashMap};
 use bevy_ecs::resource::Resource;
 
 use super::{
@@ -94,7 +92,7 @@ pub struct LightTable {
     /// Image lights sample their MIS-compensated tables (valid only when the caller combines light
     /// samples with BSDF samples by MIS); set from `Settings::mis` by the sampling system.
     pub mis_compensation: bool,
-    rows_of: HashMap<Entity, Vec<LightId>>,
+    rows_of: EntityHashMap<Vec<LightId>>,
     /// Bumped on every change; samplers compare it to know when to update.
     pub generation: u64,
     /// Set when a light was added, removed or changed its power since the flags were cleared.
@@ -333,6 +331,26 @@ impl LightTable {
         self.generation += 1;
         self.powers_changed = true;
         ids.len()
+    }
+
+    /// Where each kind's rows start in the order of [`Self::ids`], indexed by
+    /// [`LightKind::order`]: light `id` is number `offsets[id.kind.order()] + id.row`.
+    pub fn kind_offsets(&self) -> [u32; 8] {
+        let lengths = [
+            self.points.len(),
+            self.spots.len(),
+            self.area.len(),
+            self.projection.len(),
+            self.goniometric.len(),
+            self.distant.len(),
+            self.uniform_infinite.len(),
+            self.image_infinite.len(),
+        ];
+        let mut offsets = [0u32; 8];
+        for k in 1..8 {
+            offsets[k] = offsets[k - 1] + lengths[k - 1] as u32;
+        }
+        offsets
     }
 
     /// Clears the change flags (after samplers have caught up).

@@ -6,7 +6,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::camera::{Camera, PinholeCamera};
+use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::film::Film;
 use super::material::Material;
 use crate::geometry::{Hit, Ray, SceneBvh, closest_hits};
@@ -99,6 +99,9 @@ fn to_rgb(v: SampledSpectrum, wavelengths: Option<&SampledWavelengths>) -> Vec3 
     }
 }
 
+/// The material of geometry that has none.
+static DEFAULT_MATERIAL: std::sync::LazyLock<Material> = std::sync::LazyLock::new(Material::default);
+
 /// Everything about a camera sample that the shading pass needs.
 #[derive(Clone, Copy)]
 struct CameraSample {
@@ -120,12 +123,39 @@ fn find_camera(world: &mut World, width: u32, height: u32) -> PinholeCamera {
     PinholeCamera::new(&c, &t, width, height)
 }
 
-/// Renders the world's scene. The world must have had `LightingPlugin::build` applied to it and
-/// `schedule`; `Settings` choose colour mode, light sampler and selection.
+/// Renders the world's scene through its camera (the first `Camera`, or one framing the scene).
+/// The world must have had `LightingPlugin::build` applied to it and `schedule`; `Settings`
+/// choose colour mode, light sampler and selection.
 pub fn render(
     world: &mut World,
     schedule: &mut Schedule,
     opts: &RenderOptions,
+    progress: impl FnMut(f32),
+) -> (Film, RenderStats) {
+    render_with(world, schedule, opts, None, progress)
+}
+
+/// Renders a lat-long radiance map seen from `origin` (an environment camera): a `width` x
+/// `height` image whose pixels are radiance (nit) along `lat_long_direction`, ready to light
+/// another scene as an `ImageInfiniteLight` (with scale 1 and a white spectrum).
+pub fn render_environment(
+    world: &mut World,
+    schedule: &mut Schedule,
+    origin: Vec3,
+    opts: &RenderOptions,
+) -> (crate::scene::image::RgbImage, RenderStats) {
+    let model = CameraModel::LatLong { origin, width: opts.width, height: opts.height };
+    let (film, stats) = render_with(world, schedule, opts, Some(model), |_| {});
+    let (width, height) = (opts.width as usize, opts.height as usize);
+    (crate::scene::image::RgbImage { width, height, pixels: film.pixels() }, stats)
+}
+
+/// Renders through `camera`, or the world's camera when None.
+pub fn render_with(
+    world: &mut World,
+    schedule: &mut Schedule,
+    opts: &RenderOptions,
+    camera: Option<CameraModel>,
     mut progress: impl FnMut(f32),
 ) -> (Film, RenderStats) {
     let start = std::time::Instant::now();
@@ -134,7 +164,7 @@ pub fn render(
     // One update brings the BVH and light tables up to date before cameras are placed.
     world.resource_mut::<ShadingBatch>().clear();
     schedule.run(world);
-    let camera = find_camera(world, opts.width, opts.height);
+    let camera = camera.unwrap_or_else(|| CameraModel::Pinhole(find_camera(world, opts.width, opts.height)));
     let materials: Vec<Material> = {
         let entities = world.resource::<GeometryIndex>().entities.clone();
         entities.iter().map(|&e| world.get::<Material>(e).cloned().unwrap_or_default()).collect()
@@ -155,13 +185,16 @@ pub fn render(
         let last = (first + BATCH_SAMPLES).min(total);
         // Sample index s of pixel p is camera sample p * spp + s: a pixel's samples are adjacent.
         samples.clear();
-        samples.extend((first..last).map(|k| {
-            let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
-            let mut rng = SampleStream::new(seed, pixel, sample);
-            let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
-            let wavelengths = spectral.then(|| SampledWavelengths::sample_visible(rng.next_f32()));
-            CameraSample { pixel, sample, ray, hit: None, wavelengths }
-        }));
+        (first..last)
+            .into_par_iter()
+            .map(|k| {
+                let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
+                let mut rng = SampleStream::new(seed, pixel, sample);
+                let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
+                let wavelengths = spectral.then(|| SampledWavelengths::sample_visible(rng.next_f32()));
+                CameraSample { pixel, sample, ray, hit: None, wavelengths }
+            })
+            .collect_into_vec(&mut samples);
         rays.clear();
         rays.extend(samples.iter().map(|s| s.ray));
         closest_hits(world.resource::<SceneBvh>(), &rays, &mut hits);
@@ -271,8 +304,10 @@ impl ShadeContext<'_> {
         let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
         let wo = -s.ray.dir.normalize();
         let ns = self.batch.shading_normal[j];
-        let material = self.materials.get(hit.material as usize).cloned().unwrap_or_default();
-        let bsdf = material.bsdf(hit.uv, ns, query);
+        let bsdf = match self.materials.get(hit.material as usize) {
+            Some(m) => m.bsdf(hit.uv, ns, query),
+            None => DEFAULT_MATERIAL.bsdf(hit.uv, ns, query),
+        };
         // Light the camera sees on emitters directly.
         let mut l = self.emitted(&hit, wo, query).map_or(SampledSpectrum::default(), |(_, le)| le);
         for e in self.lighting.entries(j) {
