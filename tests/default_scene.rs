@@ -2,7 +2,7 @@
 
 use bevy_ecs::prelude::*;
 use kelvin::light::{LightKind, LightTable};
-use kelvin::render::renderer::{RenderOptions, render};
+use kelvin::render::renderer::{RenderOptions, Strategy, render};
 use kelvin::shading::RunReport;
 use kelvin::systems::LightingPlugin;
 
@@ -12,8 +12,12 @@ fn default_scene_has_area_spot_blackbody_point_and_sky_lights_and_renders() {
     let mut schedule = Schedule::default();
     LightingPlugin::build(&mut world, &mut schedule);
     kelvin::scenes::default_scene::spawn_default_scene(&mut world);
-    let (film, stats) =
-        render(&mut world, &mut schedule, &RenderOptions { width: 24, height: 24, spp: 2, mis: true }, |_| {});
+    let (film, stats) = render(
+        &mut world,
+        &mut schedule,
+        &RenderOptions { width: 24, height: 24, spp: 2, strategy: Strategy::Mis },
+        |_| {},
+    );
     let report = world.resource::<RunReport>();
     assert!(report.warnings.is_empty(), "{report}");
     let table = world.resource::<LightTable>();

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use bevy_ecs::prelude::*;
 use kelvin::light::LightTable;
-use kelvin::render::renderer::{RenderOptions, render};
+use kelvin::render::renderer::{RenderOptions, Strategy, render};
 use kelvin::scene::gltf::load_gltf;
 use kelvin::scene::spawn::spawn_gltf;
 use kelvin::systems::LightingPlugin;
@@ -43,8 +43,12 @@ fn every_real_gltf_scene_renders() {
         let mut schedule = Schedule::default();
         LightingPlugin::build(&mut world, &mut schedule);
         let report = spawn_gltf(&mut world, &scene);
-        let (film, stats) =
-            render(&mut world, &mut schedule, &RenderOptions { width: 24, height: 16, spp: 2, mis: true }, |_| {});
+        let (film, stats) = render(
+            &mut world,
+            &mut schedule,
+            &RenderOptions { width: 24, height: 16, spp: 2, strategy: Strategy::Mis },
+            |_| {},
+        );
         let lights = world.resource::<LightTable>().entity_count();
         eprintln!(
             "{file}: {} meshes, {} triangles, {} emissive, {} lights spawned, {lights} in the table, {} warnings, {:.3} s",

@@ -6,7 +6,7 @@ use kelvin::geometry::{Rectangle, Transform};
 use kelvin::light::{Amount, DistantLight, PointLight};
 use kelvin::render::camera::Camera;
 use kelvin::render::material::Material;
-use kelvin::render::renderer::{RenderOptions, render};
+use kelvin::render::renderer::{RenderOptions, Strategy, render};
 use kelvin::shading::{ColorMode, Settings};
 use kelvin::systems::LightingPlugin;
 
@@ -28,7 +28,7 @@ fn floor_scene(mode: ColorMode, rho: f32) -> (World, Schedule) {
 }
 
 fn centre_luminance(world: &mut World, schedule: &mut Schedule, spp: u32) -> f32 {
-    let opts = RenderOptions { width: 5, height: 5, spp, mis: true };
+    let opts = RenderOptions { width: 5, height: 5, spp, strategy: Strategy::Mis };
     let (film, _) = render(world, schedule, &opts, |_| {});
     luminance(film.pixel(2, 2))
 }
@@ -65,8 +65,15 @@ fn directional_light_gives_rho_over_pi_e_cos_theta() {
 }
 
 /// Mean and standard error of the centre pixel's luminance over renders with different seeds.
-fn centre_stats(world: &mut World, schedule: &mut Schedule, renders: u64, spp: u32, size: u32) -> (f64, f64) {
-    let opts = RenderOptions { width: size, height: size, spp, mis: true };
+fn centre_stats(
+    world: &mut World,
+    schedule: &mut Schedule,
+    renders: u64,
+    spp: u32,
+    size: u32,
+    strategy: Strategy,
+) -> (f64, f64) {
+    let opts = RenderOptions { width: size, height: size, spp, strategy };
     let values: Vec<f64> = (0..renders)
         .map(|seed| {
             world.resource_mut::<Settings>().seed = seed;
@@ -84,7 +91,13 @@ fn furnace_lambertian_sphere_under_uniform_sky_renders_albedo_times_l() {
     use kelvin::geometry::Sphere;
     use kelvin::light::UniformInfiniteLight;
     let (albedo, l) = (0.5f32, 100.0f32);
-    for mode in [ColorMode::Rgb, ColorMode::Spectral] {
+    let runs = [
+        (ColorMode::Rgb, Strategy::Mis),
+        (ColorMode::Spectral, Strategy::Mis),
+        (ColorMode::Rgb, Strategy::LightOnly),
+        (ColorMode::Rgb, Strategy::BsdfOnly),
+    ];
+    for (mode, strategy) in runs {
         let mut world = World::new();
         let mut schedule = Schedule::default();
         world.insert_resource(Settings { color_mode: mode, ..Default::default() });
@@ -93,10 +106,37 @@ fn furnace_lambertian_sphere_under_uniform_sky_renders_albedo_times_l() {
         world.spawn(UniformInfiniteLight::nits(l));
         let cam = Transform::from_translation(Vec3::new(0.0, 0.0, 5.0)).looking_to(Vec3::NEG_Z, Vec3::Y);
         world.spawn((Camera { yfov: 0.3 }, cam));
-        let (mean, se) = centre_stats(&mut world, &mut schedule, 16, 16, 3);
+        let (mean, se) = centre_stats(&mut world, &mut schedule, 16, 16, 3, strategy);
         let want = (albedo * l) as f64;
-        eprintln!("furnace {mode:?}: {mean:.4} +- {se:.4} (want {want})");
-        assert!((mean - want).abs() <= 3.0 * se + 1e-3 * want, "{mode:?}: {mean} +- {se} vs {want}");
+        eprintln!("furnace {mode:?} {strategy:?}: {mean:.4} +- {se:.4} (want {want})");
+        assert!((mean - want).abs() <= 3.0 * se + 1e-3 * want, "{mode:?} {strategy:?}: {mean} +- {se} vs {want}");
+    }
+}
+
+/// The accuracy report's knobs that must not change a delta light's answer: BSDF-only keeps the
+/// light samples of delta lights, f64 light math and a sane fixed shadow offset agree with f32 and
+/// the error-bound offset.
+#[test]
+fn point_light_answer_is_the_same_under_strategy_precision_and_offset_knobs() {
+    use kelvin::geometry::ShadowOffset;
+    use kelvin::shading::LightPrecision;
+    let (rho, i, h) = (0.5f32, 100.0f32, 2.0f32);
+    let want = rho / std::f32::consts::PI * i / (h * h);
+    let (mut world, mut schedule) = floor_scene(ColorMode::Rgb, rho);
+    world.spawn((PointLight::candela(i), Transform::from_translation(Vec3::new(0.0, h, 0.0))));
+    for (strategy, precision, offset) in [
+        (Strategy::BsdfOnly, LightPrecision::F32, ShadowOffset::ErrorBound),
+        (Strategy::LightOnly, LightPrecision::F64, ShadowOffset::ErrorBound),
+        (Strategy::Mis, LightPrecision::F32, ShadowOffset::FixedEpsilon(1e-3)),
+    ] {
+        {
+            let mut s = world.resource_mut::<Settings>();
+            (s.light_precision, s.shadow_offset) = (precision, offset);
+        }
+        let opts = RenderOptions { width: 5, height: 5, spp: 1, strategy };
+        let (film, _) = render(&mut world, &mut schedule, &opts, |_| {});
+        let got = luminance(film.pixel(2, 2));
+        assert!((got / want - 1.0).abs() < 1e-3, "{strategy:?} {precision:?} {offset:?}: {got} vs {want}");
     }
 }
 
@@ -128,7 +168,7 @@ fn rectangle_area_light_matches_the_view_factor() {
     for mut t in cams.iter_mut(&mut world) {
         t.translation.y = 0.5;
     }
-    let (mean, se) = centre_stats(&mut world, &mut schedule, 16, 16, 3);
+    let (mean, se) = centre_stats(&mut world, &mut schedule, 16, 16, 3, Strategy::Mis);
     eprintln!("rectangle light: {mean:.4} +- {se:.4} cd/m^2, view factor gives {want:.4}");
     assert!((mean - want).abs() <= 3.0 * se + 2e-3 * want, "{mean} +- {se} vs {want}");
 }

@@ -1,6 +1,7 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
 mod ies;
 mod render;
+mod report;
 mod spectrum;
 
 use clap::{Parser, Subcommand};
@@ -21,6 +22,8 @@ enum Command {
     Ies(ies::IesArgs),
     /// Render a glTF scene (or the embedded default scene) with direct lighting.
     Render(render::RenderArgs),
+    /// Reports: `report accuracy` prices each accuracy knob in render time.
+    Report(report::ReportArgs),
 }
 
 /// Errors the CLI reports: a message that names what failed.
@@ -32,5 +35,6 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Spectrum(args) => spectrum::run(args),
         Command::Ies(args) => ies::run(args),
         Command::Render(args) => render::run(args),
+        Command::Report(args) => report::run(args),
     }
 }

@@ -10,7 +10,7 @@ use kelvin::geometry::Transform;
 use kelvin::light::ImageInfiniteLight;
 use kelvin::render::camera::CameraModel;
 use kelvin::render::film_io::{write_exr, write_png};
-use kelvin::render::renderer::{RenderOptions, render_with};
+use kelvin::render::renderer::{RenderOptions, Strategy, render_with};
 use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, RunReport, Settings};
 use kelvin::systems::LightingPlugin;
 
@@ -180,7 +180,12 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     }
     let (mut world, mut schedule) = build_world(&args)?;
     let (width, height) = args.size;
-    let opts = RenderOptions { width, height, spp: args.spp.max(1), mis: !args.no_mis };
+    let opts = RenderOptions {
+        width,
+        height,
+        spp: args.spp.max(1),
+        strategy: if args.no_mis { Strategy::LightOnly } else { Strategy::Mis },
+    };
     let bar = ProgressBar::new(1000);
     bar.set_style(
         ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta}").expect("valid template"),

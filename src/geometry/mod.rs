@@ -16,7 +16,7 @@ pub mod visibility;
 
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
 pub use mesh::Mesh;
-pub use ray::{Ray, SHADOW_EPSILON, SurfacePoint, offset_ray_origin, triangle_surface_point};
+pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin, triangle_surface_point};
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};
 pub use transform::Transform;
 pub use triangle::MAX_COORDINATE;

@@ -25,6 +25,18 @@ impl LightTable {
         }
     }
 
+    /// [`Self::sample_li`] with point and spot lights evaluated in f64 (`LightPrecision::F64`);
+    /// every other kind has only its f32 form.
+    #[inline]
+    pub fn sample_li_f64(&self, id: LightId, ctx: &LightSampleContext, u: Vec2, query: ColorQuery) -> Option<LiSample> {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => self.points.sample_li_f64(i, ctx, query),
+            LightKind::Spot => self.spots.sample_li_f64(i, ctx, query),
+            _ => self.sample_li(id, ctx, u, query),
+        }
+    }
+
     /// Pdf_Li: solid-angle density with which `sample_li` returns `wi` (0 for delta lights).
     pub fn pdf_li(&self, id: LightId, ctx: &LightSampleContext, wi: Vec3) -> f32 {
         let i = id.row as usize;

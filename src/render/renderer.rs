@@ -22,19 +22,50 @@ const BATCH_SAMPLES: usize = 1 << 16;
 /// Salt that keeps the renderer's random dimensions apart from the light systems'.
 const RENDER_SALT: u64 = 0x5eed_ca3e_7a11_0b0e;
 
+/// How direct light is estimated at a surface point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Strategy {
+    /// Light and BSDF samples combined by the power heuristic (Veach 1997, ch. 9).
+    #[default]
+    Mis,
+    /// Light samples only.
+    LightOnly,
+    /// BSDF samples only. Delta lights keep their light samples (no BSDF sample can find them).
+    BsdfOnly,
+}
+
+impl Strategy {
+    /// Weight of a light sample of a non-delta light (pdfs of both strategies for its direction).
+    fn light_weight(self, light_pdf: f32, bsdf_pdf: f32) -> f32 {
+        match self {
+            Self::Mis => power_heuristic(light_pdf, bsdf_pdf),
+            Self::LightOnly => 1.0,
+            Self::BsdfOnly => 0.0,
+        }
+    }
+    /// Weight of a BSDF sample that reached a light.
+    fn bsdf_weight(self, bsdf_pdf: f32, light_pdf: f32) -> f32 {
+        match self {
+            Self::Mis => power_heuristic(bsdf_pdf, light_pdf),
+            Self::LightOnly => 0.0,
+            Self::BsdfOnly => 1.0,
+        }
+    }
+}
+
 /// What to render.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderOptions {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
-    /// Multiple importance sampling between light and BSDF sampling (else light sampling only).
-    pub mis: bool,
+    /// How light and BSDF samples are combined. Defaults to MIS.
+    pub strategy: Strategy,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { width: 256, height: 256, spp: 16, mis: true }
+        Self { width: 256, height: 256, spp: 16, strategy: Strategy::Mis }
     }
 }
 
@@ -128,7 +159,8 @@ pub fn render_with(
     mut progress: impl FnMut(f32),
 ) -> (Film, RenderStats) {
     let start = std::time::Instant::now();
-    world.resource_mut::<Settings>().mis = opts.mis;
+    // Compensated env tables only pay off when BSDF samples cover the dim part of the sky.
+    world.resource_mut::<Settings>().mis = opts.strategy == Strategy::Mis;
     // One update brings the BVH and light tables up to date before cameras are placed.
     world.resource_mut::<ShadingBatch>().clear();
     schedule.run(world);
@@ -197,11 +229,12 @@ pub fn render_with(
             geometry: world_ref.resource::<GeometryIndex>(),
             materials: &materials,
             seed,
-            mis: opts.mis,
+            strategy: opts.strategy,
+            offset: settings.shadow_offset,
             all_lights: settings.selection == crate::shading::LightSelection::All,
         };
         let escape_ids: Vec<_> = shade.table.escape_lights().collect();
-        let bsdf_sampling = opts.mis && shade.table.has_non_delta_lights();
+        let bsdf_sampling = opts.strategy != Strategy::LightOnly && shade.table.has_non_delta_lights();
         contributions.clear();
         contributions.resize(samples.len(), Vec3::ZERO);
         // Escaped camera rays see the infinite lights directly.
@@ -242,7 +275,9 @@ struct ShadeContext<'a> {
     geometry: &'a GeometryIndex,
     materials: &'a [Material],
     seed: u64,
-    mis: bool,
+    strategy: Strategy,
+    /// How BSDF rays leave the surface (as shadow rays do).
+    offset: crate::geometry::ShadowOffset,
     /// Every light is sampled for every point (pmf 1) rather than one chosen by the sampler.
     all_lights: bool,
 }
@@ -281,7 +316,10 @@ impl ShadeContext<'_> {
                 continue;
             }
             let f = bsdf.f(wo, wi);
-            let w = if self.lighting.delta[e] || !self.mis { 1.0 } else { power_heuristic(pdf, bsdf.pdf(wo, wi)) };
+            let w = if self.lighting.delta[e] { 1.0 } else { self.strategy.light_weight(pdf, bsdf.pdf(wo, wi)) };
+            if w == 0.0 {
+                continue;
+            }
             l = l.add(f.mul(li).scale(wi.dot(ns).abs() * w / pdf));
         }
         let mut traced = false;
@@ -290,12 +328,12 @@ impl ShadeContext<'_> {
             if let Some(bs) = bsdf.sample(wo, rng.next_f32(), rng.next_2d()) {
                 traced = true;
                 let from = crate::geometry::SurfacePoint { p: hit.p, p_error: hit.p_error, n: self.batch.normal[j] };
-                let ray = from.spawn_ray(bs.wi);
+                let ray = self.offset.spawn_ray(&from, bs.wi);
                 let ctx = LightSampleContext { p: hit.p, n: self.batch.normal[j], ns };
                 let pmf = |id| if self.all_lights { 1.0 } else { self.sampler.pmf(&ctx, id) };
                 if let Some(h2) = self.bvh.closest_hit(&ray) {
                     if let Some((id, le)) = self.emitted(&h2, -bs.wi, query) {
-                        let w = power_heuristic(bs.pdf, pmf(id) * self.table.pdf_li(id, &ctx, bs.wi));
+                        let w = self.strategy.bsdf_weight(bs.pdf, pmf(id) * self.table.pdf_li(id, &ctx, bs.wi));
                         l = l.add(bs.f.mul(le).scale(bs.wi.dot(ns).abs() * w / bs.pdf));
                     }
                 } else {
@@ -305,7 +343,7 @@ impl ShadeContext<'_> {
                             continue;
                         }
                         let light_pdf = pmf(id) * self.table.pdf_li(id, &ctx, bs.wi);
-                        let w = power_heuristic(bs.pdf, light_pdf);
+                        let w = self.strategy.bsdf_weight(bs.pdf, light_pdf);
                         l = l.add(bs.f.mul(le).scale(bs.wi.dot(ns).abs() * w / bs.pdf));
                     }
                 }
