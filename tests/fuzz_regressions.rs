@@ -11,7 +11,7 @@ use kelvin::geometry::{MAX_COORDINATE, Mesh, SceneBvh, Transform};
 use kelvin::light::{EnvMapTables, GoniometricLight};
 use kelvin::scene::gltf::load_gltf_from_bytes;
 use kelvin::scene::ies::IesProfile;
-use kelvin::scene::image::load_image_from_bytes;
+use kelvin::scene::image::{ImageError, load_image_from_bytes};
 use kelvin::scene::spawn::{SpawnReport, spawn_gltf};
 use kelvin::shading::ShadingBatch;
 use kelvin::systems::LightingPlugin;
@@ -153,6 +153,26 @@ fn ies_profile_too_bright_for_f32_is_refused_by_resolve() {
     assert!(world.resource::<kelvin::light::LightTable>().is_empty());
     let report = world.resource::<kelvin::shading::RunReport>();
     assert!(report.warnings.iter().any(|w| w.contains("too large for f32")), "{:?}", report.warnings);
+}
+
+/// env_map crash 1 (tests/fuzz_cases/env_map/b44_overflow.exr, 483 bytes): a B44 block whose deltas underflow
+/// made the `exr` crate panic ("attempt to subtract with overflow" where overflow checks are on) inside its
+/// own rayon thread pool, which aborts the whole process: the loader's catch_unwind never saw it. Fixed in
+/// src/scene/image.rs: EXR blocks are decoded on the calling thread, so such a panic becomes
+/// `ImageError::Decode` as documented.
+#[test]
+fn exr_decoder_panic_is_an_error_not_an_abort() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_cases/env_map/b44_overflow.exr");
+    let bytes = std::fs::read(&path).unwrap();
+    // With overflow checks (test profile) the decoder panics; without, it may decode wrapped values. Either way
+    // the process survives and a loaded image holds only finite, non-negative pixels.
+    match load_image_from_bytes(&bytes, "exr", "b44_overflow.exr") {
+        Err(e) => {
+            assert!(matches!(e, ImageError::Decode { .. }) && e.to_string().contains("b44_overflow.exr"), "{e}");
+            eprintln!("{e}");
+        }
+        Ok(l) => assert!(l.image.pixels.iter().all(|p| p.is_finite() && p.min_element() >= 0.0)),
+    }
 }
 
 /// Every file under tests/fuzz_cases/<target>/ goes through its target's path without a panic.

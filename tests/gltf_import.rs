@@ -491,6 +491,30 @@ fn truncated_glb_and_bad_json_are_errors() {
     assert!(matches!(err, GltfError::NotFound { .. }), "{err}");
 }
 
+/// A real .gltf next to a truncated (or empty) copy of its .bin: an error naming both files and both lengths.
+#[test]
+fn real_gltf_with_truncated_bin_is_an_error_naming_it() {
+    let Some(dir) = gltf_dir() else { return };
+    let src = dir.join("renderling");
+    let bin = std::fs::read(src.join("shadow_mapping_sanity.bin")).unwrap();
+    let tmp = temp_dir("truncated-bin");
+    std::fs::copy(src.join("shadow_mapping_sanity.gltf"), tmp.join("scene.gltf")).unwrap();
+    for cut in [0, 1, bin.len() / 2, bin.len() - 1] {
+        std::fs::write(tmp.join("shadow_mapping_sanity.bin"), &bin[..cut]).unwrap();
+        let err = load_gltf(&tmp.join("scene.gltf")).unwrap_err();
+        let declared = bin.len() as u64;
+        assert!(
+            matches!(err, GltfError::BufferTooShort { declared: d, actual, .. } if d == declared && actual == cut as u64),
+            "cut at {cut}: {err}"
+        );
+        let msg = err.to_string();
+        assert!(msg.contains("scene.gltf") && msg.contains("shadow_mapping_sanity.bin"), "{msg}");
+    }
+    // The whole .bin loads.
+    std::fs::write(tmp.join("shadow_mapping_sanity.bin"), &bin).unwrap();
+    assert!(!load_ok(&tmp.join("scene.gltf")).instances.is_empty());
+}
+
 /// Random byte flips and truncations of real files never panic (each gives a scene or an error).
 #[test]
 fn mutated_files_never_panic() {
