@@ -47,9 +47,12 @@ pub fn plan_sampler(
     mut work: ResMut<Work>,
     mut report: ResMut<RunReport>,
 ) {
-    let (run, why) = if sampler.kind() != settings.light_sampler
-        && !matches!(settings.light_sampler, crate::shading::LightSamplerKind::Bvh)
-    {
+    // Until the light BVH lands, a Bvh request is served by the power sampler (its stand-in).
+    let wanted = match settings.light_sampler {
+        crate::shading::LightSamplerKind::Bvh => crate::shading::LightSamplerKind::Power,
+        kind => kind,
+    };
+    let (run, why) = if sampler.kind() != wanted {
         (true, "settings changed the sampler kind")
     } else if table.is_changed() {
         (true, "light table changed")

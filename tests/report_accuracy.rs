@@ -59,3 +59,32 @@ fn quick_report_is_written_and_its_numbers_are_sane() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// The colour checker's bookkeeping: under a D65 light in RGB mode each patch's central pixels
+/// render its albedo times the luminance of a perfect white diffuser (E cos(theta) / pi).
+#[test]
+fn color_checker_patches_render_albedo_times_white_luminance() {
+    use bevy_ecs::prelude::*;
+    use kelvin::render::renderer::{RenderOptions, Strategy, render};
+    use kelvin::report::accuracy::patch_means;
+    use kelvin::scenes::color_checker::spawn_color_checker;
+    use kelvin::spectrum::Spectrum;
+    use kelvin::systems::LightingPlugin;
+
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    LightingPlugin::build(&mut world, &mut schedule);
+    let checker = spawn_color_checker(&mut world, Spectrum::d65());
+    let (w, h) = (64, 48);
+    let (film, _) = render(
+        &mut world,
+        &mut schedule,
+        &RenderOptions { width: w, height: h, spp: 1, strategy: Strategy::Mis },
+        |_| {},
+    );
+    let means = patch_means(&film.pixels(), &checker, w, h);
+    for (p, m) in checker.patches.iter().zip(&means) {
+        let want = p.albedo.as_dvec3() * checker.white_luminance as f64;
+        assert!((*m - want).abs().max_element() < 1e-3 * want.max_element().max(1.0), "{}: {m} vs {want}", p.name);
+    }
+}

@@ -25,7 +25,7 @@ mod sweep;
 use std::path::PathBuf;
 
 pub use knobs::{Config, ENV_TABLE_WIDTHS, FIXED_EPSILONS, Knob};
-pub use metrics::{loglog_slope, max_error, patch_de00, rel_mse};
+pub use metrics::{loglog_slope, max_error, patch_de00, patch_means, rel_mse};
 pub use reference::{REFERENCE_SEED, REFERENCE_VERSION, Reference};
 pub use scenes::{BuiltScene, ENV_MAP, MANY_LIGHTS, SceneId};
 
