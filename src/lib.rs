@@ -10,6 +10,8 @@ pub mod report;
 pub mod rng;
 pub mod sampling;
 pub mod scene;
+#[path = "../scenes/mod.rs"]
+pub mod scenes;
 pub mod shading;
 pub mod spectrum;
 #[path = "../systems/mod.rs"]

@@ -37,9 +37,7 @@ pub fn plan_sampler(
     mut work: ResMut<Work>,
     mut report: ResMut<RunReport>,
 ) {
-    let (run, why) = if sampler.kind() != settings.light_sampler
-        && !matches!(settings.light_sampler, crate::shading::LightSamplerKind::Bvh)
-    {
+    let (run, why) = if sampler.kind() != settings.light_sampler {
         (true, "settings changed the sampler kind")
     } else if table.is_changed() {
         (true, "light table changed")

@@ -54,9 +54,10 @@ impl ShadowRays {
     }
 }
 
-/// Rebuilds or refreshes the light sampler (rebuild on a kind change or changed powers).
+/// Rebuilds or refreshes the light sampler (rebuild on a kind change; otherwise the sampler's
+/// own update, which reads the table's change flags), then clears those flags.
 pub fn update_light_sampler(
-    table: Res<LightTable>,
+    mut table: ResMut<LightTable>,
     settings: Res<Settings>,
     mut sampler: ResMut<LightSampler>,
     mut report: ResMut<RunReport>,
@@ -68,6 +69,8 @@ pub fn update_light_sampler(
         sampler.update(&table)
     };
     report.record("light_sampler", true, what);
+    // The sampler has consumed the change log; clearing it is bookkeeping, not a table change.
+    table.bypass_change_detection().clear_change_flags();
 }
 
 /// Entries per point under `settings` for a table of `n_lights` lights.
