@@ -1,4 +1,5 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
+mod bench;
 mod ies;
 mod spectrum;
 
@@ -18,6 +19,8 @@ enum Command {
     Spectrum(spectrum::SpectrumArgs),
     /// Header, flux, peak intensity and beam angles of an IES LM-63 photometric file.
     Ies(ies::IesArgs),
+    /// Benchmarks with a printed table and plots.
+    Bench(bench::BenchArgs),
 }
 
 /// Errors the CLI reports: a message that names what failed.
@@ -28,5 +31,6 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Spectrum(args) => spectrum::run(args),
         Command::Ies(args) => ies::run(args),
+        Command::Bench(args) => bench::run(args),
     }
 }

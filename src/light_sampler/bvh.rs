@@ -3,8 +3,10 @@
 //! `BVHLightSampler`, section 12.6.3). Lights at infinity (no bounds) are chosen outside the tree,
 //! uniformly, with probability n_inf / (n_inf + 1) as pbrt does.
 //!
-//! **Power.** Leaves carry the light's luminous power (lm), as [`super::PowerSampler`] does, so
-//! the two samplers agree on what "bright" means and the photometric image is what is weighed.
+//! **Weights.** Leaves carry the light's luminous power (lm, what [`super::PowerSampler`] uses,
+//! so the photometric image is what is weighed), rescaled to that of an isotropic emitter of
+//! the same peak intensity (see `leaf_bounds`): the orientation cones already confine a light's
+//! importance to where it shines.
 //!
 //! **Following changes.** Lights that move or change power in place are refitted: only their
 //! leaves and those leaves' ancestors are recomputed (children always follow their parent, so
@@ -18,8 +20,8 @@
 
 use glam::Vec3;
 
-use super::bvh_build::{BuildItem, NO_PARENT, Node, build_tree};
-use super::importance::{cluster_cost, importance, union};
+use super::bvh_build::{BuildItem, Node, build_tree};
+use super::importance::{ClusterQuery, cluster_cost, orientation_measure, union};
 use crate::light::{LightBounds, LightId, LightSampleContext, LightTable};
 
 /// Rebuild after refits once the tree cost has grown by this factor since the last build.
@@ -31,10 +33,15 @@ pub const LIGHT_TREE_REBUILD_RATIO: f32 = 1.25;
 
 /// Number of [`LightKind`]s (rows of `leaf_of`).
 const KINDS: usize = 8;
+/// `parent` of the root.
+const NO_PARENT: u32 = u32::MAX;
 /// `leaf_of` entry of a row that is not in the sampler.
 const ABSENT: u32 = u32::MAX;
 /// `leaf_of` entry of a light chosen outside the tree.
 const AT_INFINITY: u32 = u32::MAX - 1;
+/// Floor of the orientation measure (sr) in leaf weights: a beam narrower than ~0.5 degrees
+/// weighs as one of that width rather than without bound.
+const MIN_ORIENTATION_MEASURE: f32 = 1e-4;
 /// The largest f32 below 1, so remapped sample values stay in [0, 1).
 const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
@@ -53,11 +60,15 @@ pub enum BvhUpdate {
 /// A light BVH over the table's bounded lights plus a list of lights at infinity.
 #[derive(Clone, Debug, Default)]
 pub struct BvhSampler {
+    /// Root first; siblings adjacent; children after their parent.
     nodes: Vec<Node>,
+    /// Per node: its parent ([`NO_PARENT`] for the root) and its cluster cost.
+    parent: Vec<u32>,
+    cost: Vec<f32>,
     infinite: Vec<LightId>,
     /// Per kind, per row: the leaf node, [`AT_INFINITY`] or [`ABSENT`].
     leaf_of: [Vec<u32>; KINDS],
-    /// Sum of `Node::cost` over all nodes (f64: refits add and subtract into it).
+    /// Sum of `cost` over all nodes (f64: refits add and subtract into it).
     cost_sum: f64,
     /// Normalised cost right after the last build.
     built_cost: f64,
@@ -72,11 +83,19 @@ pub struct BvhSampler {
     pub last_update: BvhUpdate,
 }
 
-/// A light's bounds as the tree weighs them: luminous power, and no power (never chosen) when
-/// the bounds are not finite.
+/// A light's bounds as the tree weighs them, or None for a light at infinity. The weight is the
+/// light's luminous power scaled to that of an isotropic emitter with the same peak intensity,
+/// 4 pi Phi_v / M_Omega (per emitting side): the orientation cones already keep a light's
+/// importance to where it shines, so inside its beam a narrow spot must weigh as much as a point
+/// light of the same intensity, not as little as its small power (pbrt-v4 gives spot bounds the
+/// power 4 pi I_max for this reason). M_Omega is Conty & Kulla's orientation measure, exactly
+/// Phi / I_max for isotropic points (4 pi), Lambertian surfaces (pi) and uniform cones. A
+/// light with non-finite bounds gets no weight: it is never chosen.
 fn leaf_bounds(table: &LightTable, id: LightId) -> Option<LightBounds> {
     let mut b = table.bounds(id)?;
-    b.phi = table.luminous_power(id);
+    let sides = if b.two_sided { 2.0 } else { 1.0 };
+    let spread = orientation_measure(b.cos_theta_o, b.cos_theta_e).max(MIN_ORIENTATION_MEASURE) * sides;
+    b.phi = table.luminous_power(id) * (4.0 * std::f32::consts::PI / spread);
     let finite = b.min.is_finite() && b.max.is_finite() && b.w.is_finite() && b.phi.is_finite();
     if !finite || b.cos_theta_o.is_nan() || b.cos_theta_e.is_nan() {
         b = LightBounds { min: Vec3::ZERO, max: Vec3::ZERO, phi: 0.0, ..super::importance::EMPTY_BOUNDS };
@@ -111,12 +130,20 @@ impl BvhSampler {
             }
         }
         self.nodes = build_tree(&mut items);
+        self.parent.clear();
+        self.parent.resize(self.nodes.len(), NO_PARENT);
+        self.cost.clear();
         self.cost_sum = 0.0;
-        for (i, node) in self.nodes.iter_mut().enumerate() {
-            node.cost = cluster_cost(&node.bounds);
-            self.cost_sum += node.cost as f64;
-            if let Some(id) = node.light() {
-                self.leaf_of[id.kind as usize][id.row as usize] = i as u32;
+        for (i, node) in self.nodes.iter().enumerate() {
+            let cost = cluster_cost(&node.query.bounds());
+            self.cost.push(cost);
+            self.cost_sum += cost as f64;
+            match node.light() {
+                Some(id) => self.leaf_of[id.kind as usize][id.row as usize] = i as u32,
+                None => {
+                    let c = node.index as usize;
+                    (self.parent[c], self.parent[c + 1]) = (i as u32, i as u32);
+                }
             }
         }
         self.built_cost = self.normalized_cost();
@@ -178,11 +205,11 @@ impl BvhSampler {
                 (AT_INFINITY | ABSENT, _) | (_, None) => return None,
                 (leaf, Some(b)) => {
                     self.set_bounds(leaf as usize, b);
-                    let mut n = self.nodes[leaf as usize].parent;
+                    let mut n = self.parent[leaf as usize];
                     while n != NO_PARENT && self.stamp[n as usize] != stamp {
                         self.stamp[n as usize] = stamp;
                         self.dirty.push(n);
-                        n = self.nodes[n as usize].parent;
+                        n = self.parent[n as usize];
                     }
                 }
             }
@@ -191,23 +218,23 @@ impl BvhSampler {
         self.dirty.sort_unstable_by(|a, b| b.cmp(a));
         for k in 0..self.dirty.len() {
             let n = self.dirty[k] as usize;
-            let b = union(&self.nodes[n + 1].bounds, &self.nodes[self.nodes[n].index as usize].bounds);
+            let c = self.nodes[n].index as usize;
+            let b = union(&self.nodes[c].query.bounds(), &self.nodes[c + 1].query.bounds());
             self.set_bounds(n, b);
         }
         Some(self.dirty.len() + changed.len())
     }
 
     fn set_bounds(&mut self, n: usize, bounds: LightBounds) {
-        let node = &mut self.nodes[n];
         let cost = cluster_cost(&bounds);
-        self.cost_sum += cost as f64 - node.cost as f64;
-        node.bounds = bounds;
-        node.cost = cost;
+        self.cost_sum += cost as f64 - self.cost[n] as f64;
+        self.cost[n] = cost;
+        self.nodes[n].query = ClusterQuery::from(&bounds);
     }
 
     fn normalized_cost(&self) -> f64 {
-        match self.nodes.first() {
-            Some(root) if root.cost > 0.0 => self.cost_sum / root.cost as f64,
+        match self.cost.first() {
+            Some(&root) if root > 0.0 => self.cost_sum / root as f64,
             _ => 1.0,
         }
     }
@@ -228,7 +255,7 @@ impl BvhSampler {
         let mut depth = vec![0u32; self.nodes.len()];
         let mut max = 0;
         for i in 1..self.nodes.len() {
-            depth[i] = depth[self.nodes[i].parent as usize] + 1;
+            depth[i] = depth[self.parent[i] as usize] + 1;
             max = max.max(depth[i]);
         }
         max as usize
@@ -237,11 +264,7 @@ impl BvhSampler {
     /// True if both trees have the same shape and the same light in every leaf.
     pub fn same_topology(&self, other: &Self) -> bool {
         self.nodes.len() == other.nodes.len()
-            && self
-                .nodes
-                .iter()
-                .zip(&other.nodes)
-                .all(|(a, b)| (a.index, a.parent, a.kind) == (b.index, b.parent, b.kind))
+            && self.nodes.iter().zip(&other.nodes).all(|(a, b)| (a.index, a.kind) == (b.index, b.kind))
     }
 
     /// Probability of choosing a light at infinity (all of them together).
@@ -264,26 +287,31 @@ impl BvhSampler {
         }
         let mut u = ((u - p_inf) / (1.0 - p_inf)).min(ONE_MINUS_EPSILON);
         let mut pmf = 1.0 - p_inf;
-        let mut i = 0;
+        let root = &self.nodes[0];
+        if let Some(id) = root.light() {
+            return (root.query.importance(ctx.p, ctx.n) > 0.0).then_some((id, pmf));
+        }
+        let mut c = root.index as usize;
         loop {
-            let node = &self.nodes[i];
-            if let Some(id) = node.light() {
-                let reachable = i > 0 || importance(&node.bounds, ctx.p, ctx.n) > 0.0;
-                return reachable.then_some((id, pmf));
-            }
-            let (c0, c1) = (i + 1, node.index as usize);
-            let w0 = importance(&self.nodes[c0].bounds, ctx.p, ctx.n);
-            let w1 = importance(&self.nodes[c1].bounds, ctx.p, ctx.n);
+            let w0 = self.nodes[c].query.importance(ctx.p, ctx.n);
+            let w1 = self.nodes[c + 1].query.importance(ctx.p, ctx.n);
             if w0 == 0.0 && w1 == 0.0 {
                 return None;
             }
             let p0 = w0 / (w0 + w1);
-            if u < p0 {
-                (i, u, pmf) = (c0, (u / p0).min(ONE_MINUS_EPSILON), pmf * p0);
+            let chosen = if u < p0 {
+                (u, pmf) = ((u / p0).min(ONE_MINUS_EPSILON), pmf * p0);
+                c
             } else {
                 let p1 = 1.0 - p0;
-                (i, u, pmf) = (c1, ((u - p0) / p1).min(ONE_MINUS_EPSILON), pmf * p1);
+                (u, pmf) = (((u - p0) / p1).min(ONE_MINUS_EPSILON), pmf * p1);
+                c + 1
+            };
+            let node = &self.nodes[chosen];
+            if let Some(id) = node.light() {
+                return Some((id, pmf));
             }
+            c = node.index as usize;
         }
     }
 
@@ -298,23 +326,57 @@ impl BvhSampler {
         };
         let mut pmf = 1.0 - self.infinite_probability();
         if leaf == 0 {
-            return if importance(&self.nodes[0].bounds, ctx.p, ctx.n) > 0.0 { pmf } else { 0.0 };
+            return if self.nodes[0].query.importance(ctx.p, ctx.n) > 0.0 { pmf } else { 0.0 };
         }
         let mut child = leaf;
-        let mut parent = self.nodes[leaf].parent;
-        while parent != NO_PARENT {
-            let p = parent as usize;
-            let w0 = importance(&self.nodes[p + 1].bounds, ctx.p, ctx.n);
-            let w1 = importance(&self.nodes[self.nodes[p].index as usize].bounds, ctx.p, ctx.n);
+        while child != 0 {
+            // Sibling pairs start at odd indices (the root is 0 and pairs are allocated whole).
+            let first = if child % 2 == 1 { child } else { child - 1 };
+            let w0 = self.nodes[first].query.importance(ctx.p, ctx.n);
+            let w1 = self.nodes[first + 1].query.importance(ctx.p, ctx.n);
             if w0 == 0.0 && w1 == 0.0 {
                 return 0.0;
             }
             let p0 = w0 / (w0 + w1);
-            pmf *= if child == p + 1 { p0 } else { 1.0 - p0 };
-            child = p;
-            parent = self.nodes[p].parent;
+            pmf *= if child == first { p0 } else { 1.0 - p0 };
+            child = self.parent[child] as usize;
         }
         pmf
+    }
+}
+
+impl BvhSampler {
+    /// Calls `f` with every light and its pmf at `ctx`, in one pass over the tree (O(nodes),
+    /// where calling `pmf` per light costs O(n log n)): for exact variances in reports and tests.
+    /// The products are formed top-down, as `sample` forms them.
+    pub fn for_each_pmf(&self, ctx: &LightSampleContext, mut f: impl FnMut(LightId, f32)) {
+        let p_inf = self.infinite_probability();
+        for &id in &self.infinite {
+            f(id, p_inf / self.infinite.len() as f32);
+        }
+        let Some(root) = self.nodes.first() else { return };
+        if let Some(id) = root.light() {
+            let reachable = root.query.importance(ctx.p, ctx.n) > 0.0;
+            f(id, if reachable { 1.0 - p_inf } else { 0.0 });
+            return;
+        }
+        let mut stack = vec![(root.index as usize, 1.0 - p_inf)];
+        while let Some((c, pmf)) = stack.pop() {
+            let w0 = self.nodes[c].query.importance(ctx.p, ctx.n);
+            let w1 = self.nodes[c + 1].query.importance(ctx.p, ctx.n);
+            let (q0, q1) = if w0 == 0.0 && w1 == 0.0 {
+                (0.0, 0.0)
+            } else {
+                let p0 = w0 / (w0 + w1);
+                (pmf * p0, pmf * (1.0 - p0))
+            };
+            for (child, q) in [(c + 1, q1), (c, q0)] {
+                match self.nodes[child].light() {
+                    Some(id) => f(id, q),
+                    None => stack.push((self.nodes[child].index as usize, q)),
+                }
+            }
+        }
     }
 }
 

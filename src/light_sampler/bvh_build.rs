@@ -1,20 +1,22 @@
 //! Building the light BVH top-down with binned SAOH splits (Conty & Kulla 2018, section 4.2;
 //! pbrt-v4 `BVHLightSampler::buildBVH`): 12 buckets per axis over the lights' centroids, cost =
 //! power x orientation measure x surface area of each side, scaled by the split axis's aspect
-//! factor so long thin boxes are split across. Nodes come out in depth-first order: an interior
-//! node's first child is the next node, so every child follows its parent.
+//! factor so long thin boxes are split across.
+//!
+//! **Layout.** Nodes are 64 bytes and siblings sit side by side, so the two importances of a
+//! traversal step read two adjacent cache lines. Children always follow their parent (an
+//! interior node reserves its children's pair before building below them), which lets a refit
+//! recompute nodes in decreasing index order.
 
 use glam::Vec3;
 
-use super::importance::{EMPTY_BOUNDS, cluster_cost, union};
-use crate::light::{LightBounds, LightId};
+use super::importance::{ClusterQuery, EMPTY_BOUNDS, cluster_cost, union};
+use crate::light::{LightBounds, LightId, LightKind};
 
 /// pbrt-v4's bucket count.
 const BUCKETS: usize = 12;
 /// Ranges at least this long build their two halves in parallel.
 const PARALLEL_MIN: usize = 8 * 1024;
-/// `Node::parent` of the root.
-pub(super) const NO_PARENT: u32 = u32::MAX;
 
 /// A light to place in the tree.
 #[derive(Clone, Copy, Debug)]
@@ -24,68 +26,70 @@ pub(super) struct BuildItem {
     pub id: LightId,
 }
 
-/// A tree node. Interior nodes have exactly two children.
+/// A tree node: its cluster's bounds and either its children or its light.
 #[derive(Clone, Copy, Debug)]
+#[repr(align(64))]
 pub(super) struct Node {
-    /// Bounds of every light below (empty, `phi = 0`, if none has power).
-    pub bounds: LightBounds,
-    /// Interior: the second child (the first is the next node). Leaf: the light's row.
+    pub query: ClusterQuery,
+    /// Interior: the first of its two adjacent children. Leaf: the light's row.
     pub index: u32,
-    /// The parent node, or [`NO_PARENT`].
-    pub parent: u32,
     /// Leaf: the light's kind. None for interior nodes.
-    pub kind: Option<crate::light::LightKind>,
-    /// `cluster_cost(bounds)`, kept for the running tree cost.
-    pub cost: f32,
+    pub kind: Option<LightKind>,
 }
 
 impl Node {
+    fn leaf(item: &BuildItem) -> Self {
+        Self { query: ClusterQuery::from(&item.bounds), index: item.id.row, kind: Some(item.id.kind) }
+    }
+    /// The node's light, for a leaf.
     #[inline]
     pub fn light(&self) -> Option<LightId> {
         self.kind.map(|kind| LightId { kind, row: self.index })
     }
 }
 
-/// The nodes of a tree over `items` (reordered in place); empty for no items.
+/// The nodes of a tree over `items` (reordered in place), root first; empty for no items.
 pub(super) fn build_tree(items: &mut [BuildItem]) -> Vec<Node> {
     if items.is_empty() {
         return Vec::new();
     }
     let mut out = Vec::with_capacity(2 * items.len() - 1);
-    build_range(items, &mut out, 0, NO_PARENT);
+    let placeholder = Node { query: ClusterQuery::from(&EMPTY_BOUNDS), index: 0, kind: None };
+    out.push(placeholder);
+    let (root, _) = build_below(items, &mut out, 0);
+    out[0] = root;
     out
 }
 
-/// Appends the subtree over `items` to `out`, whose first node has global index `base`, and
-/// returns its bounds. A binary tree over k leaves has 2k - 1 nodes, so the right subtree's
-/// index is known before the left one is built, which lets the halves build in parallel.
-fn build_range(items: &mut [BuildItem], out: &mut Vec<Node>, base: u32, parent: u32) -> LightBounds {
-    let me = base + out.len() as u32;
+/// Appends every node below the subtree over `items` to `out` (whose first element has global
+/// index `base`) and returns the subtree's root node and bounds, for the caller to place. A
+/// subtree over k lights has 2k - 2 nodes below its root, so the right child's descendants'
+/// position is known before the left ones are built, which lets the halves build in parallel.
+fn build_below(items: &mut [BuildItem], out: &mut Vec<Node>, base: u32) -> (Node, LightBounds) {
     if let [item] = items {
-        let id = item.id;
-        out.push(Node { bounds: item.bounds, index: id.row, parent, kind: Some(id.kind), cost: 0.0 });
-        return item.bounds;
+        return (Node::leaf(item), item.bounds);
     }
     let mid = partition(items);
-    let slot = out.len();
-    out.push(Node { bounds: EMPTY_BOUNDS, index: 0, parent, kind: None, cost: 0.0 });
+    let pair = out.len();
+    let first_child = base + pair as u32;
+    let placeholder = Node { query: ClusterQuery::from(&EMPTY_BOUNDS), index: 0, kind: None };
+    out.extend([placeholder; 2]);
     let (left, right) = items.split_at_mut(mid);
-    let right_first = me + 2 * left.len() as u32;
-    let (lb, rb) = if left.len() + right.len() >= PARALLEL_MIN {
-        let mut right_nodes = Vec::with_capacity(2 * right.len() - 1);
-        let (lb, rb) =
-            rayon::join(|| build_range(left, out, base, me), || build_range(right, &mut right_nodes, right_first, me));
+    let right_base = first_child + 2 + 2 * (left.len() as u32 - 1);
+    let ((ln, lb), (rn, rb)) = if left.len() + right.len() >= PARALLEL_MIN {
+        let mut right_nodes = Vec::with_capacity(2 * right.len() - 2);
+        let (l, r) = rayon::join(|| build_below(left, out, base), || build_below(right, &mut right_nodes, right_base));
         out.extend(right_nodes);
-        (lb, rb)
+        (l, r)
     } else {
-        let lb = build_range(left, out, base, me);
-        debug_assert_eq!(base + out.len() as u32, right_first);
-        (lb, build_range(right, out, base, me))
+        let l = build_below(left, out, base);
+        debug_assert_eq!(base + out.len() as u32, right_base);
+        (l, build_below(right, out, base))
     };
+    out[pair] = ln;
+    out[pair + 1] = rn;
     let bounds = union(&lb, &rb);
-    out[slot].bounds = bounds;
-    out[slot].index = right_first;
-    bounds
+    (Node { query: ClusterQuery::from(&bounds), index: first_child, kind: None }, bounds)
 }
 
 #[inline]

@@ -130,58 +130,144 @@ pub fn cluster_cost(b: &LightBounds) -> f32 {
     b.phi * orientation_measure(b.cos_theta_o, b.cos_theta_e) * surface_area(b)
 }
 
-/// How much light the cluster `b` can send to a point `p` with normal `n` (zero for no normal):
-/// power over squared distance, times the cosine of the smallest angle between emission and the
-/// direction to `p`, times the cosine at the receiver, both taken conservatively over the box
-/// (Conty & Kulla 2018, section 4.3; pbrt-v4 `LightBounds::Importance`). Unnormalised: only
-/// ratios between siblings matter. 0 when `p` lies outside every emission cone.
-///
-/// The squared distance is clamped below at the squared half-diagonal, so a point inside a
-/// large box does not see the box's power as concentrated at its centre (pbrt clamps at the
-/// half-diagonal's length; the squared form keeps units consistent).
+/// A cluster's bounds in the form the importance reads, with what can be precomputed (the box's
+/// radius, the sine of the normal-cone angle): 56 bytes, so a tree node with it fits 64.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClusterQuery {
+    min: Vec3,
+    max: Vec3,
+    w: Vec3,
+    phi: f32,
+    /// Radius of the box's bounding sphere; its sign bit is the two-sided flag (so the flag
+    /// takes no bytes of its own).
+    signed_radius: f32,
+    cos_theta_o: f32,
+    sin_theta_o: f32,
+    cos_theta_e: f32,
+}
+
+impl From<&LightBounds> for ClusterQuery {
+    fn from(b: &LightBounds) -> Self {
+        let radius = 0.5 * (b.max - b.min).length();
+        Self {
+            min: b.min,
+            max: b.max,
+            w: b.w,
+            phi: if b.phi > 0.0 { b.phi } else { 0.0 },
+            signed_radius: if b.two_sided { -radius } else { radius },
+            cos_theta_o: b.cos_theta_o,
+            sin_theta_o: safe_sqrt(1.0 - b.cos_theta_o * b.cos_theta_o),
+            cos_theta_e: b.cos_theta_e,
+        }
+    }
+}
+
+impl ClusterQuery {
+    /// The bounds this was made from (power clamped at 0).
+    pub fn bounds(&self) -> LightBounds {
+        LightBounds {
+            min: self.min,
+            max: self.max,
+            phi: self.phi,
+            w: self.w,
+            cos_theta_o: self.cos_theta_o,
+            cos_theta_e: self.cos_theta_e,
+            two_sided: self.two_sided(),
+        }
+    }
+    #[inline]
+    fn two_sided(&self) -> bool {
+        self.signed_radius.is_sign_negative()
+    }
+}
+
+/// How much light the cluster `b` can send to a point `p` with normal `n` (zero for no normal);
+/// see [`ClusterQuery::importance`].
 #[inline]
 pub fn importance(b: &LightBounds, p: Vec3, n: Vec3) -> f32 {
-    if !(b.phi > 0.0) {
-        return 0.0;
-    }
-    let pc = 0.5 * (b.min + b.max);
-    let radius2 = 0.25 * (b.max - b.min).length_squared();
-    let to_p = p - pc;
-    let dist2 = to_p.length_squared();
-    let d2 = dist2.max(radius2).max(MIN_DISTANCE_SQUARED);
-    let wi = if dist2 > 0.0 { to_p / dist2.sqrt() } else { Vec3::ZERO };
+    ClusterQuery::from(b).importance(p, n)
+}
 
-    // Angle subtended by the box's bounding sphere from p: all directions when p is inside.
-    let (sin_b, cos_b) = if dist2 <= radius2 {
-        (0.0, -1.0)
-    } else {
-        let sin2 = radius2 / dist2;
-        (sin2.sqrt(), safe_sqrt(1.0 - sin2))
-    };
+impl ClusterQuery {
+    /// How much light the cluster can send to a point `p` with normal `n` (zero for no normal):
+    /// power over squared distance, times the cosine of the smallest angle between emission and
+    /// the direction to `p`, times the cosine at the receiver, both taken conservatively over the
+    /// box (Conty & Kulla 2018, section 4.3; pbrt-v4 `LightBounds::Importance`). Unnormalised:
+    /// only ratios between siblings matter. 0 when `p` lies outside every emission cone.
+    ///
+    /// Two changes from pbrt-v4, both measured on the scaling scene (`kelvin bench lights`):
+    /// - The squared distance to the centre is clamped below at radius x gap, the geometric mean
+    ///   of the box's radius and its distance from `p` (at least radius / 8): a cluster next to
+    ///   or around `p` is not weighed as if its power sat at its centre. pbrt clamps at the
+    ///   half-diagonal's length, which is not scale-free; this is, and does as well (relative
+    ///   RMSE 2.06 vs 2.06 at 10k lights; the squared half-diagonal gives 3.6).
+    /// - The receiver cosine is also bounded by the box's extent along `n` over its distance
+    ///   from `p`, much tighter than the bounding-sphere cone for wide, flat clusters seen at
+    ///   grazing angles (relative RMSE 2.9 -> 2.06 at 10k lights).
+    #[inline(always)]
+    pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
+        if self.phi == 0.0 {
+            return 0.0;
+        }
+        let radius = self.signed_radius.abs();
+        let to_p = p - 0.5 * (self.min + self.max);
+        let dist2 = to_p.length_squared();
+        let gap = (self.min - p).max(p - self.max).max(Vec3::ZERO).length();
+        let d2 = (dist2.sqrt() * gap).max(radius * radius / 64.0).max(MIN_DISTANCE_SQUARED);
+        let inv_dist = if dist2 > 0.0 { dist2.sqrt().recip() } else { 0.0 };
+        let wi = to_p * inv_dist;
 
-    // theta' = max(0, theta_w - theta_o - theta_b): the smallest angle between an emission
-    // direction of the cluster and the direction toward p.
-    let mut cos_w = b.w.dot(wi);
-    if b.two_sided {
-        cos_w = cos_w.abs();
-    }
-    let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
-    let sin_o = safe_sqrt(1.0 - b.cos_theta_o * b.cos_theta_o);
-    let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, b.cos_theta_o);
-    let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, b.cos_theta_o);
-    let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-    if cos_p <= b.cos_theta_e {
-        return 0.0;
-    }
-    let mut value = b.phi * cos_p / d2;
+        // Angle subtended by the box's bounding sphere from p: all directions when p is inside.
+        let (sin_b, cos_b) = if dist2 <= radius * radius {
+            (0.0, -1.0)
+        } else {
+            let sin_b = radius * inv_dist;
+            (sin_b, safe_sqrt(1.0 - sin_b * sin_b))
+        };
 
-    // Receiver cosine, two-sided (transmission) and conservative over the box.
-    if n != Vec3::ZERO {
-        let cos_i = wi.dot(n).abs();
-        let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
-        value *= cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
+        // theta' = max(0, theta_w - theta_o - theta_b): the smallest angle between an emission
+        // direction of the cluster and the direction toward p.
+        let cos_p = if self.cos_theta_o <= -1.0 {
+            1.0
+        } else {
+            let mut cos_w = self.w.dot(wi);
+            if self.two_sided() {
+                cos_w = cos_w.abs();
+            }
+            let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
+            let cos_x = cos_sub_clamped(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
+            let sin_x = sin_sub_clamped(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
+            cos_sub_clamped(sin_x, cos_x, sin_b, cos_b)
+        };
+        // Strict, so a hard-edged spot (theta_e = 0, cos_theta_e = 1) still counts inside its cone.
+        if cos_p < self.cos_theta_e {
+            return 0.0;
+        }
+        // Emission toward p: Conty & Kulla's cos theta' for Lambertian spreads (theta_e = pi/2);
+        // for narrower spreads (spot falloff bands) a smoothstep from 1 at theta' = 0 to 0 at
+        // theta_e, the spot's own profile, rather than a cosine still near 1 at the beam's edge.
+        let emission = if self.cos_theta_e <= 0.0 || cos_p >= 1.0 {
+            cos_p
+        } else {
+            let t = (cos_p - self.cos_theta_e) / (1.0 - self.cos_theta_e);
+            t * t * (3.0 - 2.0 * t)
+        };
+        let mut value = self.phi * emission / d2;
+
+        // Receiver cosine, two-sided (transmission), conservative over the box.
+        if n != Vec3::ZERO {
+            let cos_i = wi.dot(n).abs();
+            let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
+            let cone_bound = cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
+            // The box's largest offset along n from the plane through p, over its distance.
+            let (lo, hi) = ((self.min - p) * n, (self.max - p) * n);
+            let offset = lo.max(hi).element_sum().max(-lo.min(hi).element_sum());
+            let plane_bound = if offset >= gap { 1.0 } else { offset / gap };
+            let bound = cone_bound.min(plane_bound);
+            value *= bound;
+        }
+        value.clamp(0.0, MAX_IMPORTANCE)
     }
-    value.clamp(0.0, MAX_IMPORTANCE)
 }
 
 #[cfg(test)]

@@ -70,6 +70,15 @@ impl LightSampler {
         .filter(|_| ctx.p.is_finite())
     }
 
+    /// Calls `f` with every light and its pmf at `ctx`, in one pass (for exact variances).
+    pub fn for_each_pmf(&self, ctx: &LightSampleContext, f: impl FnMut(LightId, f32)) {
+        match self {
+            Self::Uniform(s) => s.for_each_pmf(f),
+            Self::Power(s) => s.for_each_pmf(f),
+            Self::Bvh(s) => s.for_each_pmf(ctx, f),
+        }
+    }
+
     /// Probability that `sample` returns `light` at `ctx`.
     #[inline]
     pub fn pmf(&self, ctx: &LightSampleContext, light: LightId) -> f32 {

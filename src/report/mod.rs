@@ -1,2 +1,3 @@
 //! Reports and plots: spectrum and IES plots, accuracy-vs-time and scaling reports.
+pub mod lights;
 pub mod plot;
