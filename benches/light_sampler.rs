@@ -27,13 +27,14 @@ fn refit(c: &mut Criterion) {
         let (mut table, _) = scaling_scene_table(n, 1, 1);
         let mut sampler = BvhSampler::build(&table);
         let mut rng = SceneRng::new(2);
-        // Each iteration is a frame: 1% of the lights move (not timed), the sampler follows.
+        // Each iteration is a frame: 1% of the lights move by up to 0.25 m (not timed), the sampler
+        // follows.
         group.bench_function(format!("{n}"), |b| {
             b.iter_custom(|iters| {
                 let mut total = Duration::ZERO;
                 for _ in 0..iters {
                     table.clear_change_flags();
-                    move_fraction(&mut table, 0.01, &mut rng);
+                    move_fraction(&mut table, 0.01, 0.25, &mut rng);
                     let t = Instant::now();
                     black_box(sampler.update(&table));
                     total += t.elapsed();

@@ -21,6 +21,8 @@ pub const LIGHT_SPACING: f32 = 3.0;
 const HEIGHT: (f32, f32) = (2.0, 6.0);
 /// Luminous power range, lm (log-uniform): from a porch lamp to a street light.
 const LUMENS: (f32, f32) = (200.0, 5000.0);
+/// Colour temperatures of the lights, K.
+const CCT_K: [f64; 6] = [2700.0, 3000.0, 3500.0, 4000.0, 5000.0, 6500.0];
 /// One occluder per this many lights, up to `MAX_OCCLUDERS`.
 const LIGHTS_PER_OCCLUDER: usize = 8;
 const MAX_OCCLUDERS: usize = 20_000;
@@ -61,7 +63,11 @@ pub fn spawn_scaling_scene(world: &mut World, n: usize, seed: u64) -> ScalingSce
             rng.range(-half_extent, half_extent),
         )
     };
-    let warm_to_daylight = |rng: &mut SceneRng| Spectrum::Blackbody { temperature_k: rng.range(2700.0, 6500.0) as f64 };
+    // The colour temperatures lamps are sold in (a handful, as in real scenes).
+    let warm_to_daylight = |rng: &mut SceneRng| {
+        let t = CCT_K[(rng.next_u64() % CCT_K.len() as u64) as usize];
+        Spectrum::Blackbody { temperature_k: t }
+    };
 
     let n_points = n.div_ceil(2);
     let points: Vec<(PointLight, Transform)> = (0..n_points)

@@ -36,8 +36,11 @@ struct LightsArgs {
     #[arg(long, default_value_t = 512)]
     samples: usize,
     /// Frames per update measurement.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 10)]
     frames: usize,
+    /// How far each moving light moves per frame, m (per horizontal axis, at most).
+    #[arg(long, default_value_t = 0.25)]
+    move_step: f32,
     /// Tiles per side of the emissive panel (2 tiles^2 triangles); 0 skips the room.
     #[arg(long, default_value_t = 64)]
     panel_tiles: usize,
@@ -64,11 +67,12 @@ fn lights(a: LightsArgs) -> Result<(), CliError> {
         points: a.points,
         samples: a.samples,
         frames: a.frames.max(1),
+        move_step: a.move_step,
         panel_tiles: a.panel_tiles,
         seed: a.seed,
     };
     let rows = run_light_bench(&cfg, |line| eprintln!("{line}"));
-    print!("{}", format_tables(&rows, cfg.samples));
+    print!("{}", format_tables(&rows, cfg.samples, cfg.move_step));
     std::fs::create_dir_all(&a.out).map_err(|e| format!("cannot create {}: {e}", a.out.display()))?;
     for path in write_plots(&rows, &a.out)? {
         println!("wrote {}", path.display());

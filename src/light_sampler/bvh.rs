@@ -8,9 +8,10 @@
 //! the same peak intensity (see `leaf_bounds`): the orientation cones already confine a light's
 //! importance to where it shines.
 //!
-//! **Following changes.** Lights that move or change power in place are refitted: only their
-//! leaves and those leaves' ancestors are recomputed (children always follow their parent, so
-//! recomputing the dirty ancestors in decreasing index order sees every child before its parent).
+//! **Following changes.** Lights that move or change power in place are refitted: their leaves
+//! are recomputed, then each parent whose child's bounds changed, in decreasing index order
+//! (children always follow their parent, so every child is final before its parent); a light
+//! that moves inside its cluster's box stops the climb early.
 //! The tree's cost (the sum of every node's SAOH cluster cost over the root's, kept up to date
 //! during the refit) tells how far the topology has drifted from a good one; past
 //! [`LIGHT_TREE_REBUILD_RATIO`] times its value after the last build, the tree is rebuilt.
@@ -21,7 +22,8 @@
 use glam::Vec3;
 
 use super::bvh_build::{BuildItem, Node, build_tree};
-use super::importance::{ClusterQuery, cluster_cost, orientation_measure, union};
+use super::importance::{ClusterQuery, cluster_cost_with, orientation_measure, union};
+use super::wide::{WideTree, choose_lane, lane_probability};
 use crate::light::{LightBounds, LightId, LightSampleContext, LightTable};
 
 /// Rebuild after refits once the tree cost has grown by this factor since the last build.
@@ -43,7 +45,7 @@ const AT_INFINITY: u32 = u32::MAX - 1;
 /// weighs as one of that width rather than without bound.
 const MIN_ORIENTATION_MEASURE: f32 = 1e-4;
 /// The largest f32 below 1, so remapped sample values stay in [0, 1).
-const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+pub(super) const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// What the last [`BvhSampler::update`] did.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -57,14 +59,30 @@ pub enum BvhUpdate {
     Rebuilt,
 }
 
+/// Per-node bookkeeping for refits.
+#[derive(Clone, Copy, Debug)]
+struct NodeMeta {
+    /// The parent, [`NO_PARENT`] for the root.
+    parent: u32,
+    /// The first child (interior nodes): a copy of `Node::index`.
+    first_child: u32,
+    /// The node's slot in the wide tree, or `wide::NONE`.
+    slot: u32,
+    /// Orientation measure of the node's cone, reused while the cone does not change.
+    orientation: f32,
+    /// The node's cluster cost.
+    cost: f32,
+}
+
 /// A light BVH over the table's bounded lights plus a list of lights at infinity.
 #[derive(Clone, Debug, Default)]
 pub struct BvhSampler {
     /// Root first; siblings adjacent; children after their parent.
     nodes: Vec<Node>,
-    /// Per node: its parent ([`NO_PARENT`] for the root) and its cluster cost.
-    parent: Vec<u32>,
-    cost: Vec<f32>,
+    /// Per node, what a refit needs besides the bounds, together so it costs one cache line.
+    meta: Vec<NodeMeta>,
+    /// What sampling walks: the tree collapsed into nodes of four SIMD lanes.
+    wide: WideTree,
     infinite: Vec<LightId>,
     /// Per kind, per row: the leaf node, [`AT_INFINITY`] or [`ABSENT`].
     leaf_of: [Vec<u32>; KINDS],
@@ -75,10 +93,9 @@ pub struct BvhSampler {
     /// The table's generation and light count this sampler reflects.
     generation: u64,
     light_count: usize,
-    /// Scratch for refits: a per-node stamp and the dirty list.
-    stamp: Vec<u32>,
-    current_stamp: u32,
-    dirty: Vec<u32>,
+    /// Refit scratch: one bit per node, set while the node waits to be recomputed (all clear
+    /// between refits).
+    dirty: Vec<u64>,
     /// What the last update did.
     pub last_update: BvhUpdate,
 }
@@ -91,16 +108,23 @@ pub struct BvhSampler {
 /// power 4 pi I_max for this reason). M_Omega is Conty & Kulla's orientation measure, exactly
 /// Phi / I_max for isotropic points (4 pi), Lambertian surfaces (pi) and uniform cones. A
 /// light with non-finite bounds gets no weight: it is never chosen.
-fn leaf_bounds(table: &LightTable, id: LightId) -> Option<LightBounds> {
+///
+/// `orientation` is the bounds' orientation measure when the caller knows it (a refit whose
+/// light kept its cone); returns the bounds and their orientation measure.
+fn leaf_bounds(table: &LightTable, id: LightId, known: Option<(f32, f32, f32)>) -> Option<(LightBounds, f32)> {
     let mut b = table.bounds(id)?;
+    let orientation = match known {
+        Some((cos_o, cos_e, m)) if cos_o == b.cos_theta_o && cos_e == b.cos_theta_e => m,
+        _ => orientation_measure(b.cos_theta_o, b.cos_theta_e),
+    };
     let sides = if b.two_sided { 2.0 } else { 1.0 };
-    let spread = orientation_measure(b.cos_theta_o, b.cos_theta_e).max(MIN_ORIENTATION_MEASURE) * sides;
+    let spread = orientation.max(MIN_ORIENTATION_MEASURE) * sides;
     b.phi = table.luminous_power(id) * (4.0 * std::f32::consts::PI / spread);
     let finite = b.min.is_finite() && b.max.is_finite() && b.w.is_finite() && b.phi.is_finite();
     if !finite || b.cos_theta_o.is_nan() || b.cos_theta_e.is_nan() {
         b = LightBounds { min: Vec3::ZERO, max: Vec3::ZERO, phi: 0.0, ..super::importance::EMPTY_BOUNDS };
     }
-    Some(b)
+    Some((b, orientation))
 }
 
 impl BvhSampler {
@@ -121,7 +145,7 @@ impl BvhSampler {
             if rows.len() <= id.row as usize {
                 rows.resize(id.row as usize + 1, ABSENT);
             }
-            match leaf_bounds(table, id) {
+            match leaf_bounds(table, id, None).map(|(b, _)| b) {
                 Some(bounds) => items.push(BuildItem { bounds, centroid: 0.5 * (bounds.min + bounds.max), id }),
                 None => {
                     rows[id.row as usize] = AT_INFINITY;
@@ -130,26 +154,31 @@ impl BvhSampler {
             }
         }
         self.nodes = build_tree(&mut items);
-        self.parent.clear();
-        self.parent.resize(self.nodes.len(), NO_PARENT);
-        self.cost.clear();
+        self.wide = WideTree::build(&self.nodes);
+        self.meta.clear();
         self.cost_sum = 0.0;
         for (i, node) in self.nodes.iter().enumerate() {
-            let cost = cluster_cost(&node.query.bounds());
-            self.cost.push(cost);
+            let b = node.query.bounds();
+            let orientation = orientation_measure(b.cos_theta_o, b.cos_theta_e);
+            let cost = cluster_cost_with(&b, orientation);
             self.cost_sum += cost as f64;
-            match node.light() {
-                Some(id) => self.leaf_of[id.kind as usize][id.row as usize] = i as u32,
-                None => {
-                    let c = node.index as usize;
-                    (self.parent[c], self.parent[c + 1]) = (i as u32, i as u32);
-                }
+            let first_child = if node.kind.is_none() { node.index } else { NO_PARENT };
+            let slot = self.wide.slot_of[i];
+            self.meta.push(NodeMeta { parent: NO_PARENT, first_child, slot, orientation, cost });
+            if let Some(id) = node.light() {
+                self.leaf_of[id.kind as usize][id.row as usize] = i as u32;
+            }
+        }
+        for i in 0..self.nodes.len() {
+            let c = self.meta[i].first_child;
+            if c != NO_PARENT {
+                self.meta[c as usize].parent = i as u32;
+                self.meta[c as usize + 1].parent = i as u32;
             }
         }
         self.built_cost = self.normalized_cost();
-        self.stamp.clear();
-        self.stamp.resize(self.nodes.len(), 0);
-        self.current_stamp = 0;
+        self.dirty.clear();
+        self.dirty.resize(self.nodes.len().div_ceil(64), 0);
         self.generation = table.generation;
         self.light_count = table.len();
         self.last_update = BvhUpdate::Rebuilt;
@@ -190,51 +219,75 @@ impl BvhSampler {
     /// Returns the number of nodes recomputed, or None (changing nothing further) if a light
     /// would have to enter or leave the tree.
     fn refit(&mut self, table: &LightTable, changed: &[LightId]) -> Option<usize> {
-        self.current_stamp = self.current_stamp.wrapping_add(1);
-        if self.current_stamp == 0 {
-            self.stamp.iter_mut().for_each(|s| *s = 0);
-            self.current_stamp = 1;
-        }
-        let stamp = self.current_stamp;
-        self.dirty.clear();
+        let mut recomputed = 0;
         for &id in changed {
             let leaf = *self.leaf_of.get(id.kind as usize)?.get(id.row as usize)?;
-            let bounds = leaf_bounds(table, id);
-            match (leaf, bounds) {
+            let known = self
+                .nodes
+                .get(leaf as usize)
+                .map(|n| (n.query.cos_theta_o, n.query.cos_theta_e, self.meta[leaf as usize].orientation));
+            match (leaf, leaf_bounds(table, id, known)) {
                 (AT_INFINITY, None) => continue,
                 (AT_INFINITY | ABSENT, _) | (_, None) => return None,
-                (leaf, Some(b)) => {
-                    self.set_bounds(leaf as usize, b);
-                    let mut n = self.parent[leaf as usize];
-                    while n != NO_PARENT && self.stamp[n as usize] != stamp {
-                        self.stamp[n as usize] = stamp;
-                        self.dirty.push(n);
-                        n = self.parent[n as usize];
+                (leaf, Some((b, orientation))) => {
+                    recomputed += 1;
+                    if self.set_bounds(leaf as usize, b, orientation) {
+                        self.mark_parent(leaf as usize);
                     }
                 }
             }
         }
-        // Children have larger indices than their parent: highest first sees children first.
-        self.dirty.sort_unstable_by(|a, b| b.cmp(a));
-        for k in 0..self.dirty.len() {
-            let n = self.dirty[k] as usize;
-            let c = self.nodes[n].index as usize;
-            let b = union(&self.nodes[c].query.bounds(), &self.nodes[c + 1].query.bounds());
-            self.set_bounds(n, b);
+        // Children have larger indices than their parent, so taking the highest dirty node first
+        // sees every child before its parent; a parent is marked only if a child's bounds changed.
+        for word in (0..self.dirty.len()).rev() {
+            while self.dirty[word] != 0 {
+                let bit = 63 - self.dirty[word].leading_zeros() as usize;
+                self.dirty[word] &= !(1 << bit);
+                let n = 64 * word + bit;
+                let c = self.meta[n].first_child as usize;
+                let b = union(&self.nodes[c].query.bounds(), &self.nodes[c + 1].query.bounds());
+                let q = &self.nodes[n].query;
+                let orientation = if (q.cos_theta_o, q.cos_theta_e) == (b.cos_theta_o, b.cos_theta_e) {
+                    self.meta[n].orientation
+                } else {
+                    orientation_measure(b.cos_theta_o, b.cos_theta_e)
+                };
+                recomputed += 1;
+                if self.set_bounds(n, b, orientation) {
+                    self.mark_parent(n);
+                }
+            }
         }
-        Some(self.dirty.len() + changed.len())
+        Some(recomputed)
     }
 
-    fn set_bounds(&mut self, n: usize, bounds: LightBounds) {
-        let cost = cluster_cost(&bounds);
-        self.cost_sum += cost as f64 - self.cost[n] as f64;
-        self.cost[n] = cost;
-        self.nodes[n].query = ClusterQuery::from(&bounds);
+    #[inline]
+    fn mark_parent(&mut self, n: usize) {
+        let p = self.meta[n].parent;
+        if p != NO_PARENT {
+            self.dirty[p as usize / 64] |= 1 << (p % 64);
+        }
+    }
+
+    /// Sets node `n`'s bounds (with their orientation measure); returns whether they changed.
+    fn set_bounds(&mut self, n: usize, bounds: LightBounds, orientation: f32) -> bool {
+        let query = ClusterQuery::from(&bounds);
+        if query == self.nodes[n].query {
+            return false;
+        }
+        let cost = cluster_cost_with(&bounds, orientation);
+        let meta = &mut self.meta[n];
+        self.cost_sum += cost as f64 - meta.cost as f64;
+        (meta.cost, meta.orientation) = (cost, orientation);
+        let slot = meta.slot;
+        self.nodes[n].query = query;
+        self.wide.set_slot(slot, &query);
+        true
     }
 
     fn normalized_cost(&self) -> f64 {
-        match self.cost.first() {
-            Some(&root) if root > 0.0 => self.cost_sum / root as f64,
+        match self.meta.first() {
+            Some(root) if root.cost > 0.0 => self.cost_sum / root.cost as f64,
             _ => 1.0,
         }
     }
@@ -255,7 +308,7 @@ impl BvhSampler {
         let mut depth = vec![0u32; self.nodes.len()];
         let mut max = 0;
         for i in 1..self.nodes.len() {
-            depth[i] = depth[self.parent[i] as usize] + 1;
+            depth[i] = depth[self.meta[i].parent as usize] + 1;
             max = max.max(depth[i]);
         }
         max as usize
@@ -291,27 +344,15 @@ impl BvhSampler {
         if let Some(id) = root.light() {
             return (root.query.importance(ctx.p, ctx.n) > 0.0).then_some((id, pmf));
         }
-        let mut c = root.index as usize;
+        let mut w = 0;
         loop {
-            let w0 = self.nodes[c].query.importance(ctx.p, ctx.n);
-            let w1 = self.nodes[c + 1].query.importance(ctx.p, ctx.n);
-            if w0 == 0.0 && w1 == 0.0 {
-                return None;
+            let node = &self.wide.nodes[w];
+            let (lane, p, remapped) = choose_lane(node.importance(ctx.p, ctx.n), u)?;
+            (pmf, u) = (pmf * p, remapped);
+            match node.light(lane) {
+                Some(id) => return Some((id, pmf)),
+                None => w = node.child[lane] as usize,
             }
-            let p0 = w0 / (w0 + w1);
-            let chosen = if u < p0 {
-                (u, pmf) = ((u / p0).min(ONE_MINUS_EPSILON), pmf * p0);
-                c
-            } else {
-                let p1 = 1.0 - p0;
-                (u, pmf) = (((u - p0) / p1).min(ONE_MINUS_EPSILON), pmf * p1);
-                c + 1
-            };
-            let node = &self.nodes[chosen];
-            if let Some(id) = node.light() {
-                return Some((id, pmf));
-            }
-            c = node.index as usize;
         }
     }
 
@@ -328,20 +369,15 @@ impl BvhSampler {
         if leaf == 0 {
             return if self.nodes[0].query.importance(ctx.p, ctx.n) > 0.0 { pmf } else { 0.0 };
         }
-        let mut child = leaf;
-        while child != 0 {
-            // Sibling pairs start at odd indices (the root is 0 and pairs are allocated whole).
-            let first = if child % 2 == 1 { child } else { child - 1 };
-            let w0 = self.nodes[first].query.importance(ctx.p, ctx.n);
-            let w1 = self.nodes[first + 1].query.importance(ctx.p, ctx.n);
-            if w0 == 0.0 && w1 == 0.0 {
-                return 0.0;
+        let slot = self.wide.slot_of[leaf] as usize;
+        let (mut w, mut lane) = (slot / 4, slot % 4);
+        loop {
+            pmf *= lane_probability(self.wide.nodes[w].importance(ctx.p, ctx.n), lane);
+            match self.wide.parent_slot(w) {
+                Some(up) => (w, lane) = up,
+                None => return pmf,
             }
-            let p0 = w0 / (w0 + w1);
-            pmf *= if child == first { p0 } else { 1.0 - p0 };
-            child = self.parent[child] as usize;
         }
-        pmf
     }
 }
 
@@ -360,20 +396,16 @@ impl BvhSampler {
             f(id, if reachable { 1.0 - p_inf } else { 0.0 });
             return;
         }
-        let mut stack = vec![(root.index as usize, 1.0 - p_inf)];
-        while let Some((c, pmf)) = stack.pop() {
-            let w0 = self.nodes[c].query.importance(ctx.p, ctx.n);
-            let w1 = self.nodes[c + 1].query.importance(ctx.p, ctx.n);
-            let (q0, q1) = if w0 == 0.0 && w1 == 0.0 {
-                (0.0, 0.0)
-            } else {
-                let p0 = w0 / (w0 + w1);
-                (pmf * p0, pmf * (1.0 - p0))
-            };
-            for (child, q) in [(c + 1, q1), (c, q0)] {
-                match self.nodes[child].light() {
+        let mut stack = vec![(0usize, 1.0 - p_inf)];
+        while let Some((w, pmf)) = stack.pop() {
+            let node = &self.wide.nodes[w];
+            let weights = node.importance(ctx.p, ctx.n);
+            for lane in (0..4).rev() {
+                let q = pmf * lane_probability(weights, lane);
+                match node.light(lane) {
                     Some(id) => f(id, q),
-                    None => stack.push((self.nodes[child].index as usize, q)),
+                    None if node.child[lane] != super::wide::NONE => stack.push((node.child[lane] as usize, q)),
+                    None => {}
                 }
             }
         }

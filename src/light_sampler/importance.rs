@@ -24,10 +24,10 @@ pub const EMPTY_BOUNDS: LightBounds = LightBounds {
 
 /// Squared distances below this (m^2) are clamped, so a point on a point light gives a large,
 /// finite importance rather than infinity.
-const MIN_DISTANCE_SQUARED: f32 = 1e-8;
+pub(super) const MIN_DISTANCE_SQUARED: f32 = 1e-8;
 
 /// Importances are clamped here so the sum of two stays finite.
-const MAX_IMPORTANCE: f32 = f32::MAX / 4.0;
+pub(super) const MAX_IMPORTANCE: f32 = f32::MAX / 4.0;
 
 #[inline]
 fn safe_sqrt(x: f32) -> f32 {
@@ -124,26 +124,32 @@ pub fn surface_area(b: &LightBounds) -> f32 {
 /// A cluster's cost: power x orientation measure x box surface area (the SAOH of Conty & Kulla
 /// without the split-axis factor). 0 for bounds without power.
 pub fn cluster_cost(b: &LightBounds) -> f32 {
+    cluster_cost_with(b, orientation_measure(b.cos_theta_o, b.cos_theta_e))
+}
+
+/// [`cluster_cost`] given the bounds' orientation measure.
+#[inline]
+pub fn cluster_cost_with(b: &LightBounds, orientation: f32) -> f32 {
     if !(b.phi > 0.0) {
         return 0.0;
     }
-    b.phi * orientation_measure(b.cos_theta_o, b.cos_theta_e) * surface_area(b)
+    b.phi * orientation * surface_area(b)
 }
 
 /// A cluster's bounds in the form the importance reads, with what can be precomputed (the box's
 /// radius, the sine of the normal-cone angle): 56 bytes, so a tree node with it fits 64.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClusterQuery {
-    min: Vec3,
-    max: Vec3,
-    w: Vec3,
-    phi: f32,
+    pub(super) min: Vec3,
+    pub(super) max: Vec3,
+    pub(super) w: Vec3,
+    pub(super) phi: f32,
     /// Radius of the box's bounding sphere; its sign bit is the two-sided flag (so the flag
     /// takes no bytes of its own).
-    signed_radius: f32,
-    cos_theta_o: f32,
-    sin_theta_o: f32,
-    cos_theta_e: f32,
+    pub(super) signed_radius: f32,
+    pub(super) cos_theta_o: f32,
+    pub(super) sin_theta_o: f32,
+    pub(super) cos_theta_e: f32,
 }
 
 impl From<&LightBounds> for ClusterQuery {
@@ -176,7 +182,7 @@ impl ClusterQuery {
         }
     }
     #[inline]
-    fn two_sided(&self) -> bool {
+    pub(super) fn two_sided(&self) -> bool {
         self.signed_radius.is_sign_negative()
     }
 }

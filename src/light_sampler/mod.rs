@@ -6,6 +6,7 @@ mod bvh_build;
 pub mod importance;
 mod power;
 mod uniform;
+mod wide;
 
 use bevy_ecs::resource::Resource;
 
