@@ -11,7 +11,7 @@ use kelvin::geometry::{MAX_COORDINATE, Mesh, SceneBvh, Transform};
 use kelvin::light::{EnvMapTables, GoniometricLight};
 use kelvin::scene::gltf::load_gltf_from_bytes;
 use kelvin::scene::ies::IesProfile;
-use kelvin::scene::image::{ImageError, load_image_from_bytes};
+use kelvin::scene::image::{ImageError, MAX_PIXELS_PER_BYTE, load_image_from_bytes};
 use kelvin::scene::spawn::{SpawnReport, spawn_gltf};
 use kelvin::shading::ShadingBatch;
 use kelvin::systems::LightingPlugin;
@@ -173,6 +173,23 @@ fn exr_decoder_panic_is_an_error_not_an_abort() {
         }
         Ok(l) => assert!(l.image.pixels.iter().all(|p| p.is_finite() && p.min_element() >= 0.0)),
     }
+}
+
+/// env_map, memory: 616 bytes of EXR (tests/fuzz_cases/env_map/exr_claims_50m_pixels.exr) claiming 50331656 x 1
+/// pixels made the decoder allocate its buffers (peak RSS 2.1 GB in the fuzzer) before failing on missing data;
+/// an HDR header claiming 16000 x 16000 likewise (3 GB). Fixed in src/scene/image.rs: EXR and HDR headers claiming
+/// more than MAX_PIXELS_PER_BYTE pixels per byte of file are refused before decoding.
+#[test]
+fn tiny_files_claiming_huge_images_are_refused_before_decoding() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_cases/env_map/exr_claims_50m_pixels.exr");
+    let bytes = std::fs::read(&path).unwrap();
+    let err = load_image_from_bytes(&bytes, "exr", "claims.exr").unwrap_err();
+    assert!(matches!(err, ImageError::Decode { .. }) && err.to_string().contains("50331656 pixels"), "{err}");
+    let mut hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16000 +X 16000\n".to_vec();
+    hdr.extend_from_slice(&[2, 2, 0x3e, 0x80, 0x80, 1, 0x80, 1, 0x80, 1, 0x80, 1]);
+    let err = load_image_from_bytes(&hdr, "hdr", "claims.hdr").unwrap_err();
+    assert!(matches!(err, ImageError::Decode { .. }) && err.to_string().contains("256000000 pixels"), "{err}");
+    assert!(MAX_PIXELS_PER_BYTE >= 1024, "real EXR / HDR compression ratios must stay accepted");
 }
 
 /// Every file under tests/fuzz_cases/<target>/ goes through its target's path without a panic.

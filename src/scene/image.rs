@@ -11,7 +11,8 @@
 //! - Negative values (only EXR can hold them): clamped to 0, counted, and reported in [`LoadedImage::warnings`]
 //!   for the caller to print.
 //! - Missing, unreadable, empty (zero-byte), zero-size, truncated or corrupt files and unknown formats each give an
-//!   [`ImageError`] naming the file. Images over [`MAX_PIXELS`] pixels are refused before their pixels are decoded.
+//!   [`ImageError`] naming the file. Images over [`MAX_PIXELS`] pixels are refused before their pixels are decoded,
+//!   and so are EXR and HDR files whose header claims more than [`MAX_PIXELS_PER_BYTE`] pixels per byte of file.
 //!
 //! Loading never panics; a panic inside a third-party decoder is caught and reported as [`ImageError::Decode`].
 //!
@@ -42,6 +43,12 @@ use glam::{Vec2, Vec3};
 
 /// The largest image accepted, in pixels (2^28, e.g. 23170 x 23170; 3 GiB as linear f32 RGB).
 pub const MAX_PIXELS: usize = 1 << 28;
+
+/// The most pixels an EXR or HDR file may claim per byte of file. Decoders allocate the whole image from the
+/// header before reading pixel data, so a few hundred bytes claiming 50 million pixels cost gigabytes (found by
+/// fuzzing). Real files stay far below: RGBE run-length coding reaches about 16 pixels per byte and zlib about
+/// 1000:1 (172 f16 RGB pixels per byte).
+pub const MAX_PIXELS_PER_BYTE: usize = 4096;
 
 /// Rec. 709 / sRGB luminance weights: the Y row of the sRGB-to-XYZ matrix (IEC 61966-2-1), as in
 /// [`crate::spectrum::color::SRGB_TO_XYZ`].
@@ -284,6 +291,21 @@ fn validate(image: RgbImage, what: &str) -> Result<LoadedImage, ImageError> {
     Ok(LoadedImage { image, warnings })
 }
 
+/// Refuses a header claiming far more pixels than `file_len` bytes can encode (see [`MAX_PIXELS_PER_BYTE`]).
+fn check_plausible(pixels: usize, file_len: usize, format: ImageFormat, what: &str) -> Result<(), ImageError> {
+    if pixels > file_len.saturating_mul(MAX_PIXELS_PER_BYTE) {
+        return Err(ImageError::Decode {
+            what: what.into(),
+            format: format.name(),
+            msg: format!(
+                "the header claims {pixels} pixels, more than a {file_len}-byte file can hold \
+                 (at most {MAX_PIXELS_PER_BYTE} per byte)"
+            ),
+        });
+    }
+    Ok(())
+}
+
 fn check_size(width: usize, height: usize, what: &str) -> Result<(), ImageError> {
     if width == 0 || height == 0 {
         return Err(ImageError::ZeroSize { what: what.into(), width, height });
@@ -315,6 +337,9 @@ fn decode_with_image_crate(
     reader.limits(limits.clone());
     let (w, h) = reader.into_dimensions().map_err(decode_error)?;
     check_size(w as usize, h as usize, what)?;
+    if format == ImageFormat::Hdr {
+        check_plausible(w as usize * h as usize, bytes.len(), format, what)?;
+    }
     let mut reader = image::ImageReader::with_format(Cursor::new(bytes), crate_format);
     reader.limits(limits);
     let img = reader.decode().map_err(decode_error)?;
@@ -343,9 +368,12 @@ fn decode_exr(bytes: &[u8], what: &str) -> Result<RgbImage, ImageError> {
         |e: exr::error::Error| ImageError::Decode { what: what.into(), format: "OpenEXR", msg: e.to_string() };
 
     let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(decode_error)?;
+    let mut claimed = 0usize;
     for header in &meta.headers {
         check_size(header.layer_size.0, header.layer_size.1, what)?;
+        claimed = claimed.saturating_add(header.layer_size.0 * header.layer_size.1);
     }
+    check_plausible(claimed, bytes.len(), ImageFormat::Exr, what)?;
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
