@@ -106,21 +106,32 @@ impl WideNode {
         let sin_b = Vec4::select(inside, zero, radius * inv_dist);
         let cos_b = Vec4::select(inside, -one, (one - sin_b * sin_b).max(zero).sqrt());
 
-        let [ax, ay, az] = self.w;
-        let cos_w0 = ax * wx + ay * wy + az * wz;
-        let cos_w = Vec4::select(self.two_sided.cmpgt(zero), cos_w0.abs(), cos_w0);
-        let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
-        let (cos_o, sin_o) = (self.cos_theta_o, self.sin_theta_o);
-        let within_o = cos_w.cmpgt(cos_o);
-        let cos_x = Vec4::select(within_o, one, cos_w * cos_o + sin_w * sin_o);
-        let sin_x = Vec4::select(within_o, zero, sin_w * cos_o - cos_w * sin_o);
-        let cos_p = Vec4::select(cos_x.cmpgt(cos_b), one, cos_x * cos_b + sin_x * sin_b);
-        let cos_p = Vec4::select(cos_o.cmple(-one), one, cos_p);
-        let cos_e = self.cos_theta_e;
+        // Clusters that emit every way (any point light inside) skip the cone terms: most
+        // interior nodes, since points and spots mix.
+        let (cos_o, cos_e) = (self.cos_theta_o, self.cos_theta_e);
+        let everywhere = cos_o.cmple(-one);
+        let cos_p = if everywhere.all() {
+            one
+        } else {
+            let [ax, ay, az] = self.w;
+            let cos_w0 = ax * wx + ay * wy + az * wz;
+            let cos_w = Vec4::select(self.two_sided.cmpgt(zero), cos_w0.abs(), cos_w0);
+            let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
+            let sin_o = self.sin_theta_o;
+            let within_o = cos_w.cmpgt(cos_o);
+            let cos_x = Vec4::select(within_o, one, cos_w * cos_o + sin_w * sin_o);
+            let sin_x = Vec4::select(within_o, zero, sin_w * cos_o - cos_w * sin_o);
+            let cos_p = Vec4::select(cos_x.cmpgt(cos_b), one, cos_x * cos_b + sin_x * sin_b);
+            Vec4::select(everywhere, one, cos_p)
+        };
         let dark = cos_p.cmplt(cos_e) | self.phi.cmple(zero);
-        let t = ((cos_p - cos_e) / (one - cos_e).max(Vec4::splat(1e-12))).clamp(zero, one);
-        let smooth = t * t * (3.0 - 2.0 * t);
-        let emission = Vec4::select(cos_e.cmple(zero) | cos_p.cmpge(one), cos_p, smooth);
+        let lambertian = cos_e.cmple(zero) | cos_p.cmpge(one);
+        let emission = if lambertian.all() {
+            cos_p
+        } else {
+            let t = ((cos_p - cos_e) / (one - cos_e).max(Vec4::splat(1e-12))).clamp(zero, one);
+            Vec4::select(lambertian, cos_p, t * t * (3.0 - 2.0 * t))
+        };
         let mut value = self.phi * emission / d2;
 
         if n != Vec3::ZERO {
