@@ -187,6 +187,15 @@ fn exact_relative_variance(
     (exact, variances)
 }
 
+/// The mean over `points` of the exact relative variance of `sampler`'s one-sample estimate.
+pub fn mean_relative_variance(sampler: &LightSampler, table: &LightTable, points: &[LightSampleContext]) -> f64 {
+    let per_point: Vec<f64> = points
+        .par_iter()
+        .map(|ctx| exact_relative_variance(std::slice::from_ref(sampler), table, ctx).1[0].0)
+        .collect();
+    per_point.iter().sum::<f64>() / points.len().max(1) as f64
+}
+
 /// Time per sample (ns) and measured relative RMSE with `samples` samples per point. With
 /// `shadows`, each sample also traces its shadow ray (the light system's per-sample cost; the
 /// answer is ignored, the estimate stays unshadowed).
