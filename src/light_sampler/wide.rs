@@ -245,6 +245,73 @@ impl WideTree {
     #[inline]
     pub fn parent_slot(&self, w: usize) -> Option<(usize, usize)> {
         let slot = self.slot_of[self.nodes[w].origin as usize];
-        (slot != NONE).then(|| (slot as usize / 4, slot as usize % 4))
+        (slot != NONE).then_some((slot as usize / 4, slot as usize % 4))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::LightBounds;
+
+    #[test]
+    fn lanes_match_the_scalar_importance() {
+        let clusters = [
+            LightBounds {
+                min: Vec3::new(-1.0, 2.0, 0.0),
+                max: Vec3::new(3.0, 4.0, 1.0),
+                phi: 5.0,
+                w: Vec3::Z,
+                cos_theta_o: -1.0,
+                cos_theta_e: 0.0,
+                two_sided: false,
+            },
+            LightBounds {
+                min: Vec3::ONE,
+                max: Vec3::ONE,
+                phi: 2.0,
+                w: Vec3::NEG_Y,
+                cos_theta_o: 0.9,
+                cos_theta_e: 0.95,
+                two_sided: false,
+            },
+            LightBounds {
+                min: Vec3::new(0.0, 3.0, 0.0),
+                max: Vec3::new(2.0, 3.0, 2.0),
+                phi: 1.0,
+                w: Vec3::NEG_Y,
+                cos_theta_o: 1.0,
+                cos_theta_e: 0.0,
+                two_sided: true,
+            },
+            EMPTY_BOUNDS,
+        ];
+        let mut node = WideNode::empty(0);
+        for (lane, b) in clusters.iter().enumerate() {
+            node.set_lane(lane, &ClusterQuery::from(b));
+        }
+        for (p, n) in
+            [(Vec3::ZERO, Vec3::Y), (Vec3::new(1.0, 0.5, 1.0), Vec3::ZERO), (Vec3::new(5.0, 6.0, -2.0), Vec3::X)]
+        {
+            let wide = node.importance(p, n).to_array();
+            for (lane, b) in clusters.iter().enumerate() {
+                let scalar = ClusterQuery::from(b).importance(p, n);
+                assert!(
+                    (wide[lane] - scalar).abs() <= 1e-5 * scalar.abs().max(1e-6),
+                    "lane {lane} at {p}: {} vs {scalar}",
+                    wide[lane]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn lane_choice_follows_the_weights() {
+        let w = Vec4::new(1.0, 0.0, 3.0, 0.0);
+        assert_eq!(choose_lane(w, 0.1).map(|c| c.0), Some(0));
+        assert_eq!(choose_lane(w, 0.3).map(|c| (c.0, c.1)), Some((2, 0.75)));
+        assert_eq!(choose_lane(w, 0.999_999).map(|c| c.0), Some(2));
+        assert_eq!(choose_lane(Vec4::ZERO, 0.5), None);
+        assert_eq!(lane_probability(w, 1), 0.0);
     }
 }
