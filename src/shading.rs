@@ -37,6 +37,15 @@ pub enum LightSelection {
     All,
 }
 
+/// Floating-point precision of the light math where kelvin has both (point and spot Sample_Li:
+/// the vector to the light, its length and 1/r^2); other light types always use f32.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LightPrecision {
+    #[default]
+    F32,
+    F64,
+}
+
 /// What the light system computes and how.
 #[derive(Resource, Clone, Debug, PartialEq)]
 pub struct Settings {
@@ -49,6 +58,14 @@ pub struct Settings {
     pub samples_per_point: u32,
     /// Seed of the counter-based random numbers.
     pub seed: u64,
+    /// The caller combines light samples with BSDF samples by MIS, so image lights may sample
+    /// their MIS-compensated tables. Set false when light samples are used alone.
+    pub mis: bool,
+    /// How shadow rays leave the shading point (and area-light points). Defaults to the
+    /// error-bound offset.
+    pub shadow_offset: crate::geometry::ShadowOffset,
+    /// Precision of point and spot light sampling. Defaults to f32.
+    pub light_precision: LightPrecision,
 }
 
 impl Default for Settings {
@@ -60,6 +77,9 @@ impl Default for Settings {
             shadows: true,
             samples_per_point: 1,
             seed: 0,
+            mis: true,
+            shadow_offset: crate::geometry::ShadowOffset::ErrorBound,
+            light_precision: LightPrecision::F32,
         }
     }
 }

@@ -1,8 +1,7 @@
 //! Keeping the `SceneBvh` in step with geometry entities: rebuilt when geometry is added,
 //! removed or reshaped, refitted (or rebuilt past a quality threshold) when only transforms move.
 
-use std::collections::HashMap;
-
+use bevy_ecs::entity::EntityHashMap;
 use bevy_ecs::prelude::*;
 
 use crate::geometry::{
@@ -17,7 +16,7 @@ use super::Work;
 #[derive(Resource, Clone, Debug, Default)]
 pub struct GeometryIndex {
     pub entities: Vec<Entity>,
-    instance_of: HashMap<Entity, u32>,
+    instance_of: EntityHashMap<u32>,
 }
 
 impl GeometryIndex {

@@ -2,9 +2,10 @@
 //! work, and the plugin that schedules them.
 //!
 //! The chain, set by set (each set's doc says what holds after it):
-//! update the scene BVH -> sync lights -> update the light sampler -> build env-map tables ->
+//! update the scene BVH -> build env-map tables -> sync lights -> update the light sampler ->
 //! sample lights for the shading batch -> trace shadow rays -> write direct lighting.
 
+mod env_tables;
 mod geometry;
 mod plan;
 mod sample;
@@ -17,17 +18,23 @@ use crate::light::LightTable;
 use crate::light_sampler::LightSampler;
 use crate::shading::{DirectLighting, RunReport, SceneBounds, Settings, ShadingBatch};
 
+pub use env_tables::{EnvTables, build_env_tables, plan_env_tables};
 pub use geometry::{BvhWork, GeometryIndex, plan_bvh, update_scene_bvh};
 pub use plan::Work;
 pub use sample::{ShadowRays, sample_direct_lighting};
 pub use shadows::trace_shadow_rays;
-pub use sync_lights::{remove_lights, sync_distant_lights, sync_point_lights, sync_spot_lights};
+pub use sync_lights::{
+    remove_lights, sync_area_lights, sync_distant_lights, sync_goniometric_lights, sync_image_infinite_lights,
+    sync_point_lights, sync_projection_lights, sync_spot_lights, sync_uniform_infinite_lights,
+};
 
 /// The light system's sets, in order.
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
 pub enum LightingSet {
     /// After this set, the `SceneBvh` and `SceneBounds` match the geometry entities.
     UpdateBvh,
+    /// After this set, every image infinite light has sampling tables for its current image.
+    BuildEnvTables,
     /// After this set, every added, changed or removed light is reflected in the `LightTable`.
     SyncLights,
     /// After this set, the light sampler matches the `LightTable`.
@@ -60,10 +67,13 @@ impl LightingPlugin {
         world.init_resource::<SceneBounds>();
         world.init_resource::<crate::geometry::SceneBvh>();
         world.init_resource::<GeometryIndex>();
+        world.init_resource::<EnvTables>();
 
         schedule.configure_sets(
             (
                 LightingSet::UpdateBvh,
+                // Independent of geometry; image lights need their tables before they are synced.
+                LightingSet::BuildEnvTables,
                 // Distant and infinite lights read the scene bounds the BVH step computes.
                 LightingSet::SyncLights,
                 // The sampler weighs lights by power, so it reads the synced table.
@@ -86,10 +96,24 @@ impl LightingPlugin {
             (
                 // Removals first: an entity whose light changed kind is removed, then re-added.
                 remove_lights,
-                (sync_point_lights, sync_spot_lights, sync_distant_lights),
+                (
+                    sync_point_lights,
+                    sync_spot_lights,
+                    sync_distant_lights,
+                    sync_area_lights,
+                    sync_projection_lights,
+                    sync_goniometric_lights,
+                    sync_uniform_infinite_lights,
+                    sync_image_infinite_lights,
+                ),
             )
                 .chain()
                 .in_set(LightingSet::SyncLights),
+        );
+        schedule.add_systems(
+            (plan_env_tables, build_env_tables.run_if(plan::planned(|w| w.env_tables)))
+                .chain()
+                .in_set(LightingSet::BuildEnvTables),
         );
         schedule.add_systems(
             (plan::plan_sampler, sample::update_light_sampler.run_if(plan::planned(|w| w.sampler)))

@@ -15,6 +15,7 @@ pub struct Work {
     pub sampling: bool,
     pub shadows: bool,
     pub bvh: super::geometry::BvhWork,
+    pub env_tables: bool,
 }
 
 /// A run condition that reads one of `Work`'s flags.
@@ -22,11 +23,20 @@ pub fn planned(flag: fn(&Work) -> bool) -> impl FnMut(Res<Work>) -> bool + Clone
     move |work: Res<Work>| flag(&work)
 }
 
-/// Starts an update: empties the run report and the decisions.
-pub fn begin_update(mut report: ResMut<RunReport>, mut work: ResMut<Work>) {
+/// Starts an update: empties the run report and the decisions, and passes settings the light
+/// table needs.
+pub fn begin_update(
+    mut report: ResMut<RunReport>,
+    mut work: ResMut<Work>,
+    settings: Res<Settings>,
+    mut table: ResMut<LightTable>,
+) {
     report.entries.clear();
     report.warnings.clear();
     *work = Work::default();
+    if table.mis_compensation != settings.mis {
+        table.mis_compensation = settings.mis;
+    }
 }
 
 /// The sampler is updated when the table changed or the settings ask for another kind.
@@ -55,6 +65,8 @@ pub fn plan_sampling(
     settings: Res<Settings>,
     mut work: ResMut<Work>,
     mut report: ResMut<RunReport>,
+    mut out: ResMut<crate::shading::DirectLighting>,
+    mut rays: ResMut<super::ShadowRays>,
 ) {
     let (run, why) = if batch.is_empty() {
         (false, "shading batch is empty".to_string())
@@ -69,4 +81,10 @@ pub fn plan_sampling(
     };
     work.sampling = run;
     report.record("sample_direct_lighting", run, why);
+    if !run {
+        // Every point gets no entries: nothing from an earlier update may linger.
+        out.clear();
+        out.offsets.resize(batch.len() + 1, 0);
+        rays.clear();
+    }
 }

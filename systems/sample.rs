@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use crate::light::{ColorQuery, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
-use crate::shading::{ColorMode, DirectLighting, LightSelection, RunReport, Settings, ShadingBatch};
+use crate::shading::{ColorMode, DirectLighting, LightPrecision, LightSelection, RunReport, Settings, ShadingBatch};
 use crate::spectrum::SampledSpectrum;
 
 /// Points per parallel task.
@@ -42,7 +42,8 @@ impl ShadowRays {
     pub fn is_empty(&self) -> bool {
         self.origin.is_empty()
     }
-    fn clear(&mut self) {
+    /// Empties every column, keeping capacity.
+    pub fn clear(&mut self) {
         self.origin.clear();
         self.origin_error.clear();
         self.origin_normal.clear();
@@ -68,6 +69,8 @@ pub fn update_light_sampler(
     } else {
         sampler.update(&table)
     };
+    // The sampler has caught up; clearing the flags is bookkeeping, not a change to the table.
+    table.bypass_change_detection().clear_change_flags();
     report.record("light_sampler", true, what);
     // The sampler has consumed the change log; clearing it is bookkeeping, not a table change.
     table.bypass_change_detection().clear_change_flags();
@@ -143,7 +146,11 @@ pub fn sample_direct_lighting(
                 let Some((id, pmf)) = chosen else { continue };
                 light[e] = id;
                 let u = rng.at_dimension(1 + 2 * light_index.unwrap_or(0) as u32).next_2d();
-                if let Some(ls) = table.sample_li(id, &ctx, u, query)
+                let sampled = match settings.light_precision {
+                    LightPrecision::F32 => table.sample_li(id, &ctx, u, query),
+                    LightPrecision::F64 => table.sample_li_f64(id, &ctx, u, query),
+                };
+                if let Some(ls) = sampled
                     && ls.pdf > 0.0
                     && ls.radiance.is_finite()
                 {

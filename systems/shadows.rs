@@ -29,24 +29,30 @@ pub fn plan_shadows(
     report.record("trace_shadow_rays", run, why);
 }
 
-/// Builds offset segments (off the shading surface and off the light's surface) and traces them
-/// in parallel; fills `ShadowRays::occluded`.
+/// Builds offset segments (off the shading surface and off the light's surface, by
+/// `Settings::shadow_offset`) and traces them in parallel; fills `ShadowRays::occluded`.
 pub fn trace_shadow_rays(
     mut rays: ResMut<ShadowRays>,
     bvh: Res<SceneBvh>,
+    settings: Res<Settings>,
     mut segments: Local<Vec<crate::geometry::Ray>>,
 ) {
+    use rayon::prelude::*;
     let r = &mut *rays;
+    let offset = settings.shadow_offset;
     segments.clear();
-    segments.extend((0..r.origin.len()).map(|i| {
-        let from = SurfacePoint { p: r.origin[i], p_error: r.origin_error[i], n: r.origin_normal[i] };
-        if r.to_infinity[i] {
-            from.spawn_ray((r.target[i] - r.origin[i]).normalize())
-        } else if r.target_normal[i] == glam::Vec3::ZERO {
-            from.spawn_ray_to_point(r.target[i])
-        } else {
-            from.spawn_ray_to(&SurfacePoint::from_point(r.target[i], r.target_normal[i]))
-        }
-    }));
+    (0..r.origin.len())
+        .into_par_iter()
+        .map(|i| {
+            let from = SurfacePoint { p: r.origin[i], p_error: r.origin_error[i], n: r.origin_normal[i] };
+            if r.to_infinity[i] {
+                offset.spawn_ray(&from, (r.target[i] - r.origin[i]).normalize())
+            } else if r.target_normal[i] == glam::Vec3::ZERO {
+                offset.spawn_ray_to_point(&from, r.target[i])
+            } else {
+                offset.spawn_ray_to(&from, &SurfacePoint::from_point(r.target[i], r.target_normal[i]))
+            }
+        })
+        .collect_into_vec(&mut segments);
     occluded(&bvh, &segments, &mut r.occluded);
 }

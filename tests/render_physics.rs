@@ -6,7 +6,7 @@ use kelvin::geometry::{Rectangle, Transform};
 use kelvin::light::{Amount, DistantLight, PointLight};
 use kelvin::render::camera::Camera;
 use kelvin::render::material::Material;
-use kelvin::render::renderer::{RenderOptions, render};
+use kelvin::render::renderer::{RenderOptions, Strategy, render};
 use kelvin::shading::{ColorMode, Settings};
 use kelvin::systems::LightingPlugin;
 
@@ -28,7 +28,7 @@ fn floor_scene(mode: ColorMode, rho: f32) -> (World, Schedule) {
 }
 
 fn centre_luminance(world: &mut World, schedule: &mut Schedule, spp: u32) -> f32 {
-    let opts = RenderOptions { width: 5, height: 5, spp, mis: true };
+    let opts = RenderOptions { width: 5, height: 5, spp, strategy: Strategy::Mis };
     let (film, _) = render(world, schedule, &opts, |_| {});
     luminance(film.pixel(2, 2))
 }
@@ -62,4 +62,113 @@ fn directional_light_gives_rho_over_pi_e_cos_theta() {
     let got = centre_luminance(&mut world, &mut schedule, 1);
     eprintln!("directional: {got} cd/m^2, expected {want}");
     assert!((got / want - 1.0).abs() < 1e-3, "{got} vs {want}");
+}
+
+/// Mean and standard error of the centre pixel's luminance over renders with different seeds.
+fn centre_stats(
+    world: &mut World,
+    schedule: &mut Schedule,
+    renders: u64,
+    spp: u32,
+    size: u32,
+    strategy: Strategy,
+) -> (f64, f64) {
+    let opts = RenderOptions { width: size, height: size, spp, strategy };
+    let values: Vec<f64> = (0..renders)
+        .map(|seed| {
+            world.resource_mut::<Settings>().seed = seed;
+            let (film, _) = render(world, schedule, &opts, |_| {});
+            luminance(film.pixel(size / 2, size / 2)) as f64
+        })
+        .collect();
+    let mean = values.iter().sum::<f64>() / renders as f64;
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (renders as f64 - 1.0);
+    (mean, (var / renders as f64).sqrt())
+}
+
+#[test]
+fn furnace_lambertian_sphere_under_uniform_sky_renders_albedo_times_l() {
+    use kelvin::geometry::Sphere;
+    use kelvin::light::UniformInfiniteLight;
+    let (albedo, l) = (0.5f32, 100.0f32);
+    let runs = [
+        (ColorMode::Rgb, Strategy::Mis),
+        (ColorMode::Spectral, Strategy::Mis),
+        (ColorMode::Rgb, Strategy::LightOnly),
+        (ColorMode::Rgb, Strategy::BsdfOnly),
+    ];
+    for (mode, strategy) in runs {
+        let mut world = World::new();
+        let mut schedule = Schedule::default();
+        world.insert_resource(Settings { color_mode: mode, ..Default::default() });
+        LightingPlugin::build(&mut world, &mut schedule);
+        world.spawn((Sphere { radius: 1.0 }, Transform::default(), Material::lambertian(Vec3::splat(albedo))));
+        world.spawn(UniformInfiniteLight::nits(l));
+        let cam = Transform::from_translation(Vec3::new(0.0, 0.0, 5.0)).looking_to(Vec3::NEG_Z, Vec3::Y);
+        world.spawn((Camera { yfov: 0.3 }, cam));
+        let (mean, se) = centre_stats(&mut world, &mut schedule, 16, 16, 3, strategy);
+        let want = (albedo * l) as f64;
+        eprintln!("furnace {mode:?} {strategy:?}: {mean:.4} +- {se:.4} (want {want})");
+        assert!((mean - want).abs() <= 3.0 * se + 1e-3 * want, "{mode:?} {strategy:?}: {mean} +- {se} vs {want}");
+    }
+}
+
+/// The accuracy report's knobs that must not change a delta light's answer: BSDF-only keeps the
+/// light samples of delta lights, f64 light math and a sane fixed shadow offset agree with f32 and
+/// the error-bound offset.
+#[test]
+fn point_light_answer_is_the_same_under_strategy_precision_and_offset_knobs() {
+    use kelvin::geometry::ShadowOffset;
+    use kelvin::shading::LightPrecision;
+    let (rho, i, h) = (0.5f32, 100.0f32, 2.0f32);
+    let want = rho / std::f32::consts::PI * i / (h * h);
+    let (mut world, mut schedule) = floor_scene(ColorMode::Rgb, rho);
+    world.spawn((PointLight::candela(i), Transform::from_translation(Vec3::new(0.0, h, 0.0))));
+    for (strategy, precision, offset) in [
+        (Strategy::BsdfOnly, LightPrecision::F32, ShadowOffset::ErrorBound),
+        (Strategy::LightOnly, LightPrecision::F64, ShadowOffset::ErrorBound),
+        (Strategy::Mis, LightPrecision::F32, ShadowOffset::FixedEpsilon(1e-3)),
+    ] {
+        {
+            let mut s = world.resource_mut::<Settings>();
+            (s.light_precision, s.shadow_offset) = (precision, offset);
+        }
+        let opts = RenderOptions { width: 5, height: 5, spp: 1, strategy };
+        let (film, _) = render(&mut world, &mut schedule, &opts, |_| {});
+        let got = luminance(film.pixel(2, 2));
+        assert!((got / want - 1.0).abs() < 1e-3, "{strategy:?} {precision:?} {offset:?}: {got} vs {want}");
+    }
+}
+
+/// View factor from a differential area to a parallel rectangle centred above it (a x b at
+/// height h): four corner rectangles (Howell's catalogue, configuration B-3).
+fn view_factor_centered(a: f64, b: f64, h: f64) -> f64 {
+    let corner = |x: f64, y: f64| {
+        let (x, y) = (x / h, y / h);
+        let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+        (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
+    };
+    4.0 * corner(a / 2.0, b / 2.0)
+}
+
+#[test]
+fn rectangle_area_light_matches_the_view_factor() {
+    use kelvin::light::AreaLight;
+    let (rho, l, h, a, b) = (0.6f32, 500.0f32, 1.0f32, 1.2f32, 0.8f32);
+    let want = (rho * l) as f64 * view_factor_centered(a as f64, b as f64, h as f64);
+    let (mut world, mut schedule) = floor_scene(ColorMode::Rgb, rho);
+    let down = Transform::from_translation(Vec3::new(0.0, h, 0.0)).looking_to(Vec3::Y, Vec3::Z); // front -> -Y
+    world.spawn((
+        Rectangle { half_size: Vec2::new(a / 2.0, b / 2.0) },
+        down,
+        AreaLight { amount: Amount::Nits(l), ..Default::default() },
+    ));
+    // The camera sits below the emitter, looking down at the floor's centre.
+    let mut cams = world.query_filtered::<&mut Transform, With<Camera>>();
+    for mut t in cams.iter_mut(&mut world) {
+        t.translation.y = 0.5;
+    }
+    let (mean, se) = centre_stats(&mut world, &mut schedule, 16, 16, 3, Strategy::Mis);
+    eprintln!("rectangle light: {mean:.4} +- {se:.4} cd/m^2, view factor gives {want:.4}");
+    assert!((mean - want).abs() <= 3.0 * se + 2e-3 * want, "{mean} +- {se} vs {want}");
 }

@@ -1,6 +1,8 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
 mod bench;
 mod ies;
+mod render;
+mod report;
 mod spectrum;
 
 use clap::{Parser, Subcommand};
@@ -19,6 +21,10 @@ enum Command {
     Spectrum(spectrum::SpectrumArgs),
     /// Header, flux, peak intensity and beam angles of an IES LM-63 photometric file.
     Ies(ies::IesArgs),
+    /// Render a glTF scene (or the embedded default scene) with direct lighting.
+    Render(render::RenderArgs),
+    /// Reports: `report accuracy` prices each accuracy knob in render time.
+    Report(report::ReportArgs),
     /// Benchmarks with a printed table and plots.
     Bench(bench::BenchArgs),
 }
@@ -31,6 +37,8 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Spectrum(args) => spectrum::run(args),
         Command::Ies(args) => ies::run(args),
+        Command::Render(args) => render::run(args),
+        Command::Report(args) => report::run(args),
         Command::Bench(args) => bench::run(args),
     }
 }

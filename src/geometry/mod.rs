@@ -2,12 +2,13 @@
 //!
 //! - [`Mesh`], [`Sphere`], [`Disk`], [`Rectangle`]: geometry components, placed by a [`Transform`].
 //! - [`SceneBvh`]: one CWBVH (obvhs) over every world-space triangle and analytic shape; see
-//!   `bvh.rs` for the build / refit choices and their measured costs.
+//!   `bvh.rs` for the build / refit choices and their measured costs, `refit.rs` for updates.
 //! - [`occluded`] and [`closest_hits`]: batched any-hit and closest-hit queries (rayon).
 //! - [`offset_ray_origin`], [`SurfacePoint`]: robust shadow-ray endpoints with stated error bounds.
 pub mod bvh;
 pub mod mesh;
 pub mod ray;
+mod refit;
 pub mod shapes;
 pub mod transform;
 mod triangle;
@@ -15,9 +16,10 @@ pub mod visibility;
 
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
 pub use mesh::Mesh;
-pub use ray::{Ray, SHADOW_EPSILON, SurfacePoint, offset_ray_origin, triangle_surface_point};
+pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin, triangle_surface_point};
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};
 pub use transform::Transform;
+pub use triangle::MAX_COORDINATE;
 pub use visibility::{Hit, closest_hits, occluded};
 
 use glam::Vec3;

@@ -7,6 +7,10 @@
 //! Intersection and sampling run in f64 in object space: the hit (or sample) is re-projected
 //! exactly onto the surface, mapped to world space in f64 and rounded once to f32, which gives the
 //! small error bound documented in `ray.rs` ([`f64_point_error`]).
+//!
+//! Area lights should sample a [`PlacedShape`] (made once per change with [`PlacedShape::new`],
+//! or read back with `SceneBvh::placed_shape`): it carries the same f64 maps the BVH traces, so
+//! samples lie on the traced surface and [`SurfacePoint::spawn_ray_to`] never self-intersects.
 
 use bevy_ecs::component::Component;
 use glam::{DAffine3, DMat3, DVec3, Vec2, Vec3};
@@ -288,7 +292,12 @@ impl PlacedShape {
         if !invertible || !transform.rotation.is_finite() || transform.rotation.length_squared() == 0.0 {
             return Err(GeometryError::InvalidTransform { transform: *transform });
         }
-        Ok(Self { shape, to_world, to_object: to_world.inverse() })
+        let placed = Self { shape, to_world, to_object: to_world.inverse() };
+        let (lo, hi) = placed.world_bounds();
+        if !(lo.is_finite() && hi.is_finite()) {
+            return Err(GeometryError::InvalidTransform { transform: *transform });
+        }
+        Ok(placed)
     }
 
     /// World-space bounds (min, max), rounded outward to f32.
@@ -430,5 +439,10 @@ mod tests {
         ));
         let nan = Transform::from_translation(Vec3::new(f32::NAN, 0.0, 0.0));
         assert!(matches!(PlacedShape::new(Disk::new(1.0).into(), &nan), Err(GeometryError::InvalidTransform { .. })));
+        let huge = Transform { scale: Vec3::splat(1e30), ..Default::default() };
+        assert!(matches!(
+            PlacedShape::new(Sphere { radius: 1e10 }.into(), &huge),
+            Err(GeometryError::InvalidTransform { .. })
+        ));
     }
 }

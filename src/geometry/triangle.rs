@@ -18,8 +18,8 @@ use super::ray::{Ray, gamma};
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ShearedRay {
     origin: Vec3,
-    /// Indices of the permuted x, y, z axes (z = largest |dir| component).
-    k: [usize; 3],
+    /// Axis of the largest |dir| component, which becomes z (x and y follow cyclically).
+    kz: u8,
     /// Shear (Sx, Sy, Sz) = (-dx/dz, -dy/dz, 1/dz) in permuted axes.
     shear: Vec3,
 }
@@ -46,16 +46,13 @@ impl ShearedRay {
         } else {
             2
         };
-        let kx = (kz + 1) % 3;
-        let ky = (kx + 1) % 3;
-        let d = Vec3::new(ray.dir[kx], ray.dir[ky], ray.dir[kz]);
-        Self { origin: ray.origin, k: [kx, ky, kz], shear: Vec3::new(-d.x / d.z, -d.y / d.z, 1.0 / d.z) }
+        let d = swizzle(ray.dir, kz);
+        Self { origin: ray.origin, kz, shear: Vec3::new(-d.x / d.z, -d.y / d.z, 1.0 / d.z) }
     }
 
     #[inline(always)]
     fn permute(&self, v: Vec3) -> Vec3 {
-        let t = v - self.origin;
-        Vec3::new(t[self.k[0]], t[self.k[1]], t[self.k[2]])
+        swizzle(v - self.origin, self.kz)
     }
 
     /// The hit with triangle `v` if its computed `t` satisfies `delta_t < t <= t_max`.
@@ -103,7 +100,7 @@ impl ShearedRay {
 
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
-        if !(t <= t_max) {
+        if t.is_nan() || t > t_max {
             return None;
         }
 
@@ -124,11 +121,30 @@ impl ShearedRay {
     }
 }
 
-/// Whether a triangle has zero area in f32 (repeated or collinear vertices), or a non-finite
-/// vertex. Such triangles are left out of the scene BVH.
+/// `v` with its axes rotated so that axis `kz` becomes z (static swizzles: runtime indexing
+/// into a `Vec3` made the whole test ~25% slower).
+#[inline(always)]
+fn swizzle(v: Vec3, kz: u8) -> Vec3 {
+    match kz {
+        0 => Vec3::new(v.y, v.z, v.x),
+        1 => Vec3::new(v.z, v.x, v.y),
+        _ => v,
+    }
+}
+
+/// Largest usable world coordinate, metres (1e9 km). Beyond about 1e19 the BVH builder's surface
+/// areas overflow f32 and obvhs breaks (found by fuzzing the glTF import); 1e12 leaves room for
+/// sums over millions of nodes.
+pub const MAX_COORDINATE: f32 = 1e12;
+
+/// Whether a triangle has zero area in f32 (repeated or collinear vertices), or a vertex that is
+/// not finite or lies beyond [`MAX_COORDINATE`] on some axis. Such triangles are left out of the
+/// scene BVH and of area lights.
 pub(crate) fn is_degenerate(v: &[Vec3; 3]) -> bool {
     let n = (v[1] - v[0]).cross(v[2] - v[0]);
-    !(n.length_squared() > 0.0) || !n.is_finite() || !(v[0].is_finite() && v[1].is_finite() && v[2].is_finite())
+    let in_range = v.iter().all(|p| p.abs().max_element() <= MAX_COORDINATE);
+    let proper = n.length_squared() > 0.0 && n.is_finite() && in_range;
+    !proper
 }
 
 #[cfg(test)]
@@ -176,6 +192,8 @@ mod tests {
         assert!(is_degenerate(&[p, p, Vec3::ZERO]));
         assert!(is_degenerate(&[Vec3::ZERO, p, 2.0 * p]));
         assert!(is_degenerate(&[Vec3::ZERO, Vec3::X, Vec3::new(f32::NAN, 0.0, 0.0)]));
+        // Finite normal, but a vertex far beyond MAX_COORDINATE (BVH areas would overflow).
+        assert!(is_degenerate(&[Vec3::ZERO, Vec3::X, Vec3::new(0.0, 1.0, 1e38)]));
         assert!(!is_degenerate(&TRI));
     }
 }

@@ -4,7 +4,7 @@
 //! Traversal uses obvhs's `traverse!` loop with our own node test. obvhs's node test clamps box
 //! entry to t >= 1e-4 (which would drop occluders right next to a shadow-ray origin) and replaces
 //! tiny direction components by +-1/f32::EPSILON; ours honours t in [0, t_max] exactly and pads
-//! each slab by a bound on its own rounding (see [`NODE_PAD`]), so it never culls a box the exact
+//! each slab by a bound on its own rounding (see `NODE_PAD`), so it never culls a box the exact
 //! ray meets. With primitive tests shared between the two paths, BVH queries then return exactly
 //! what testing every primitive returns (closest-hit ties go to the lowest input primitive index).
 
@@ -243,21 +243,14 @@ impl SceneBvh {
         let leaf = &self.leaf[best.slot];
         if leaf.shape != NO_SHAPE {
             let shape = &self.shapes[leaf.shape as usize];
-            // Same inputs, same arithmetic: this reproduces the hit found during traversal.
-            if let Some(h) = shape.intersect(ray, best.t) {
-                let sp = h.point;
-                return Hit {
-                    t: h.t,
-                    p: sp.p,
-                    p_error: sp.p_error,
-                    ng: sp.n,
-                    ns: sp.n,
-                    uv: h.uv,
-                    id,
-                    material,
-                    instance,
-                };
-            }
+            // Same inputs, same arithmetic: this reproduces the hit found during traversal (the
+            // nearest accepted root does not depend on t_max beyond it).
+            let (sp, uv) = match shape.intersect(ray, ray.t_max) {
+                Some(h) => (h.point, h.uv),
+                // Unreachable in practice; stay finite and conservative rather than panic.
+                None => (SurfacePoint::from_point(ray.at(best.t), -ray.dir.normalize()), Vec2::ZERO),
+            };
+            return Hit { t: best.t, p: sp.p, p_error: sp.p_error, ng: sp.n, ns: sp.n, uv, id, material, instance };
         }
         let (v, b) = (&leaf.v, best.b);
         let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];

@@ -14,17 +14,39 @@ impl LightTable {
             LightKind::Point => self.points.sample_li(i, ctx, query),
             LightKind::Spot => self.spots.sample_li(i, ctx, query),
             LightKind::Distant => self.distant.items[i].sample_li(ctx, u, query),
-            other => unreachable!("no block for {other:?}"),
+            LightKind::UniformInfinite => self.uniform_infinite.items[i].sample_li(ctx, u, query),
+            LightKind::ImageInfinite if self.mis_compensation => {
+                self.image_infinite.items[i].sample_li_mis(ctx, u, query)
+            }
+            LightKind::ImageInfinite => self.image_infinite.items[i].sample_li(ctx, u, query),
+            LightKind::Projection => self.projection.items[i].sample_li(ctx, query),
+            LightKind::Goniometric => self.goniometric.items[i].sample_li(ctx, query),
+            LightKind::Area => self.area.items[i].light.sample_li(ctx, u, query),
+        }
+    }
+
+    /// [`Self::sample_li`] with point and spot lights evaluated in f64 (`LightPrecision::F64`);
+    /// every other kind has only its f32 form.
+    #[inline]
+    pub fn sample_li_f64(&self, id: LightId, ctx: &LightSampleContext, u: Vec2, query: ColorQuery) -> Option<LiSample> {
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => self.points.sample_li_f64(i, ctx, query),
+            LightKind::Spot => self.spots.sample_li_f64(i, ctx, query),
+            _ => self.sample_li(id, ctx, u, query),
         }
     }
 
     /// Pdf_Li: solid-angle density with which `sample_li` returns `wi` (0 for delta lights).
-    pub fn pdf_li(&self, id: LightId, _ctx: &LightSampleContext, wi: Vec3) -> f32 {
+    pub fn pdf_li(&self, id: LightId, ctx: &LightSampleContext, wi: Vec3) -> f32 {
         let i = id.row as usize;
         match id.kind {
-            LightKind::Point | LightKind::Spot => 0.0,
+            LightKind::Point | LightKind::Spot | LightKind::Projection | LightKind::Goniometric => 0.0,
             LightKind::Distant => self.distant.items[i].pdf_li(wi),
-            other => unreachable!("no block for {other:?}"),
+            LightKind::UniformInfinite => self.uniform_infinite.items[i].pdf_li(ctx, wi),
+            LightKind::ImageInfinite if self.mis_compensation => self.image_infinite.items[i].pdf_li_mis(wi),
+            LightKind::ImageInfinite => self.image_infinite.items[i].pdf_li(wi),
+            LightKind::Area => self.area.items[i].light.pdf_li(ctx, wi),
         }
     }
 
@@ -43,7 +65,11 @@ impl LightTable {
             LightKind::Point => self.points.phi(i),
             LightKind::Spot => self.spots.phi(i),
             LightKind::Distant => self.distant.items[i].phi(),
-            other => unreachable!("no block for {other:?}"),
+            LightKind::UniformInfinite => self.uniform_infinite.items[i].phi(),
+            LightKind::ImageInfinite => self.image_infinite.items[i].phi(),
+            LightKind::Projection => self.projection.items[i].phi(),
+            LightKind::Goniometric => self.goniometric.items[i].phi(),
+            LightKind::Area => self.area.items[i].light.phi(),
         }
     }
 
@@ -53,11 +79,27 @@ impl LightTable {
         let (rgb_y, radiometric) = match id.kind {
             LightKind::Point => (self.points.rgb[i].y, self.points.radiometric[i]),
             LightKind::Spot => (self.spots.rgb[i].y, self.spots.radiometric[i]),
+            LightKind::Area => {
+                let e = &self.area.items[i].light.radiance;
+                (e.rgb.y, e.radiometric)
+            }
+            LightKind::Projection => {
+                let e = &self.projection.items[i].intensity;
+                (e.rgb.y, e.radiometric)
+            }
+            LightKind::Goniometric => {
+                let e = &self.goniometric.items[i].intensity;
+                (e.rgb.y, e.radiometric)
+            }
             LightKind::Distant => {
                 let e = &self.distant.items[i].irradiance;
                 (e.rgb.y, e.radiometric)
             }
-            other => unreachable!("no block for {other:?}"),
+            LightKind::UniformInfinite => {
+                let e = &self.uniform_infinite.items[i].radiance;
+                (e.rgb.y, e.radiometric)
+            }
+            LightKind::ImageInfinite => return self.image_infinite.items[i].luminous_phi().max(0.0),
         };
         if radiometric > 0.0 { (self.phi(id) * rgb_y / radiometric).max(0.0) } else { 0.0 }
     }
@@ -70,7 +112,10 @@ impl LightTable {
             LightKind::Point => Some(self.points.get(i).bounds()),
             LightKind::Spot => Some(self.spots.get(i).bounds()),
             LightKind::Distant => None,
-            other => unreachable!("no block for {other:?}"),
+            LightKind::UniformInfinite | LightKind::ImageInfinite => None,
+            LightKind::Projection => Some(self.projection.items[i].bounds()),
+            LightKind::Goniometric => Some(self.goniometric.items[i].bounds()),
+            LightKind::Area => Some(self.area.items[i].light.bounds()),
         }
     }
 
@@ -81,7 +126,11 @@ impl LightTable {
             LightKind::Point => self.points.casts_shadows[i],
             LightKind::Spot => self.spots.casts_shadows[i],
             LightKind::Distant => self.distant.casts_shadows[i],
-            other => unreachable!("no block for {other:?}"),
+            LightKind::UniformInfinite => self.uniform_infinite.casts_shadows[i],
+            LightKind::ImageInfinite => self.image_infinite.casts_shadows[i],
+            LightKind::Projection => self.projection.casts_shadows[i],
+            LightKind::Goniometric => self.goniometric.casts_shadows[i],
+            LightKind::Area => self.area.casts_shadows[i],
         }
     }
 }
@@ -98,6 +147,8 @@ impl LightTable {
     pub fn le(&self, id: LightId, wi: Vec3, query: ColorQuery) -> crate::spectrum::SampledSpectrum {
         match id.kind {
             LightKind::Distant => self.distant.items[id.row as usize].le(wi, query),
+            LightKind::UniformInfinite => self.uniform_infinite.items[id.row as usize].le(wi, query),
+            LightKind::ImageInfinite => self.image_infinite.items[id.row as usize].le(wi, query),
             _ => Default::default(),
         }
     }

@@ -137,7 +137,10 @@ impl ResolvedDistant {
     }
 
     fn in_disc(&self, wi: Vec3) -> bool {
-        1.0 - wi.normalize().dot(self.to_light) <= self.one_minus_cos
+        // sin^2 from a cross product keeps its digits for a sun-sized disc, where 1 - cos in f32
+        // does not; the 1e-4 margin covers the f32 rounding of sampled directions at the rim.
+        let (w, d) = (wi.as_dvec3().normalize(), self.to_light.as_dvec3());
+        w.dot(d) > 0.0 && w.cross(d).length_squared() <= self.sin2_half_angle as f64 * (1.0 + 1e-4)
     }
 
     /// Power through the scene's bounding disc, W: E pi R^2.

@@ -7,6 +7,9 @@ use glam::Vec3;
 use super::ColorQuery;
 use crate::spectrum::{SampledSpectrum, Spectrum, rgb_reflectance};
 
+/// Wavelength range of the Mallett-Yuksel basis behind [`rgb_reflectance`], nm.
+const RGB_BASIS_NM: (f64, f64) = (380.0, 780.0);
+
 /// Errors in a light's description; each names the light and the field.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum LightError {
@@ -162,7 +165,10 @@ impl Emitter {
                 let t = [tint.x as f64, tint.y as f64, tint.z as f64];
                 SampledSpectrum(std::array::from_fn(|i| {
                     let l = w.lambda[i] as f64;
-                    (self.spectrum.eval(l) * rgb_reflectance(t, l)) as f32 * self.scale
+                    // The basis ends at 380-780 nm (zero beyond); hold its end values so a white tint
+                    // keeps every sampled wavelength (360-830 nm).
+                    let tint = rgb_reflectance(t, l.clamp(RGB_BASIS_NM.0, RGB_BASIS_NM.1));
+                    (self.spectrum.eval(l) * tint) as f32 * self.scale
                 }))
             }
         }

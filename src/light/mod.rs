@@ -5,10 +5,14 @@
 //! functions on that form. A light is `(LightKind, index)` into per-kind tables; one `match` per
 //! operation, no trait objects on hot paths.
 
+pub mod area;
 mod dispatch;
 pub mod distant;
 pub mod emitter;
+pub mod goniometric;
+pub mod infinite;
 pub mod point;
+pub mod projection;
 pub mod spot;
 pub mod table;
 
@@ -16,9 +20,16 @@ use glam::Vec3;
 
 use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 
+pub use area::{AreaLight, AreaShape, LightTexture, ResolvedArea, ResolvedMesh};
 pub use distant::{DistantLight, ResolvedDistant};
 pub use emitter::{Amount, Emitter, LightError, Quantity};
+pub use goniometric::{GonioProfile, GoniometricLight, ResolvedGoniometric};
+pub use infinite::{
+    EnvLookup, EnvMapTables, EnvTableOptions, ImageInfiniteLight, ResolvedImageInfinite, ResolvedUniformInfinite,
+    UniformInfiniteLight,
+};
 pub use point::{PointLight, ResolvedPoint};
+pub use projection::{ProjectionLight, ResolvedProjection};
 pub use spot::{ResolvedSpot, SpotLight};
 pub use table::{LightId, LightTable};
 
@@ -111,6 +122,20 @@ impl LightFlags {
 }
 
 impl LightKind {
+    /// Position of this kind's block in `LightTable::ids` order.
+    pub const fn order(self) -> usize {
+        match self {
+            Self::Point => 0,
+            Self::Spot => 1,
+            Self::Area => 2,
+            Self::Projection => 3,
+            Self::Goniometric => 4,
+            Self::Distant => 5,
+            Self::UniformInfinite => 6,
+            Self::ImageInfinite => 7,
+        }
+    }
+
     /// The flags of this kind. A distant light with an angular diameter is not delta: see
     /// [`ResolvedDistant::flags`].
     pub const fn flags(self) -> LightFlags {

@@ -170,6 +170,26 @@ impl PointColumns {
         Some(LiSample { radiance, wi: d / r2.sqrt(), pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
     }
 
+    /// [`Self::sample_li`] with the vector to the light, r^2 and 1/r^2 in f64 (the precision knob
+    /// of the accuracy report); positions and results stay f32.
+    pub fn sample_li_f64(&self, row: usize, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
+        let d = self.position[row].as_dvec3() - ctx.p.as_dvec3();
+        let r2 = d.length_squared();
+        if !(r2 > 0.0) || !r2.is_finite() {
+            return None;
+        }
+        let inv_r2 = (1.0 / r2) as f32;
+        let radiance = match query {
+            ColorQuery::Rgb => {
+                let c = self.rgb[row];
+                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0]).scale(inv_r2)
+            }
+            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row]).scale(inv_r2),
+        };
+        let wi = (d / r2.sqrt()).as_vec3();
+        Some(LiSample { radiance, wi, pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
+    }
+
     /// Radiant power of the light at `row`, W.
     pub fn phi(&self, row: usize) -> f32 {
         4.0 * PI * self.radiometric[row]
@@ -209,5 +229,20 @@ impl crate::light::table::Block for PointColumns {
     }
     fn owner(&self, i: usize) -> bevy_ecs::entity::Entity {
         self.owner[i]
+    }
+}
+
+impl PointColumns {
+    /// Sample_Li of light `row` for a batch of points in RGB mode (the SoA batch form): writes the
+    /// direction toward the light and the radiance I / r^2 per point (zero at the light itself).
+    pub fn sample_li_batch_rgb(&self, row: usize, positions: &[Vec3], wi: &mut [Vec3], radiance: &mut [Vec3]) {
+        let (p, rgb) = (self.position[row], self.rgb[row]);
+        for ((x, w), l) in positions.iter().zip(wi.iter_mut()).zip(radiance.iter_mut()) {
+            let d = p - *x;
+            let r2 = d.length_squared();
+            let inv_r2 = if r2 > 0.0 { 1.0 / r2 } else { 0.0 };
+            *w = d * inv_r2.sqrt();
+            *l = rgb * inv_r2;
+        }
     }
 }

@@ -224,6 +224,31 @@ impl SpotColumns {
         Some(LiSample { radiance, wi, pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
     }
 
+    /// [`Self::sample_li`] with the vector to the light, r^2, the cone cosine and 1/r^2 in f64
+    /// (the precision knob of the accuracy report); positions and results stay f32.
+    pub fn sample_li_f64(&self, row: usize, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
+        let d = self.position[row].as_dvec3() - ctx.p.as_dvec3();
+        let r2 = d.length_squared();
+        if !(r2 > 0.0) || !r2.is_finite() {
+            return None;
+        }
+        let wi = d / r2.sqrt();
+        let cos = -wi.dot(self.direction[row].as_dvec3());
+        let f = smooth_step(cos as f32, self.cos_outer[row], self.cos_inner[row]);
+        if f <= 0.0 {
+            return None;
+        }
+        let s = (f as f64 / r2) as f32;
+        let radiance = match query {
+            ColorQuery::Rgb => {
+                let c = self.rgb[row];
+                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0]).scale(s)
+            }
+            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row]).scale(s),
+        };
+        Some(LiSample { radiance, wi: wi.as_vec3(), pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
+    }
+
     /// Radiant power of the light at `row`, W.
     pub fn phi(&self, row: usize) -> f32 {
         self.radiometric[row] * falloff_solid_angle(self.cos_inner[row], self.cos_outer[row])
@@ -272,5 +297,21 @@ impl crate::light::table::Block for SpotColumns {
     }
     fn owner(&self, i: usize) -> bevy_ecs::entity::Entity {
         self.owner[i]
+    }
+}
+
+impl SpotColumns {
+    /// Sample_Li of light `row` for a batch of points in RGB mode (the SoA batch form): direction
+    /// toward the light and radiance I falloff / r^2 per point.
+    pub fn sample_li_batch_rgb(&self, row: usize, positions: &[Vec3], wi: &mut [Vec3], radiance: &mut [Vec3]) {
+        let (p, dir, rgb) = (self.position[row], self.direction[row], self.rgb[row]);
+        let (c0, c1) = (self.cos_outer[row], self.cos_inner[row]);
+        for ((x, w), l) in positions.iter().zip(wi.iter_mut()).zip(radiance.iter_mut()) {
+            let d = p - *x;
+            let r2 = d.length_squared();
+            let inv_r = if r2 > 0.0 { r2.sqrt().recip() } else { 0.0 };
+            *w = d * inv_r;
+            *l = rgb * (smooth_step(-w.dot(dir), c0, c1) * inv_r * inv_r);
+        }
     }
 }

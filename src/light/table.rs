@@ -3,12 +3,13 @@
 //! kinds are rows of their resolved form. Rows stay dense: removal swap-removes and fixes the
 //! entity -> rows map.
 
-use std::collections::HashMap;
-
-use bevy_ecs::entity::Entity;
+use bevy_ecs::entity::{Entity, EntityHashMap};
 use bevy_ecs::resource::Resource;
 
-use super::{LightKind, ResolvedDistant, point::PointColumns, spot::SpotColumns};
+use super::{
+    LightKind, ResolvedArea, ResolvedDistant, ResolvedGoniometric, ResolvedImageInfinite, ResolvedProjection,
+    ResolvedUniformInfinite, point::PointColumns, spot::SpotColumns,
+};
 
 /// A light: its kind and its row in that kind's block. Rows move when lights are removed, so a
 /// `LightId` is valid until the next table update.
@@ -31,6 +32,14 @@ impl<T> Default for Rows<T> {
     fn default() -> Self {
         Self { items: Vec::new(), owner: Vec::new(), casts_shadows: Vec::new() }
     }
+}
+
+/// One emitting shape of an area light: a sphere, disk or rectangle (primitive 0), or one
+/// triangle of a mesh (its index in the mesh).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AreaRow {
+    pub light: ResolvedArea,
+    pub primitive: u32,
 }
 
 /// Operations every block supports, so the table's bookkeeping is written once.
@@ -74,8 +83,16 @@ impl<T> Block for Rows<T> {
 pub struct LightTable {
     pub points: PointColumns,
     pub spots: SpotColumns,
+    pub area: Rows<AreaRow>,
+    pub projection: Rows<ResolvedProjection>,
+    pub goniometric: Rows<ResolvedGoniometric>,
     pub distant: Rows<ResolvedDistant>,
-    rows_of: HashMap<Entity, Vec<LightId>>,
+    pub uniform_infinite: Rows<ResolvedUniformInfinite>,
+    pub image_infinite: Rows<ResolvedImageInfinite>,
+    /// Image lights sample their MIS-compensated tables (valid only when the caller combines light
+    /// samples with BSDF samples by MIS); set from `Settings::mis` by the sampling system.
+    pub mis_compensation: bool,
+    rows_of: EntityHashMap<Vec<LightId>>,
     /// Bumped on every change; samplers compare it to know when to update.
     pub generation: u64,
     /// Set when a light was added, removed or changed its power since the flags were cleared.
@@ -102,11 +119,30 @@ macro_rules! for_block {
                 let $b = &mut $table.spots;
                 $body
             }
+            LightKind::Area => {
+                let $b = &mut $table.area;
+                $body
+            }
+            LightKind::Projection => {
+                let $b = &mut $table.projection;
+                $body
+            }
+            LightKind::Goniometric => {
+                let $b = &mut $table.goniometric;
+                $body
+            }
             LightKind::Distant => {
                 let $b = &mut $table.distant;
                 $body
             }
-            other => unreachable!("no block for {other:?}"),
+            LightKind::UniformInfinite => {
+                let $b = &mut $table.uniform_infinite;
+                $body
+            }
+            LightKind::ImageInfinite => {
+                let $b = &mut $table.image_infinite;
+                $body
+            }
         }
     };
 }
@@ -114,7 +150,14 @@ macro_rules! for_block {
 impl LightTable {
     /// Number of lights (rows) of every kind.
     pub fn len(&self) -> usize {
-        self.points.len() + self.spots.len() + self.distant.len()
+        self.points.len()
+            + self.spots.len()
+            + self.area.len()
+            + self.projection.len()
+            + self.goniometric.len()
+            + self.distant.len()
+            + self.uniform_infinite.len()
+            + self.image_infinite.len()
     }
     /// True with no lights.
     pub fn is_empty(&self) -> bool {
@@ -133,7 +176,12 @@ impl LightTable {
         let block = |kind, n: usize| (0..n as u32).map(move |row| LightId { kind, row });
         block(LightKind::Point, self.points.len())
             .chain(block(LightKind::Spot, self.spots.len()))
+            .chain(block(LightKind::Area, self.area.len()))
+            .chain(block(LightKind::Projection, self.projection.len()))
+            .chain(block(LightKind::Goniometric, self.goniometric.len()))
             .chain(block(LightKind::Distant, self.distant.len()))
+            .chain(block(LightKind::UniformInfinite, self.uniform_infinite.len()))
+            .chain(block(LightKind::ImageInfinite, self.image_infinite.len()))
     }
     /// The entity that owns light `id`.
     pub fn owner(&self, id: LightId) -> Entity {
@@ -141,8 +189,12 @@ impl LightTable {
         match id.kind {
             LightKind::Point => self.points.owner(i),
             LightKind::Spot => self.spots.owner(i),
+            LightKind::Area => self.area.owner(i),
+            LightKind::Projection => self.projection.owner(i),
+            LightKind::Goniometric => self.goniometric.owner(i),
             LightKind::Distant => self.distant.owner(i),
-            other => unreachable!("no block for {other:?}"),
+            LightKind::UniformInfinite => self.uniform_infinite.owner(i),
+            LightKind::ImageInfinite => self.image_infinite.owner(i),
         }
     }
 
@@ -164,6 +216,76 @@ impl LightTable {
     /// See [`Self::upsert_point`].
     pub fn upsert_distant(&mut self, entity: Entity, row: ResolvedDistant, casts_shadows: bool, power_changed: bool) {
         self.upsert(entity, LightKind::Distant, power_changed, |t| &mut t.distant, row, casts_shadows);
+    }
+
+    /// Inserts or replaces the area-light rows of `entity` (one per emitting shape or triangle,
+    /// in increasing `primitive` order): in place when the count is unchanged (a moving light).
+    pub fn upsert_area(&mut self, entity: Entity, rows: Vec<AreaRow>, casts_shadows: bool, power_changed: bool) {
+        self.generation += 1;
+        let same = self
+            .rows_of
+            .get(&entity)
+            .is_some_and(|ids| ids.len() == rows.len() && ids.iter().all(|id| id.kind == LightKind::Area));
+        if same {
+            let ids = self.rows_of[&entity].clone();
+            for (id, row) in ids.iter().zip(rows) {
+                self.area.set(id.row as usize, row, casts_shadows);
+            }
+            self.moved = true;
+            self.powers_changed |= power_changed;
+            return;
+        }
+        self.remove(entity);
+        if rows.is_empty() {
+            return;
+        }
+        let first = self.area.len() as u32;
+        let n = rows.len() as u32;
+        for row in rows {
+            self.area.push(entity, row, casts_shadows);
+        }
+        self.rows_of.insert(entity, (first..first + n).map(|row| LightId { kind: LightKind::Area, row }).collect());
+        self.powers_changed = true;
+    }
+
+    /// The area light on `entity`'s `primitive` (its triangle index, 0 for shapes), if any.
+    pub fn area_light_at(&self, entity: Entity, primitive: u32) -> Option<LightId> {
+        let ids = self.rows_of.get(&entity)?;
+        let k = ids
+            .binary_search_by_key(&primitive, |id| {
+                if id.kind == LightKind::Area { self.area.items[id.row as usize].primitive } else { u32::MAX }
+            })
+            .ok()?;
+        Some(ids[k])
+    }
+
+    /// See [`Self::upsert_point`].
+    pub fn upsert_projection(
+        &mut self,
+        entity: Entity,
+        row: ResolvedProjection,
+        casts_shadows: bool,
+        power_changed: bool,
+    ) {
+        self.upsert(entity, LightKind::Projection, power_changed, |t| &mut t.projection, row, casts_shadows);
+    }
+    /// See [`Self::upsert_point`].
+    pub fn upsert_goniometric(
+        &mut self,
+        entity: Entity,
+        row: ResolvedGoniometric,
+        casts_shadows: bool,
+        power_changed: bool,
+    ) {
+        self.upsert(entity, LightKind::Goniometric, power_changed, |t| &mut t.goniometric, row, casts_shadows);
+    }
+    /// See [`Self::upsert_point`].
+    pub fn upsert_uniform_infinite(&mut self, entity: Entity, row: ResolvedUniformInfinite, power_changed: bool) {
+        self.upsert(entity, LightKind::UniformInfinite, power_changed, |t| &mut t.uniform_infinite, row, true);
+    }
+    /// See [`Self::upsert_point`].
+    pub fn upsert_image_infinite(&mut self, entity: Entity, row: ResolvedImageInfinite, power_changed: bool) {
+        self.upsert(entity, LightKind::ImageInfinite, power_changed, |t| &mut t.image_infinite, row, true);
     }
 
     fn upsert<B: Block>(
@@ -218,6 +340,26 @@ impl LightTable {
         self.powers_changed = true;
         self.rows_reordered = true;
         ids.len()
+    }
+
+    /// Where each kind's rows start in the order of [`Self::ids`], indexed by
+    /// [`LightKind::order`]: light `id` is number `offsets[id.kind.order()] + id.row`.
+    pub fn kind_offsets(&self) -> [u32; 8] {
+        let lengths = [
+            self.points.len(),
+            self.spots.len(),
+            self.area.len(),
+            self.projection.len(),
+            self.goniometric.len(),
+            self.distant.len(),
+            self.uniform_infinite.len(),
+            self.image_infinite.len(),
+        ];
+        let mut offsets = [0u32; 8];
+        for k in 1..8 {
+            offsets[k] = offsets[k - 1] + lengths[k - 1] as u32;
+        }
+        offsets
     }
 
     /// Clears the change flags (after samplers have caught up).

@@ -2,8 +2,6 @@
 //! sample. pbrt-v4 weighs by radiometric power over visible wavelengths; luminous power is the
 //! same idea weighted by what the eye (and the photometric image) sees.
 
-use std::collections::HashMap;
-
 use crate::light::{LightId, LightTable};
 use crate::sampling::AliasTable;
 
@@ -12,7 +10,8 @@ use crate::sampling::AliasTable;
 pub struct PowerSampler {
     ids: Vec<LightId>,
     alias: AliasTable,
-    index_of: HashMap<LightId, u32>,
+    /// `LightTable::kind_offsets` when built: maps a light to its alias-table index.
+    offsets: [u32; 8],
     generation: u64,
 }
 
@@ -21,8 +20,7 @@ impl PowerSampler {
     pub fn build(table: &LightTable) -> Self {
         let ids: Vec<LightId> = table.ids().collect();
         let weights: Vec<f32> = ids.iter().map(|&id| table.luminous_power(id)).collect();
-        let index_of = ids.iter().enumerate().map(|(i, &id)| (id, i as u32)).collect();
-        Self { alias: AliasTable::new(&weights), ids, index_of, generation: table.generation }
+        Self { alias: AliasTable::new(&weights), ids, offsets: table.kind_offsets(), generation: table.generation }
     }
 
     /// Rebuilds the alias table when powers changed (lights added, removed, or re-powered); a
@@ -52,6 +50,7 @@ impl PowerSampler {
 
     /// Probability of choosing `light`.
     pub fn pmf(&self, light: LightId) -> f32 {
-        self.index_of.get(&light).map_or(0.0, |&i| self.alias.pmf(i as usize))
+        let i = (self.offsets[light.kind.order()] + light.row) as usize;
+        if self.ids.get(i) == Some(&light) { self.alias.pmf(i) } else { 0.0 }
     }
 }

@@ -72,3 +72,34 @@ impl PinholeCamera {
         (self.width, self.height)
     }
 }
+
+/// A camera at a point that sees every direction: pixel (x, y) of a `width` x `height` image looks
+/// along `scene::image::lat_long_direction` of the pixel's (u, v), so its render is a lat-long
+/// radiance map that an `ImageInfiniteLight` can use directly (pbrt's `EnvironmentCamera`).
+#[derive(Component, Clone, Copy, Debug, PartialEq, Default)]
+pub struct EnvironmentCamera;
+
+/// How primary rays leave the camera.
+#[derive(Clone, Copy, Debug)]
+pub enum CameraModel {
+    Pinhole(PinholeCamera),
+    /// An environment camera at `origin` rendering a `width` x `height` lat-long map.
+    LatLong {
+        origin: Vec3,
+        width: u32,
+        height: u32,
+    },
+}
+
+impl CameraModel {
+    /// The ray through pixel (x, y) at `offset` within it.
+    pub fn ray(&self, x: u32, y: u32, offset: Vec2) -> Ray {
+        match *self {
+            Self::Pinhole(c) => c.ray(x, y, offset),
+            Self::LatLong { origin, width, height } => {
+                let uv = Vec2::new((x as f32 + offset.x) / width as f32, (y as f32 + offset.y) / height as f32);
+                Ray::new(origin, crate::scene::image::lat_long_direction(uv))
+            }
+        }
+    }
+}

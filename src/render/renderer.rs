@@ -6,7 +6,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::camera::{Camera, PinholeCamera};
+use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::film::Film;
 use super::material::Material;
 use crate::geometry::{Hit, Ray, SceneBvh, closest_hits};
@@ -22,19 +22,50 @@ const BATCH_SAMPLES: usize = 1 << 16;
 /// Salt that keeps the renderer's random dimensions apart from the light systems'.
 const RENDER_SALT: u64 = 0x5eed_ca3e_7a11_0b0e;
 
+/// How direct light is estimated at a surface point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Strategy {
+    /// Light and BSDF samples combined by the power heuristic (Veach 1997, ch. 9).
+    #[default]
+    Mis,
+    /// Light samples only.
+    LightOnly,
+    /// BSDF samples only. Delta lights keep their light samples (no BSDF sample can find them).
+    BsdfOnly,
+}
+
+impl Strategy {
+    /// Weight of a light sample of a non-delta light (pdfs of both strategies for its direction).
+    fn light_weight(self, light_pdf: f32, bsdf_pdf: f32) -> f32 {
+        match self {
+            Self::Mis => power_heuristic(light_pdf, bsdf_pdf),
+            Self::LightOnly => 1.0,
+            Self::BsdfOnly => 0.0,
+        }
+    }
+    /// Weight of a BSDF sample that reached a light.
+    fn bsdf_weight(self, bsdf_pdf: f32, light_pdf: f32) -> f32 {
+        match self {
+            Self::Mis => power_heuristic(bsdf_pdf, light_pdf),
+            Self::LightOnly => 0.0,
+            Self::BsdfOnly => 1.0,
+        }
+    }
+}
+
 /// What to render.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderOptions {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
-    /// Multiple importance sampling between light and BSDF sampling (else light sampling only).
-    pub mis: bool,
+    /// How light and BSDF samples are combined. Defaults to MIS.
+    pub strategy: Strategy,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { width: 256, height: 256, spp: 16, mis: true }
+        Self { width: 256, height: 256, spp: 16, strategy: Strategy::Mis }
     }
 }
 
@@ -68,6 +99,9 @@ fn to_rgb(v: SampledSpectrum, wavelengths: Option<&SampledWavelengths>) -> Vec3 
     }
 }
 
+/// The material of geometry that has none.
+static DEFAULT_MATERIAL: std::sync::LazyLock<Material> = std::sync::LazyLock::new(Material::default);
+
 /// Everything about a camera sample that the shading pass needs.
 #[derive(Clone, Copy)]
 struct CameraSample {
@@ -89,19 +123,48 @@ fn find_camera(world: &mut World, width: u32, height: u32) -> PinholeCamera {
     PinholeCamera::new(&c, &t, width, height)
 }
 
-/// Renders the world's scene. The world must have had `LightingPlugin::build` applied to it and
-/// `schedule`; `Settings` choose colour mode, light sampler and selection.
+/// Renders the world's scene through its camera (the first `Camera`, or one framing the scene).
+/// The world must have had `LightingPlugin::build` applied to it and `schedule`; `Settings`
+/// choose colour mode, light sampler and selection.
 pub fn render(
     world: &mut World,
     schedule: &mut Schedule,
     opts: &RenderOptions,
+    progress: impl FnMut(f32),
+) -> (Film, RenderStats) {
+    render_with(world, schedule, opts, None, progress)
+}
+
+/// Renders a lat-long radiance map seen from `origin` (an environment camera): a `width` x
+/// `height` image whose pixels are radiance (nit) along `lat_long_direction`, ready to light
+/// another scene as an `ImageInfiniteLight` (with scale 1 and a white spectrum).
+pub fn render_environment(
+    world: &mut World,
+    schedule: &mut Schedule,
+    origin: Vec3,
+    opts: &RenderOptions,
+) -> (crate::scene::image::RgbImage, RenderStats) {
+    let model = CameraModel::LatLong { origin, width: opts.width, height: opts.height };
+    let (film, stats) = render_with(world, schedule, opts, Some(model), |_| {});
+    let (width, height) = (opts.width as usize, opts.height as usize);
+    (crate::scene::image::RgbImage { width, height, pixels: film.pixels() }, stats)
+}
+
+/// Renders through `camera`, or the world's camera when None.
+pub fn render_with(
+    world: &mut World,
+    schedule: &mut Schedule,
+    opts: &RenderOptions,
+    camera: Option<CameraModel>,
     mut progress: impl FnMut(f32),
 ) -> (Film, RenderStats) {
     let start = std::time::Instant::now();
+    // Compensated env tables only pay off when BSDF samples cover the dim part of the sky.
+    world.resource_mut::<Settings>().mis = opts.strategy == Strategy::Mis;
     // One update brings the BVH and light tables up to date before cameras are placed.
     world.resource_mut::<ShadingBatch>().clear();
     schedule.run(world);
-    let camera = find_camera(world, opts.width, opts.height);
+    let camera = camera.unwrap_or_else(|| CameraModel::Pinhole(find_camera(world, opts.width, opts.height)));
     let materials: Vec<Material> = {
         let entities = world.resource::<GeometryIndex>().entities.clone();
         entities.iter().map(|&e| world.get::<Material>(e).cloned().unwrap_or_default()).collect()
@@ -122,13 +185,16 @@ pub fn render(
         let last = (first + BATCH_SAMPLES).min(total);
         // Sample index s of pixel p is camera sample p * spp + s: a pixel's samples are adjacent.
         samples.clear();
-        samples.extend((first..last).map(|k| {
-            let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
-            let mut rng = SampleStream::new(seed, pixel, sample);
-            let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
-            let wavelengths = spectral.then(|| SampledWavelengths::sample_visible(rng.next_f32()));
-            CameraSample { pixel, sample, ray, hit: None, wavelengths }
-        }));
+        (first..last)
+            .into_par_iter()
+            .map(|k| {
+                let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
+                let mut rng = SampleStream::new(seed, pixel, sample);
+                let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
+                let wavelengths = spectral.then(|| SampledWavelengths::sample_visible(rng.next_f32()));
+                CameraSample { pixel, sample, ray, hit: None, wavelengths }
+            })
+            .collect_into_vec(&mut samples);
         rays.clear();
         rays.extend(samples.iter().map(|s| s.ray));
         closest_hits(world.resource::<SceneBvh>(), &rays, &mut hits);
@@ -160,12 +226,15 @@ pub fn render(
             lighting: world_ref.resource::<DirectLighting>(),
             batch: world_ref.resource::<ShadingBatch>(),
             bvh: world_ref.resource::<SceneBvh>(),
+            geometry: world_ref.resource::<GeometryIndex>(),
             materials: &materials,
             seed,
-            mis: opts.mis,
+            strategy: opts.strategy,
+            offset: settings.shadow_offset,
             all_lights: settings.selection == crate::shading::LightSelection::All,
         };
         let escape_ids: Vec<_> = shade.table.escape_lights().collect();
+        let bsdf_sampling = opts.strategy != Strategy::LightOnly && shade.table.has_non_delta_lights();
         contributions.clear();
         contributions.resize(samples.len(), Vec3::ZERO);
         // Escaped camera rays see the infinite lights directly.
@@ -176,8 +245,11 @@ pub fn render(
                 .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.ray.dir, query)));
             *c = to_rgb(le, s.wavelengths.as_ref());
         }
-        let shaded_values: Vec<(Vec3, bool)> =
-            shaded.par_iter().enumerate().map(|(j, &i)| shade.shade(j, &samples[i], &escape_ids)).collect();
+        let shaded_values: Vec<(Vec3, bool)> = shaded
+            .par_iter()
+            .enumerate()
+            .map(|(j, &i)| shade.shade(j, &samples[i], &escape_ids, bsdf_sampling))
+            .collect();
         for (&i, (rgb, traced)) in shaded.iter().zip(shaded_values) {
             contributions[i] = rgb;
             stats.bsdf_rays += traced as u64;
@@ -200,9 +272,12 @@ struct ShadeContext<'a> {
     lighting: &'a DirectLighting,
     batch: &'a ShadingBatch,
     bvh: &'a SceneBvh,
+    geometry: &'a GeometryIndex,
     materials: &'a [Material],
     seed: u64,
-    mis: bool,
+    strategy: Strategy,
+    /// How BSDF rays leave the surface (as shadow rays do).
+    offset: crate::geometry::ShadowOffset,
     /// Every light is sampled for every point (pmf 1) rather than one chosen by the sampler.
     all_lights: bool,
 }
@@ -210,40 +285,65 @@ struct ShadeContext<'a> {
 impl ShadeContext<'_> {
     /// Direct light at batch point `j` (camera sample `s`): the light system's samples weighted by
     /// MIS, plus one BSDF sample toward non-delta lights. Returns RGB and whether a ray was traced.
-    fn shade(&self, j: usize, s: &CameraSample, escape_ids: &[crate::light::LightId]) -> (Vec3, bool) {
+    /// The area light `hit` landed on and its radiance toward `w` (unit, away from the surface).
+    fn emitted(&self, hit: &Hit, w: Vec3, query: ColorQuery) -> Option<(crate::light::LightId, SampledSpectrum)> {
+        let entity = *self.geometry.entities.get(hit.instance as usize)?;
+        let id = self.table.area_light_at(entity, hit.id.primitive)?;
+        let light = &self.table.area.items[id.row as usize].light;
+        Some((id, light.radiance(hit.p, hit.ng, hit.uv, w, query)))
+    }
+
+    fn shade(
+        &self,
+        j: usize,
+        s: &CameraSample,
+        escape_ids: &[crate::light::LightId],
+        bsdf_sampling: bool,
+    ) -> (Vec3, bool) {
         let hit = s.hit.expect("shaded samples have hits");
         let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
         let wo = -s.ray.dir.normalize();
         let ns = self.batch.shading_normal[j];
-        let material = self.materials.get(hit.material as usize).cloned().unwrap_or_default();
-        let bsdf = material.bsdf(hit.uv, ns, query);
-        let mut l = SampledSpectrum::default();
+        let bsdf = match self.materials.get(hit.material as usize) {
+            Some(m) => m.bsdf(hit.uv, ns, query),
+            None => DEFAULT_MATERIAL.bsdf(hit.uv, ns, query),
+        };
+        // Light the camera sees on emitters directly.
+        let mut l = self.emitted(&hit, wo, query).map_or(SampledSpectrum::default(), |(_, le)| le);
         for e in self.lighting.entries(j) {
             let (li, wi, pdf) = (self.lighting.radiance[e], self.lighting.wi[e], self.lighting.pdf[e]);
             if pdf <= 0.0 {
                 continue;
             }
             let f = bsdf.f(wo, wi);
-            let w = if self.lighting.delta[e] || !self.mis { 1.0 } else { power_heuristic(pdf, bsdf.pdf(wo, wi)) };
+            let w = if self.lighting.delta[e] { 1.0 } else { self.strategy.light_weight(pdf, bsdf.pdf(wo, wi)) };
+            if w == 0.0 {
+                continue;
+            }
             l = l.add(f.mul(li).scale(wi.dot(ns).abs() * w / pdf));
         }
         let mut traced = false;
-        if self.mis && !escape_ids.is_empty() {
+        if bsdf_sampling {
             let mut rng = SampleStream::new(self.seed, s.pixel, s.sample).at_dimension(16);
             if let Some(bs) = bsdf.sample(wo, rng.next_f32(), rng.next_2d()) {
                 traced = true;
                 let from = crate::geometry::SurfacePoint { p: hit.p, p_error: hit.p_error, n: self.batch.normal[j] };
-                let ray = from.spawn_ray(bs.wi);
-                if self.bvh.closest_hit(&ray).is_none() {
-                    let ctx = LightSampleContext { p: hit.p, n: self.batch.normal[j], ns };
+                let ray = self.offset.spawn_ray(&from, bs.wi);
+                let ctx = LightSampleContext { p: hit.p, n: self.batch.normal[j], ns };
+                let pmf = |id| if self.all_lights { 1.0 } else { self.sampler.pmf(&ctx, id) };
+                if let Some(h2) = self.bvh.closest_hit(&ray) {
+                    if let Some((id, le)) = self.emitted(&h2, -bs.wi, query) {
+                        let w = self.strategy.bsdf_weight(bs.pdf, pmf(id) * self.table.pdf_li(id, &ctx, bs.wi));
+                        l = l.add(bs.f.mul(le).scale(bs.wi.dot(ns).abs() * w / bs.pdf));
+                    }
+                } else {
                     for &id in escape_ids {
                         let le = self.table.le(id, bs.wi, query);
                         if le.0.iter().all(|&v| v == 0.0) {
                             continue;
                         }
-                        let pmf = if self.all_lights { 1.0 } else { self.sampler.pmf(&ctx, id) };
-                        let light_pdf = pmf * self.table.pdf_li(id, &ctx, bs.wi);
-                        let w = power_heuristic(bs.pdf, light_pdf);
+                        let light_pdf = pmf(id) * self.table.pdf_li(id, &ctx, bs.wi);
+                        let w = self.strategy.bsdf_weight(bs.pdf, light_pdf);
                         l = l.add(bs.f.mul(le).scale(bs.wi.dot(ns).abs() * w / bs.pdf));
                     }
                 }

@@ -38,7 +38,8 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
-fn register_font() {
+/// Registers the bundled font under "sans-serif" (once).
+pub(crate) fn register_font() {
     static ONCE: Once = Once::new();
     // DejaVu Sans (Bitstream Vera license, see fonts/LICENSE-DejaVu.txt) so PNGs need no system font.
     ONCE.call_once(|| {

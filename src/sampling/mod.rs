@@ -41,7 +41,7 @@ pub enum SamplingError {
 /// The largest f32 below 1: samples are clamped to it so that `floor(u * n) < n`.
 pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
-/// Helpers shared by the unit tests: a deterministic RNG and a chi-square test.
+/// Helpers shared by the unit tests: a deterministic RNG.
 #[cfg(test)]
 pub(crate) mod test_util {
     use glam::Vec2;
@@ -70,26 +70,5 @@ pub(crate) mod test_util {
         pub fn uniform_f64(&mut self) -> f64 {
             (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
         }
-    }
-
-    /// Pearson's statistic of `counts` against `probs` (summing to 1).
-    pub fn chi_square(counts: &[u64], probs: &[f64]) -> f64 {
-        let n: u64 = counts.iter().sum();
-        counts
-            .iter()
-            .zip(probs)
-            .filter(|(_, p)| **p > 0.0)
-            .map(|(&c, &p)| {
-                let e = p * n as f64;
-                (c as f64 - e).powi(2) / e
-            })
-            .sum()
-    }
-
-    /// Upper 1e-5 quantile of chi-square with `dof` degrees of freedom (Wilson-Hilferty 1931).
-    pub fn chi_square_critical(dof: usize) -> f64 {
-        let k = dof as f64;
-        let z = 4.265; // standard normal upper 1e-5 quantile
-        k * (1.0 - 2.0 / (9.0 * k) + z * (2.0 / (9.0 * k)).sqrt()).powi(3)
     }
 }

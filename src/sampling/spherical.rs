@@ -8,7 +8,7 @@
 
 use std::f64::consts::TAU;
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 
 /// Below this solid angle (sr) the rectangle sampler maps the unit square bilinearly onto the
 /// rectangle: there, the angle-sum form of Ureña et al. has lost more digits (relative error
@@ -16,9 +16,10 @@ use glam::{DVec3, Vec2, Vec3};
 const RECT_PLANAR_BELOW_SR: f64 = 1e-10;
 
 /// Solid angle subtended from the origin by the triangle (r1, r2, r3), vectors of any length.
-/// Van Oosterom & Strackee 1983: tan(Omega / 2) = |r1 . (r2 × r3)| / (|r1||r2||r3| + (r1.r2)|r3|
-/// + (r1.r3)|r2| + (r2.r3)|r1|). The triple product is taken over edges (r2 - r1, r3 - r1), which
-/// keeps its digits for tiny triangles; atan2 keeps them for triangles near a hemisphere.
+/// Van Oosterom & Strackee 1983: tan(Omega / 2) = |r1 . (r2 × r3)| / D with
+/// D = |r1||r2||r3| + (r1.r2)|r3| + (r1.r3)|r2| + (r2.r3)|r1|. The triple product is taken over
+/// edges (r2 - r1, r3 - r1), which keeps its digits for tiny triangles; atan2 keeps them for
+/// triangles near a hemisphere.
 fn solid_angle_f64(r1: DVec3, r2: DVec3, r3: DVec3) -> f64 {
     let (l1, l2, l3) = (r1.length(), r2.length(), r3.length());
     let det = r1.dot((r2 - r1).cross(r3 - r1)).abs();
@@ -90,15 +91,15 @@ impl SphericalTriangle {
     /// included angle: tan(E/2) = t k sin(alpha) / (1 + t k cos(alpha)), k = tan(arc a-b / 2),
     /// which gives t = sin(E/2) / (k sin(alpha - E/2)). Since E < 2 alpha for any spherical
     /// triangle, t is finite and >= 0.
-    fn sample(&self, u: Vec2) -> DVec3 {
-        let half = 0.5 * u.x as f64 * self.area;
+    fn sample(&self, u: DVec2) -> DVec3 {
+        let half = 0.5 * u.x * self.area;
         let denom = self.tan_half_ab * (self.alpha - half).sin();
         let t = if denom > 0.0 { (half.sin() / denom).min(self.tan_half_ac) } else { self.tan_half_ac };
         let t2 = t * t;
         let c_p = self.a * ((1.0 - t2) / (1.0 + t2)) + self.toward_c * (2.0 * t / (1.0 + t2));
         // Along b -> c': 1 - cos(theta) = u.y (1 - cos(theta_max)), i.e. sin(theta / 2) =
         // sqrt(u.y) * |c' - b| / 2; the half-angle form keeps its digits for short arcs.
-        let s = (u.y as f64).max(0.0).sqrt() * 0.5 * (c_p - self.b).length();
+        let s = u.y.max(0.0).sqrt() * 0.5 * (c_p - self.b).length();
         let cos_theta = 1.0 - 2.0 * s * s;
         let sin_theta = 2.0 * s * (1.0 - s * s).max(0.0).sqrt();
         let tangent = (c_p - self.b * c_p.dot(self.b)).normalize_or_zero();
@@ -129,13 +130,17 @@ impl SphericalTriangle {
 /// barycentrics `[b0, b1, b2]` (weights of `v[0]`, `v[1]`, `v[2]`) of the point it hits, with the
 /// pdf per steradian, 1 / solid angle (Arvo 1995; pbrt-v4 §6.5.4, made robust as above).
 ///
+/// Corners of the unit square land where pbrt-v4's bilinear pre-warp expects them: u.y = 0 gives
+/// `v[1]`, u = (0, 1) gives `v[0]`, u = (1, 1) gives `v[2]`; so weights
+/// `[cos1, cos1, cos0, cos2]` for [`crate::sampling::sample_bilinear`] approximate cos(theta).
+///
 /// None when the triangle is degenerate as seen from `p`: `p` in its plane or on a vertex, or
 /// collinear vertices. Callers that want to handle tiny or nearly-hemispherical triangles
 /// differently can test [`triangle_solid_angle`] first; this function itself is accurate for
 /// both.
 pub fn sample_spherical_triangle(v: [Vec3; 3], p: Vec3, u: Vec2) -> Option<([f32; 3], f32)> {
     let tri = SphericalTriangle::new(rel(v, p))?;
-    let w = tri.sample(u);
+    let w = tri.sample(u.as_dvec2());
     let b = barycentrics_along_ray(v, p, w)?;
     let pdf = (1.0 / tri.area) as f32;
     pdf.is_finite().then_some((b, pdf))
@@ -207,7 +212,7 @@ impl SphericalRectangle {
     fn new(p_ref: Vec3, corner: Vec3, ex: Vec3, ey: Vec3) -> Option<Self> {
         let (p_ref, corner, ex, ey) = (p_ref.as_dvec3(), corner.as_dvec3(), ex.as_dvec3(), ey.as_dvec3());
         let (exl, eyl) = (ex.length(), ey.length());
-        if !(exl > 0.0 && eyl > 0.0) || !(exl * eyl).is_finite() || ex.dot(ey).abs() > 1e-3 * exl * eyl {
+        if !(exl > 0.0 && eyl > 0.0 && (exl * eyl).is_finite()) || ex.dot(ey).abs() > 1e-3 * exl * eyl {
             return None;
         }
         let x_axis = ex / exl;
@@ -219,8 +224,8 @@ impl SphericalRectangle {
             z_axis = -z_axis;
             z0 = -z0;
         }
-        if !(z0 < 0.0) {
-            return None;
+        if z0 == 0.0 || z0.is_nan() {
+            return None; // the viewpoint is in the rectangle's plane
         }
         let (x1, y1, z) = (x0 + exl, y0 + eyl, -z0);
         // Interior angles at the four corners, as atan2 of the edge planes' normals (Ureña et al.
@@ -263,8 +268,8 @@ impl SphericalRectangle {
         y / (dd2 + y * y).sqrt()
     }
 
-    fn sample(&self, u: Vec2) -> DVec3 {
-        let (u0, u1) = (u.x as f64, u.y as f64);
+    fn sample(&self, u: DVec2) -> DVec3 {
+        let (u0, u1) = (u.x, u.y);
         if self.planar() {
             return self.corner + self.ex * u0 + self.ey * u1;
         }
@@ -317,7 +322,7 @@ impl SphericalRectangle {
 /// (relative distortion ~1e-5), keeping the exact pdf.
 pub fn sample_spherical_rectangle(p_ref: Vec3, corner: Vec3, ex: Vec3, ey: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
     let rect = SphericalRectangle::new(p_ref, corner, ex, ey)?;
-    let q = rect.sample(u);
+    let q = rect.sample(u.as_dvec2());
     Some((q.as_vec3(), (1.0 / rect.solid_angle) as f32))
 }
 
@@ -347,7 +352,7 @@ mod tests {
 
     fn hits_inside(v: [Vec3; 3], p: Vec3, u: Vec2, tol: f64) -> bool {
         let tri = SphericalTriangle::new(rel(v, p)).unwrap();
-        let [b1, b2] = raw_barycentrics(v, p, tri.sample(u)).unwrap();
+        let [b1, b2] = raw_barycentrics(v, p, tri.sample(u.as_dvec2())).unwrap();
         b1 >= -tol && b2 >= -tol && b1 + b2 <= 1.0 + tol
     }
 
@@ -371,14 +376,61 @@ mod tests {
         }
     }
 
+    /// |dw/du0 × dw/du1| by f64 central differences with step `h`.
+    fn direction_jacobian(f: impl Fn(DVec2) -> DVec3, u: DVec2, h: f64) -> f64 {
+        let du = (f(u + DVec2::X * h) - f(u - DVec2::X * h)) / (2.0 * h);
+        let dv = (f(u + DVec2::Y * h) - f(u - DVec2::Y * h)) / (2.0 * h);
+        du.cross(dv).length()
+    }
+
+    #[test]
+    fn f64_maps_have_constant_jacobian_near_2pi_and_tiny() {
+        // Steps: small where the near-2pi maps curve sharply near the viewpoint's foot; larger for
+        // tiny polygons, whose directions move by only ~1e-4 over the square and whose f64 maps
+        // jitter by ~1e-8 of their width (the rectangle's angle sum at 1e-8 sr), below f32 output.
+        let tri_cases = [
+            (
+                [Vec3::new(-1.0, -0.6, 0.0), Vec3::new(1.0, -0.6, 0.0), Vec3::new(0.0, 1.0, 0.0)],
+                Vec3::new(0.0, 0.0, 1e-3),
+                1e-6,
+            ),
+            (
+                [Vec3::ZERO, Vec3::new(1.4e-4, 0.0, 0.0), Vec3::new(0.3e-4, 1.4e-4, 0.0)],
+                Vec3::new(0.5e-4, 0.3e-4, 1.0),
+                1e-4,
+            ),
+        ];
+        let mut rng = Rng::new(17);
+        for (v, p, h) in tri_cases {
+            let tri = SphericalTriangle::new(rel(v, p)).unwrap();
+            for _ in 0..2000 {
+                let u = DVec2::new(rng.uniform_f64(), rng.uniform_f64()) * 0.9 + 0.05;
+                let j = direction_jacobian(|u| tri.sample(u), u, h);
+                assert!((j / tri.area - 1.0).abs() < 1e-5, "{v:?} at {u}: {j} vs {}", tri.area);
+            }
+        }
+        let rect_cases = [
+            (Vec3::new(0.1, 0.2, 1e-3), Vec3::new(-1.0, -1.0, 0.0), Vec3::X * 2.0, Vec3::Y * 2.0, 1e-6),
+            (Vec3::new(0.3e-4, -0.2e-4, 1.0), Vec3::ZERO, Vec3::X * 1e-4, Vec3::Y * 1e-4, 1e-2),
+        ];
+        for (p, corner, ex, ey, h) in rect_cases {
+            let rect = SphericalRectangle::new(p, corner, ex, ey).unwrap();
+            for _ in 0..2000 {
+                let u = DVec2::new(rng.uniform_f64(), rng.uniform_f64()) * 0.9 + 0.05;
+                let j = direction_jacobian(|u| (rect.sample(u) - rect.p_ref).normalize(), u, h);
+                assert!((j / rect.solid_angle - 1.0).abs() < 1e-5, "rect at {u}: {j} vs {}", rect.solid_angle);
+            }
+        }
+    }
+
     #[test]
     fn triangle_arcs_end_where_arvo_says() {
         // u = (1, 1) must reach vertex c, u.y = 0 vertex b, u.x = 0 the arc b-a.
         let v = [Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 1.5)];
         let tri = SphericalTriangle::new(rel(v, Vec3::ZERO)).unwrap();
-        assert!((tri.sample(Vec2::ONE) - tri.c).length() < 1e-12);
-        assert!((tri.sample(Vec2::new(0.4, 0.0)) - tri.b).length() < 1e-12);
-        assert!((tri.sample(Vec2::new(0.0, 1.0)) - tri.a).length() < 1e-12);
+        assert!((tri.sample(DVec2::ONE) - tri.c).length() < 1e-12);
+        assert!((tri.sample(DVec2::new(0.4, 0.0)) - tri.b).length() < 1e-12);
+        assert!((tri.sample(DVec2::new(0.0, 1.0)) - tri.a).length() < 1e-12);
     }
 
     #[test]

@@ -335,7 +335,8 @@ fn decode_with_image_crate(
     Ok(RgbImage { width, height, pixels })
 }
 
-/// OpenEXR through the `exr` crate: headers are checked before any pixel is decoded.
+/// OpenEXR through the `exr` crate: headers are checked before any pixel is decoded; blocks are decompressed on
+/// this thread.
 fn decode_exr(bytes: &[u8], what: &str) -> Result<RgbImage, ImageError> {
     use exr::prelude::{FlatSamples, ReadChannels, ReadLayers};
     let decode_error =
@@ -351,6 +352,9 @@ fn decode_exr(bytes: &[u8], what: &str) -> Result<RgbImage, ImageError> {
         .all_channels()
         .all_layers()
         .all_attributes()
+        // On the calling thread: a panic in the crate's own thread pool aborts the process, out of reach of
+        // load_image_from_bytes' catch_unwind (found by fuzzing a B44 block).
+        .non_parallel()
         .from_buffered(Cursor::new(bytes))
         .map_err(decode_error)?;
 

@@ -7,6 +7,7 @@
 pub mod cct;
 pub mod cie;
 pub mod color;
+pub mod lab;
 mod parse;
 pub mod photometry;
 pub mod planck;

@@ -1,0 +1,213 @@
+//! `kelvin render [SCENE] [-o out.exr] [--spp N] [--size WxH] [--env map [--env-intensity X]]
+//! [--light-sampler uniform|power|bvh] [--color rgb|spectral] [--seed S] [--threads T] [--report]`.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use bevy_ecs::prelude::*;
+use indicatif::{ProgressBar, ProgressStyle};
+use kelvin::geometry::Transform;
+use kelvin::light::ImageInfiniteLight;
+use kelvin::render::camera::CameraModel;
+use kelvin::render::film_io::{write_exr, write_png};
+use kelvin::render::renderer::{RenderOptions, Strategy, render_with};
+use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, RunReport, Settings};
+use kelvin::systems::LightingPlugin;
+
+use super::CliError;
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum SamplerArg {
+    Uniform,
+    Power,
+    Bvh,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ColorArg {
+    Rgb,
+    Spectral,
+}
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// glTF scene (.gltf or .glb); the embedded default scene when absent.
+    scene: Option<PathBuf>,
+    /// Output image: .exr (linear, photometric) or .png (tone-mapped). An .exr also gets a .png preview.
+    #[arg(short, long, default_value = "render.exr")]
+    output: PathBuf,
+    /// Camera samples per pixel.
+    #[arg(long, default_value_t = 16)]
+    spp: u32,
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Lat-long environment map (.exr or .hdr) lighting the scene as an infinite light.
+    #[arg(long)]
+    env: Option<PathBuf>,
+    /// Luminance (nit) of an environment texel of value 1.
+    #[arg(long, default_value_t = 1.0)]
+    env_intensity: f32,
+    /// How a light is chosen per sample.
+    #[arg(long, value_enum, default_value = "power")]
+    light_sampler: SamplerArg,
+    /// Colour mode.
+    #[arg(long, value_enum, default_value = "rgb")]
+    color: ColorArg,
+    /// Sample every light at every point instead of one chosen light.
+    #[arg(long)]
+    all_lights: bool,
+    /// Light sampling only (no MIS with BSDF sampling).
+    #[arg(long)]
+    no_mis: bool,
+    /// Seed of the random numbers.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (default: all cores). Output is bit-identical for any count.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// PNG exposure in stops; automatic (mean log luminance to 18% grey) when absent.
+    #[arg(long)]
+    exposure: Option<f32>,
+    /// Render a lat-long radiance map seen from this point (an environment camera), e.g. 0,1,0,
+    /// instead of the scene's camera; the EXR can light another scene with --env.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point)]
+    environment_at: Option<glam::Vec3>,
+    /// Print which systems ran and why others were skipped.
+    #[arg(long)]
+    report: bool,
+}
+
+fn parse_point(s: &str) -> Result<glam::Vec3, String> {
+    let v: Vec<f32> = s.split(',').filter_map(|c| c.trim().parse().ok()).collect();
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err(format!("'{s}': expected three numbers X,Y,Z")),
+    }
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT, e.g. 512x512"))?;
+    let parse = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
+    match (parse(w), parse(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("'{s}': width and height must be whole numbers in 1..=16384")),
+    }
+}
+
+/// Builds the world: settings, the scene (file or default) and the optional environment light.
+fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    world.insert_resource(Settings {
+        color_mode: match args.color {
+            ColorArg::Rgb => ColorMode::Rgb,
+            ColorArg::Spectral => ColorMode::Spectral,
+        },
+        light_sampler: match args.light_sampler {
+            SamplerArg::Uniform => LightSamplerKind::Uniform,
+            SamplerArg::Power => LightSamplerKind::Power,
+            SamplerArg::Bvh => LightSamplerKind::Bvh,
+        },
+        selection: if args.all_lights { LightSelection::All } else { LightSelection::OneSampled },
+        seed: args.seed,
+        ..Default::default()
+    });
+    LightingPlugin::build(&mut world, &mut schedule);
+    match &args.scene {
+        Some(path) => {
+            let scene = kelvin::scene::gltf::load_gltf(path)?;
+            let report = kelvin::scene::spawn::spawn_gltf(&mut world, &scene);
+            for w in &report.warnings {
+                eprintln!("warning: {w}");
+            }
+            eprintln!(
+                "scene {}: {} meshes ({} triangles, {} emissive), {} lights, {} cameras",
+                path.display(),
+                report.meshes,
+                report.triangles,
+                report.emissive_meshes,
+                report.lights,
+                report.cameras
+            );
+        }
+        None => kelvin::scenes::default_scene::spawn_default_scene(&mut world),
+    }
+    if let Some(path) = &args.env {
+        let loaded = kelvin::scene::image::load_image(path)?;
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+        let mut light = ImageInfiniteLight::new(Arc::new(loaded.image));
+        light.scale = args.env_intensity;
+        world.spawn((light, Transform::IDENTITY));
+    }
+    Ok((world, schedule))
+}
+
+/// Exposure (stops) that maps the log-average luminance to 18% grey.
+fn auto_exposure(rgb: &[glam::Vec3]) -> f32 {
+    let ys: Vec<f64> =
+        rgb.iter().map(|c| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64).filter(|y| *y > 0.0).collect();
+    if ys.is_empty() {
+        return 0.0;
+    }
+    let log_mean = ys.iter().map(|y| y.ln()).sum::<f64>() / ys.len() as f64;
+    (0.18f64 / log_mean.exp()).log2() as f32
+}
+
+fn write_outputs(path: &Path, w: u32, h: u32, rgb: &[glam::Vec3], exposure: f32) -> Result<(), CliError> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    match ext.as_str() {
+        "exr" => {
+            write_exr(path, w as usize, h as usize, rgb)?;
+            let preview = path.with_extension("png");
+            write_png(&preview, w as usize, h as usize, rgb, exposure)?;
+            eprintln!("wrote {} and {}", path.display(), preview.display());
+        }
+        "png" => {
+            write_png(path, w as usize, h as usize, rgb, exposure)?;
+            eprintln!("wrote {}", path.display());
+        }
+        _ => return Err(format!("{}: unsupported output extension; use .exr or .png", path.display()).into()),
+    }
+    Ok(())
+}
+
+pub fn run(args: RenderArgs) -> Result<(), CliError> {
+    if let Some(t) = args.threads {
+        rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global()?;
+    }
+    let (mut world, mut schedule) = build_world(&args)?;
+    let (width, height) = args.size;
+    let opts = RenderOptions {
+        width,
+        height,
+        spp: args.spp.max(1),
+        strategy: if args.no_mis { Strategy::LightOnly } else { Strategy::Mis },
+    };
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta}").expect("valid template"),
+    );
+    let camera = args.environment_at.map(|origin| CameraModel::LatLong { origin, width, height });
+    let (film, stats) =
+        render_with(&mut world, &mut schedule, &opts, camera, |f| bar.set_position((f * 1000.0) as u64));
+    bar.finish_and_clear();
+    if args.report {
+        eprint!("{}", world.resource::<RunReport>());
+    }
+    let rgb = film.pixels();
+    let exposure = args.exposure.unwrap_or_else(|| auto_exposure(&rgb));
+    write_outputs(&args.output, width, height, &rgb, exposure)?;
+    let secs = stats.seconds.max(1e-9);
+    println!(
+        "rendered {width}x{height} at {} spp in {:.3} s: {:.2} M samples/s, {:.2} M shadow rays/s, {:.2} M BSDF rays/s",
+        opts.spp,
+        stats.seconds,
+        stats.camera_samples as f64 / secs / 1e6,
+        stats.shadow_rays as f64 / secs / 1e6,
+        stats.bsdf_rays as f64 / secs / 1e6
+    );
+    Ok(())
+}

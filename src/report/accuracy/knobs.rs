@@ -1,0 +1,201 @@
+//! The knobs that trade accuracy for time, one render configuration per setting, and how a
+//! configuration is applied to a world.
+
+use bevy_ecs::prelude::*;
+
+use crate::geometry::ShadowOffset;
+use crate::light::ImageInfiniteLight;
+use crate::render::renderer::{RenderOptions, Strategy};
+use crate::shading::{ColorMode, LightPrecision, LightSamplerKind, LightSelection, Settings};
+
+/// Everything the report varies about one render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    pub spp: u32,
+    pub color: ColorMode,
+    pub sampler: LightSamplerKind,
+    pub selection: LightSelection,
+    pub strategy: Strategy,
+    pub offset: ShadowOffset,
+    pub precision: LightPrecision,
+    /// Largest env sampling-table width; None for the image's own width.
+    pub env_table_width: Option<usize>,
+}
+
+impl Config {
+    /// kelvin's defaults (RGB, power sampler, one light per sample, MIS, error-bound offsets, f32)
+    /// at `spp` in colour mode `color`.
+    pub fn baseline(spp: u32, color: ColorMode) -> Self {
+        Self {
+            spp,
+            color,
+            sampler: LightSamplerKind::Power,
+            selection: LightSelection::OneSampled,
+            strategy: Strategy::Mis,
+            offset: ShadowOffset::ErrorBound,
+            precision: LightPrecision::F32,
+            env_table_width: None,
+        }
+    }
+
+    /// The render options of this configuration.
+    pub fn render_options(&self, width: u32, height: u32) -> RenderOptions {
+        RenderOptions { width, height, spp: self.spp, strategy: self.strategy }
+    }
+
+    /// Writes the light-system settings (with `seed`) and the env-table width into `world`. The
+    /// image light is touched only when its width changes, so its tables are not rebuilt needlessly.
+    pub fn apply(&self, world: &mut World, seed: u64) {
+        {
+            let mut s = world.resource_mut::<Settings>();
+            s.color_mode = self.color;
+            s.light_sampler = self.sampler;
+            s.selection = self.selection;
+            s.shadow_offset = self.offset;
+            s.light_precision = self.precision;
+            s.seed = seed;
+        }
+        let mut q = world.query::<&mut ImageInfiniteLight>();
+        for mut light in q.iter_mut(world) {
+            if light.table_max_width != self.env_table_width {
+                light.table_max_width = self.env_table_width;
+            }
+        }
+    }
+}
+
+/// A knob of the report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Knob {
+    Spp,
+    LightSampler,
+    Color,
+    EnvTable,
+    Strategy,
+    Selection,
+    ShadowOffset,
+    Precision,
+}
+
+/// Fixed-epsilon shadow offsets the report tries, m (scenes are 1-50 m across): none at all, the
+/// usual small values, and large ones that let light leak into contact shadows.
+pub const FIXED_EPSILONS: [f32; 5] = [0.0, 1e-6, 1e-4, 1e-2, 1e-1];
+/// Env sampling-table widths the report tries (the map's own width is added).
+pub const ENV_TABLE_WIDTHS: [usize; 4] = [4, 16, 64, 256];
+
+impl Knob {
+    /// Every knob, in table order.
+    pub const ALL: [Knob; 8] = [
+        Knob::Spp,
+        Knob::LightSampler,
+        Knob::Color,
+        Knob::EnvTable,
+        Knob::Strategy,
+        Knob::Selection,
+        Knob::ShadowOffset,
+        Knob::Precision,
+    ];
+
+    /// Short name (tables, CSV, plot legends).
+    pub fn name(self) -> &'static str {
+        match self {
+            Knob::Spp => "spp",
+            Knob::LightSampler => "light sampler",
+            Knob::Color => "colour",
+            Knob::EnvTable => "env table",
+            Knob::Strategy => "strategy",
+            Knob::Selection => "lights per sample",
+            Knob::ShadowOffset => "shadow offset",
+            Knob::Precision => "light math",
+        }
+    }
+
+    /// The settings of this knob around `base` as (label, configuration); the one equal to `base`
+    /// is the knob's baseline.
+    /// `max_spp` ends the spp ladder; `n_lights` sets the spp of "all lights" (the same number of
+    /// light samples per pixel as the baseline, at least one camera sample).
+    pub fn settings(self, base: &Config, max_spp: u32, n_lights: usize) -> Vec<(String, Config)> {
+        let with = |f: &dyn Fn(&mut Config)| {
+            let mut c = *base;
+            f(&mut c);
+            c
+        };
+        match self {
+            Knob::Spp => std::iter::successors(Some(1u32), |s| (s * 2 <= max_spp).then_some(s * 2))
+                .map(|spp| (format!("{spp} spp"), with(&|c| c.spp = spp)))
+                .collect(),
+            Knob::LightSampler => [
+                ("uniform", LightSamplerKind::Uniform),
+                ("power", LightSamplerKind::Power),
+                ("bvh", LightSamplerKind::Bvh),
+            ]
+            .into_iter()
+            .map(|(l, k)| (l.to_string(), with(&|c| c.sampler = k)))
+            .collect(),
+            Knob::Color => [("rgb", ColorMode::Rgb), ("spectral", ColorMode::Spectral)]
+                .into_iter()
+                .map(|(l, m)| (l.to_string(), with(&|c| c.color = m)))
+                .collect(),
+            Knob::EnvTable => std::iter::once(("full".to_string(), with(&|c| c.env_table_width = None)))
+                .chain(
+                    ENV_TABLE_WIDTHS
+                        .iter()
+                        .rev()
+                        .map(|&w| (format!("{w} wide"), with(&|c| c.env_table_width = Some(w)))),
+                )
+                .collect(),
+            Knob::Strategy => {
+                [("mis", Strategy::Mis), ("light only", Strategy::LightOnly), ("bsdf only", Strategy::BsdfOnly)]
+                    .into_iter()
+                    .map(|(l, s)| (l.to_string(), with(&|c| c.strategy = s)))
+                    .collect()
+            }
+            Knob::Selection => {
+                let spp = (base.spp as usize / n_lights.max(1)).max(1) as u32;
+                vec![
+                    ("one".to_string(), *base),
+                    (
+                        format!("all {n_lights}"),
+                        with(&|c| {
+                            c.selection = LightSelection::All;
+                            c.spp = spp;
+                        }),
+                    ),
+                ]
+            }
+            Knob::ShadowOffset => {
+                std::iter::once(("error bound".to_string(), with(&|c| c.offset = ShadowOffset::ErrorBound)))
+                    .chain(FIXED_EPSILONS.iter().map(|&e| {
+                        (
+                            if e == 0.0 { "none".to_string() } else { format!("fixed {e:.0e} m") },
+                            with(&|c| c.offset = ShadowOffset::FixedEpsilon(e)),
+                        )
+                    }))
+                    .collect()
+            }
+            Knob::Precision => [("f32", LightPrecision::F32), ("f64", LightPrecision::F64)]
+                .into_iter()
+                .map(|(l, p)| (l.to_string(), with(&|c| c.precision = p)))
+                .collect(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_knob_has_the_baseline_among_its_settings() {
+        for color in [ColorMode::Rgb, ColorMode::Spectral] {
+            let base = Config::baseline(16, color);
+            for knob in Knob::ALL {
+                let s = knob.settings(&base, 64, 4);
+                assert!(s.len() >= 2 && s.iter().filter(|(_, c)| *c == base).count() == 1, "{knob:?}");
+            }
+        }
+        let spps: Vec<u32> =
+            Knob::Spp.settings(&Config::baseline(16, ColorMode::Rgb), 64, 4).iter().map(|s| s.1.spp).collect();
+        assert_eq!(spps, [1, 2, 4, 8, 16, 32, 64]);
+    }
+}

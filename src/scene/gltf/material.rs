@@ -1,0 +1,242 @@
+//! Materials and their textures. Nothing here is fatal: a bad value is clamped or defaulted, a texture that cannot
+//! be loaded leaves the material with its factors; each with a warning.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{Vec3, Vec4};
+
+use super::accessor::view_bytes;
+use super::container::{UriTarget, resolve_uri, shorten};
+use super::{Doc, MaterialData, Warnings};
+use crate::scene::image::{ImageFormat, RgbImage, load_image_from_bytes};
+use crate::spectrum::color::srgb_encode;
+
+/// How a texture's texels are meant (glTF 2.0 spec, section 3.9: colour textures are sRGB-encoded, the others
+/// hold linear data).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Encoding {
+    Srgb,
+    Linear,
+}
+
+/// Decoded images, so that an image shared by several materials is decoded (and warned about) once.
+struct TextureCache {
+    /// (glTF image index, encoding) -> index into `images`, or `None` when it failed.
+    loaded: HashMap<(usize, Encoding), Option<usize>>,
+    images: Vec<Arc<RgbImage>>,
+}
+
+/// Reads every material (indexed as in the file) and the textures they use.
+pub(super) fn read_materials(doc: &Doc, warnings: &mut Warnings) -> (Vec<MaterialData>, Vec<Arc<RgbImage>>) {
+    let mut cache = TextureCache { loaded: HashMap::new(), images: Vec::new() };
+    let materials =
+        doc.root.materials.iter().enumerate().map(|(i, m)| read_material(doc, i, m, &mut cache, warnings)).collect();
+    (materials, cache.images)
+}
+
+fn read_material(
+    doc: &Doc,
+    index: usize,
+    material: &::gltf::json::Material,
+    cache: &mut TextureCache,
+    warnings: &mut Warnings,
+) -> MaterialData {
+    let pointer = format!("/materials/{index}");
+    let pbr = &material.pbr_metallic_roughness;
+    let mut unit = |value: f32, field: &str| clamp_unit(value, &format!("{pointer}/{field}"), warnings);
+    let f = pbr.base_color_factor.0;
+    let base_color = Vec4::new(
+        unit(f[0], "pbrMetallicRoughness/baseColorFactor/0"),
+        unit(f[1], "pbrMetallicRoughness/baseColorFactor/1"),
+        unit(f[2], "pbrMetallicRoughness/baseColorFactor/2"),
+        unit(f[3], "pbrMetallicRoughness/baseColorFactor/3"),
+    );
+    let metallic = unit(pbr.metallic_factor.0, "pbrMetallicRoughness/metallicFactor");
+    let roughness = unit(pbr.roughness_factor.0, "pbrMetallicRoughness/roughnessFactor");
+    let e = material.emissive_factor.0;
+    let emissive_factor =
+        Vec3::new(unit(e[0], "emissiveFactor/0"), unit(e[1], "emissiveFactor/1"), unit(e[2], "emissiveFactor/2"));
+
+    let ext = material.extensions.as_ref();
+    let mut emissive_strength = ext.and_then(|x| x.emissive_strength.as_ref()).map_or(1.0, |s| s.emissive_strength.0);
+    if !(emissive_strength.is_finite() && emissive_strength >= 0.0) {
+        warnings.push(
+            &format!("{pointer}/extensions/KHR_materials_emissive_strength/emissiveStrength"),
+            format!("{emissive_strength} is out of range (must be >= 0); strength 1 used"),
+        );
+        emissive_strength = 1.0;
+    }
+    let misplaced = format!("{pointer}/pbrMetallicRoughness/extensions/KHR_materials_emissive_strength");
+    if doc.raw(&misplaced).is_some() {
+        warnings.push(&misplaced, "KHR_materials_emissive_strength belongs on the material itself; ignored here");
+    }
+    let specular_factor = ext.and_then(|x| x.specular.as_ref()).map_or(1.0, |s| {
+        clamp_unit(
+            s.specular_factor.0,
+            &format!("{pointer}/extensions/KHR_materials_specular/specularFactor"),
+            warnings,
+        )
+    });
+    let mut ior = ext.and_then(|x| x.ior.as_ref()).map_or(1.5, |i| i.ior.0);
+    if !(ior.is_finite() && ior >= 1.0) {
+        warnings.push(&format!("{pointer}/extensions/KHR_materials_ior/ior"), format!("{ior} is not >= 1; 1.5 used"));
+        ior = 1.5;
+    }
+
+    let mut texture = |info: Option<&::gltf::json::texture::Info>, field: &str, encoding: Encoding| {
+        info.and_then(|info| texture_index(doc, info, &format!("{pointer}/{field}"), encoding, cache, warnings))
+    };
+    MaterialData {
+        name: material.name.clone(),
+        base_color,
+        base_color_texture: texture(
+            pbr.base_color_texture.as_ref(),
+            "pbrMetallicRoughness/baseColorTexture",
+            Encoding::Srgb,
+        ),
+        metallic,
+        roughness,
+        metallic_roughness_texture: texture(
+            pbr.metallic_roughness_texture.as_ref(),
+            "pbrMetallicRoughness/metallicRoughnessTexture",
+            Encoding::Linear,
+        ),
+        emissive: emissive_factor * emissive_strength,
+        emissive_strength,
+        emissive_texture: texture(material.emissive_texture.as_ref(), "emissiveTexture", Encoding::Srgb),
+        specular_factor,
+        ior,
+        double_sided: material.double_sided,
+    }
+}
+
+/// `value` clamped to [0, 1] (NaN to 0), with a warning when it changed.
+fn clamp_unit(value: f32, pointer: &str, warnings: &mut Warnings) -> f32 {
+    if (0.0..=1.0).contains(&value) {
+        return value;
+    }
+    let fixed = if value.is_nan() { 0.0 } else { value.clamp(0.0, 1.0) };
+    warnings.push(pointer, format!("{value} is outside [0, 1]; {fixed} used"));
+    fixed
+}
+
+/// The index in `cache.images` of the texture `info` refers to, or `None` (with a warning) if it cannot be used.
+fn texture_index(
+    doc: &Doc,
+    info: &::gltf::json::texture::Info,
+    pointer: &str,
+    encoding: Encoding,
+    cache: &mut TextureCache,
+    warnings: &mut Warnings,
+) -> Option<usize> {
+    if info.tex_coord != 0 {
+        warnings.push(pointer, format!("uses UV set {}; only TEXCOORD_0 is read, texture ignored", info.tex_coord));
+        return None;
+    }
+    if doc.raw(&format!("{pointer}/extensions/KHR_texture_transform")).is_some() {
+        warnings.push(pointer, "KHR_texture_transform ignored (texture used untransformed)");
+    }
+    let t = info.index.value();
+    let Some(texture) = doc.root.textures.get(t) else {
+        warnings.push(pointer, format!("texture {t} does not exist; material keeps its factors"));
+        return None;
+    };
+    let image = texture.source.value();
+    if image >= doc.root.images.len() {
+        warnings.push(
+            &format!("/textures/{t}"),
+            "no usable source image (extension-only sources such as KHR_texture_basisu or EXT_texture_webp are not \
+             supported); material keeps its factors",
+        );
+        return None;
+    }
+    if let Some(&loaded) = cache.loaded.get(&(image, encoding)) {
+        return loaded;
+    }
+    let loaded = load_texture_image(doc, image, encoding, warnings).map(|img| {
+        cache.images.push(Arc::new(img));
+        cache.images.len() - 1
+    });
+    cache.loaded.insert((image, encoding), loaded);
+    loaded
+}
+
+/// Decodes glTF image `index` (a file, a data: URI or a buffer view) into linear RGB; `None` with a warning that
+/// names the file when it cannot.
+fn load_texture_image(doc: &Doc, index: usize, encoding: Encoding, warnings: &mut Warnings) -> Option<RgbImage> {
+    let pointer = format!("/images/{index}");
+    let image = &doc.root.images[index];
+    let declared_mime = image.mime_type.as_ref().map(|m| m.0.to_ascii_lowercase());
+    let fallback = "material keeps its factors";
+    let (bytes, hint, name) = match (&image.uri, image.buffer_view) {
+        (Some(uri), _) => match resolve_uri(uri, doc.base_dir) {
+            Ok(UriTarget::Data { bytes, mime }) => {
+                (bytes, declared_mime.unwrap_or(mime), format!("{pointer} (data: URI)"))
+            }
+            Ok(UriTarget::File(path)) => {
+                let name = path.display().to_string();
+                let hint = extension_hint(&path).or(declared_mime).unwrap_or_default();
+                if ImageFormat::from_hint(&hint).is_none() {
+                    warnings.push(&pointer, format!("{name}: unsupported image type {hint:?}; {fallback}"));
+                    return None;
+                }
+                match std::fs::read(&path) {
+                    Ok(bytes) => (bytes, hint, name),
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                        warnings.push(&pointer, format!("{name}: file not found; {fallback}"));
+                        return None;
+                    }
+                    Err(e) => {
+                        warnings.push(&pointer, format!("{name}: cannot read: {e}; {fallback}"));
+                        return None;
+                    }
+                }
+            }
+            Err(msg) => {
+                warnings.push(&pointer, format!("image {}: {msg}; {fallback}", shorten(uri)));
+                return None;
+            }
+        },
+        (None, Some(view)) => match view_bytes(doc, view.value()) {
+            Ok((bytes, _)) => (bytes.to_vec(), declared_mime.unwrap_or_default(), format!("{pointer} (bufferView)")),
+            Err(e) => {
+                warnings.push(&pointer, format!("{e}; {fallback}"));
+                return None;
+            }
+        },
+        (None, None) => {
+            warnings.push(&pointer, format!("neither uri nor bufferView; {fallback}"));
+            return None;
+        }
+    };
+    let Some(format) = ImageFormat::from_hint(&hint) else {
+        warnings.push(&pointer, format!("{name}: unsupported image type {hint:?} (PNG and JPEG are read); {fallback}"));
+        return None;
+    };
+    match load_image_from_bytes(&bytes, &hint, &name) {
+        Ok(loaded) => {
+            for w in loaded.warnings {
+                warnings.push(&pointer, w);
+            }
+            let mut img = loaded.image;
+            // The image module decodes 8/16-bit PNG and JPEG as sRGB; data textures hold linear values, so undo it.
+            if encoding == Encoding::Linear && matches!(format, ImageFormat::Png | ImageFormat::Jpeg) {
+                let encode = |c: f32| srgb_encode(c as f64) as f32;
+                img.pixels.iter_mut().for_each(|p| *p = Vec3::new(encode(p.x), encode(p.y), encode(p.z)));
+            }
+            Some(img)
+        }
+        Err(e) => {
+            warnings.push(&pointer, format!("{e}; {fallback}"));
+            None
+        }
+    }
+}
+
+/// The file extension as a format hint, if it names a format kelvin reads.
+fn extension_hint(path: &Path) -> Option<String> {
+    let ext = path.extension()?.to_string_lossy().into_owned();
+    ImageFormat::from_hint(&ext).map(|_| ext)
+}

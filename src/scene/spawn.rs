@@ -1,0 +1,161 @@
+//! Turning an imported glTF scene into entities: meshes (baked to world space) with materials,
+//! emissive surfaces as area lights, KHR_lights_punctual / EXT_lights_ies lights, and cameras.
+//!
+//! Light units are glTF's: candela for point and spot lights, lux for directional ones. A light's
+//! colour is its chromaticity (an RGB-derived spectrum); its luminous amount is the intensity
+//! times the colour's luminance, as an RGB renderer multiplying colour by intensity would show.
+//! `range` is ignored: kelvin keeps the inverse-square law everywhere (glTF allows a renderer to
+//! treat range as a culling hint).
+
+use std::sync::Arc;
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+
+use super::gltf::{GltfScene, IesSource, LightKind, MaterialData};
+use super::ies::IesProfile;
+use crate::geometry::{Mesh, Transform};
+use crate::light::{Amount, DistantLight, GoniometricLight, PointLight, SpotLight};
+use crate::render::camera::Camera;
+use crate::render::material::Material;
+use crate::spectrum::Spectrum;
+
+/// What was spawned, and what was skipped with why.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SpawnReport {
+    pub meshes: usize,
+    pub triangles: usize,
+    pub emissive_meshes: usize,
+    pub lights: usize,
+    pub cameras: usize,
+    pub warnings: Vec<String>,
+}
+
+/// Rec. 709 luminance of linear RGB.
+fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// A colour as an RGB-derived spectrum (white (1,1,1) is D65) and its luminance.
+fn colour_spectrum(c: Vec3) -> (Spectrum, f32) {
+    let y = luminance(c);
+    if y > 0.0 { (Spectrum::Rgb { rgb: (c / y).as_dvec3().to_array() }, y) } else { (Spectrum::d65(), 0.0) }
+}
+
+fn material_of(m: &MaterialData, scene: &GltfScene) -> Material {
+    let tex = |i: Option<usize>| i.and_then(|i| scene.textures.get(i).cloned());
+    Material {
+        base_color: m.base_color.truncate(),
+        base_color_texture: tex(m.base_color_texture),
+        metallic: m.metallic,
+        roughness: m.roughness,
+        metallic_roughness_texture: tex(m.metallic_roughness_texture),
+        specular: m.specular_factor,
+        ior: m.ior,
+        double_sided: m.double_sided,
+    }
+}
+
+/// Spawns everything in `scene` into `world`.
+pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
+    let mut report = SpawnReport { warnings: scene.warnings.clone(), ..Default::default() };
+    let materials: Vec<Material> = scene.materials.iter().map(|m| material_of(m, scene)).collect();
+    for inst in &scene.instances {
+        let Some(mesh) = scene.meshes.get(inst.mesh) else { continue };
+        let normal_matrix = inst.world.matrix3.inverse().transpose();
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let what = format!("mesh {} primitive {p}", mesh.name.as_deref().unwrap_or("?"));
+            let positions: Vec<Vec3> = prim.positions.iter().map(|&v| inst.world.transform_point3(v)).collect();
+            let mut built = Mesh::new(positions, prim.indices.clone());
+            if let (Ok(m), Some(n)) = (&built, &prim.normals) {
+                let normals = n.iter().map(|&v| (normal_matrix * v).normalize_or_zero()).collect();
+                built = m.clone().with_normals(normals);
+            }
+            if let (Ok(m), Some(uv)) = (&built, &prim.uvs) {
+                built = m.clone().with_uvs(uv.clone());
+            }
+            let mesh_component = match built {
+                Ok(m) => m,
+                Err(e) => {
+                    report.warnings.push(format!("{what} skipped: {e}"));
+                    continue;
+                }
+            };
+            let material = prim.material.and_then(|i| materials.get(i).cloned()).unwrap_or_default();
+            report.meshes += 1;
+            report.triangles += mesh_component.triangle_count();
+            let mut entity = world.spawn((mesh_component, Transform::IDENTITY, material));
+            if let Some(area) =
+                prim.material.and_then(|i| scene.materials.get(i)).and_then(|m| emissive_light(m, scene))
+            {
+                entity.insert(area);
+                report.emissive_meshes += 1;
+            }
+        }
+    }
+    for light in &scene.lights {
+        let transform = Transform::from_affine(light.world);
+        let (spectrum, y) = colour_spectrum(light.color);
+        let luminous = light.intensity * y;
+        let mut e = world.spawn_empty();
+        match light.kind {
+            LightKind::Point => {
+                e.insert((PointLight { amount: Amount::Candela(luminous), spectrum, ..Default::default() }, transform));
+            }
+            LightKind::Spot { inner_cone_angle, outer_cone_angle } => {
+                let spot = SpotLight {
+                    amount: Amount::Candela(luminous),
+                    spectrum,
+                    inner_angle: inner_cone_angle,
+                    outer_angle: outer_cone_angle,
+                    ..Default::default()
+                };
+                e.insert((spot, transform));
+            }
+            LightKind::Directional => {
+                e.insert((DistantLight { amount: Amount::Lux(luminous), spectrum, ..Default::default() }, transform));
+            }
+            LightKind::Ies => match load_ies(light.ies.as_ref()) {
+                Ok(profile) => {
+                    let mut g = GoniometricLight::from_ies(Arc::new(profile));
+                    g.amount = Amount::Candela(light.intensity);
+                    g.spectrum = spectrum;
+                    e.insert((g, transform));
+                }
+                Err(msg) => {
+                    report.warnings.push(format!("IES light {} skipped: {msg}", light.name.as_deref().unwrap_or("?")));
+                    e.despawn();
+                    continue;
+                }
+            },
+        }
+        report.lights += 1;
+    }
+    for cam in &scene.cameras {
+        world.spawn((Camera { yfov: cam.yfov }, Transform::from_affine(cam.world)));
+        report.cameras += 1;
+    }
+    report
+}
+
+fn load_ies(source: Option<&IesSource>) -> Result<IesProfile, String> {
+    match source {
+        Some(IesSource::File(path)) => IesProfile::from_file(path).map_err(|e| e.to_string()),
+        Some(IesSource::Embedded { bytes, what }) => {
+            let text = std::str::from_utf8(bytes).map_err(|_| format!("{what}: not UTF-8 text"))?;
+            IesProfile::parse(text, what).map_err(|e| e.to_string())
+        }
+        None => Err("no profile".into()),
+    }
+}
+
+/// The area light an emissive material makes, if any.
+fn emissive_light(m: &MaterialData, scene: &GltfScene) -> Option<crate::light::AreaLight> {
+    let y = luminance(m.emissive);
+    if !(y > 0.0) {
+        return None;
+    }
+    let (spectrum, _) = colour_spectrum(m.emissive);
+    let texture = m.emissive_texture.and_then(|i| scene.textures.get(i).cloned());
+    Some(crate::light::AreaLight::emissive(Amount::Nits(y), spectrum, texture, m.double_sided))
+}

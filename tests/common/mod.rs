@@ -1,0 +1,73 @@
+//! Shared by the light tests: a deterministic RNG, Monte Carlo statistics and their assertion, and
+//! the area-light fixtures. Each test binary uses part of it.
+#![allow(dead_code)]
+
+pub mod area;
+
+use glam::Vec2;
+use kelvin::light::ColorQuery;
+use kelvin::spectrum::SampledSpectrum;
+
+/// SplitMix64 (Steele, Lea, Flood 2014).
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    pub fn u2(&mut self) -> Vec2 {
+        Vec2::new(self.f32(), self.f32())
+    }
+}
+
+/// Running mean and standard error.
+#[derive(Default)]
+pub struct Stats {
+    n: f64,
+    sum: f64,
+    sum2: f64,
+}
+
+impl Stats {
+    pub fn add(&mut self, x: f64) {
+        self.n += 1.0;
+        self.sum += x;
+        self.sum2 += x * x;
+    }
+    pub fn mean(&self) -> f64 {
+        self.sum / self.n
+    }
+    pub fn sigma(&self) -> f64 {
+        let m = self.mean();
+        ((self.sum2 / self.n - m * m).max(0.0) / self.n).sqrt()
+    }
+}
+
+pub const RGB: ColorQuery<'static> = ColorQuery::Rgb;
+
+/// Rec. 709 luminance of an RGB-mode result.
+pub fn lum(s: SampledSpectrum) -> f64 {
+    0.2126 * s.0[0] as f64 + 0.7152 * s.0[1] as f64 + 0.0722 * s.0[2] as f64
+}
+
+/// Asserts |measured - expected| <= 3 sigma (+ a 1e-5 relative floor for f32 rounding when the
+/// estimator has next to no variance) and prints the relative error.
+pub fn assert_mc(name: &str, s: &Stats, expected: f64) {
+    let (m, sigma) = (s.mean(), s.sigma());
+    let rel = (m - expected).abs() / expected.abs().max(1e-30);
+    eprintln!(
+        "{name}: measured {m:.6e}, expected {expected:.6e}, rel err {rel:.2e}, 3 sigma rel {:.2e}",
+        3.0 * sigma / expected.abs().max(1e-30)
+    );
+    assert!((m - expected).abs() <= 3.0 * sigma + 1e-5 * expected.abs(), "{name}: {m} vs {expected} (sigma {sigma})");
+}

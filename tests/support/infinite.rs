@@ -1,0 +1,93 @@
+//! Helpers shared by the infinite-light tests: a deterministic RNG, running Monte Carlo
+//! statistics, and small constructors.
+#![allow(dead_code)]
+
+use std::sync::Arc;
+
+use glam::{Quat, Vec2, Vec3};
+use kelvin::geometry::Transform;
+use kelvin::light::{ImageInfiniteLight, LightSampleContext, ResolvedImageInfinite, SceneSphere};
+use kelvin::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
+use kelvin::spectrum::SampledSpectrum;
+
+/// SplitMix64: a tiny deterministic RNG.
+pub struct Rng(pub u64);
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    pub fn vec2(&mut self) -> Vec2 {
+        Vec2::new(self.f32(), self.f32())
+    }
+}
+
+/// Running mean and standard error.
+#[derive(Default)]
+pub struct Stats {
+    pub n: f64,
+    sum: f64,
+    sum2: f64,
+}
+impl Stats {
+    pub fn add(&mut self, x: f64) {
+        self.n += 1.0;
+        self.sum += x;
+        self.sum2 += x * x;
+    }
+    pub fn mean(&self) -> f64 {
+        self.sum / self.n
+    }
+    pub fn std_err(&self) -> f64 {
+        let m = self.mean();
+        ((self.sum2 / self.n - m * m).max(0.0) / self.n).sqrt()
+    }
+    /// Asserts |mean - expected| <= 3 sigma + abs_tol and prints the errors.
+    pub fn check(&self, name: &str, expected: f64, abs_tol: f64) {
+        let (m, s) = (self.mean(), self.std_err());
+        let rel = (m - expected).abs() / expected.abs().max(1e-300);
+        eprintln!("{name}: estimate {m:.6e} vs {expected:.6e}, rel err {rel:.2e}, sigma/expected {:.2e}", s / expected);
+        assert!((m - expected).abs() <= 3.0 * s + abs_tol, "{name}: {m} vs {expected} (3 sigma = {})", 3.0 * s);
+    }
+}
+
+/// Photometric Y of an RGB-mode radiance.
+pub fn y_of(s: SampledSpectrum) -> f64 {
+    Vec3::new(s.0[0], s.0[1], s.0[2]).dot(LUMINANCE_WEIGHTS) as f64
+}
+
+pub fn rel_diff(a: f32, b: f32) -> f32 {
+    (a - b).abs() / a.abs().max(b.abs()).max(f32::MIN_POSITIVE)
+}
+
+pub fn image(w: usize, h: usize, f: impl Fn(usize, usize) -> Vec3) -> Arc<RgbImage> {
+    Arc::new(RgbImage { width: w, height: h, pixels: (0..w * h).map(|i| f(i % w, i / w)).collect() })
+}
+
+/// A smooth sky with a soft bright spot: a gradient plus a Gaussian blob, no zeros.
+pub fn test_sky(w: usize, h: usize) -> Arc<RgbImage> {
+    image(w, h, |x, y| {
+        let (u, v) = ((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+        let blob = 20.0 * (-((u - 0.3).powi(2) + (v - 0.35).powi(2)) / 0.004).exp();
+        Vec3::new(0.3 + u, 0.5 + 0.5 * v, 1.0 - 0.5 * v) + Vec3::splat(blob)
+    })
+}
+
+pub fn resolve(light: &ImageInfiniteLight, rotation: Quat) -> ResolvedImageInfinite {
+    let t = Transform { rotation, ..Transform::IDENTITY };
+    light.resolve(&t, SceneSphere { center: Vec3::new(1.0, 2.0, 3.0), radius: 5.0 }).expect("valid light")
+}
+
+pub fn tilted() -> Quat {
+    Quat::from_euler(glam::EulerRot::YXZ, 0.7, -0.4, 0.2)
+}
+
+pub fn surface_ctx() -> LightSampleContext {
+    LightSampleContext::on_surface(Vec3::new(0.5, 0.2, -0.3), Vec3::new(0.3, 0.9, -0.2).normalize())
+}
