@@ -106,21 +106,32 @@ impl WideNode {
         let sin_b = Vec4::select(inside, zero, radius * inv_dist);
         let cos_b = Vec4::select(inside, -one, (one - sin_b * sin_b).max(zero).sqrt());
 
-        let [ax, ay, az] = self.w;
-        let cos_w0 = ax * wx + ay * wy + az * wz;
-        let cos_w = Vec4::select(self.two_sided.cmpgt(zero), cos_w0.abs(), cos_w0);
-        let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
-        let (cos_o, sin_o) = (self.cos_theta_o, self.sin_theta_o);
-        let within_o = cos_w.cmpgt(cos_o);
-        let cos_x = Vec4::select(within_o, one, cos_w * cos_o + sin_w * sin_o);
-        let sin_x = Vec4::select(within_o, zero, sin_w * cos_o - cos_w * sin_o);
-        let cos_p = Vec4::select(cos_x.cmpgt(cos_b), one, cos_x * cos_b + sin_x * sin_b);
-        let cos_p = Vec4::select(cos_o.cmple(-one), one, cos_p);
-        let cos_e = self.cos_theta_e;
+        // Clusters that emit every way (any point light inside) skip the cone terms: most
+        // interior nodes, since points and spots mix.
+        let (cos_o, cos_e) = (self.cos_theta_o, self.cos_theta_e);
+        let everywhere = cos_o.cmple(-one);
+        let cos_p = if everywhere.all() {
+            one
+        } else {
+            let [ax, ay, az] = self.w;
+            let cos_w0 = ax * wx + ay * wy + az * wz;
+            let cos_w = Vec4::select(self.two_sided.cmpgt(zero), cos_w0.abs(), cos_w0);
+            let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
+            let sin_o = self.sin_theta_o;
+            let within_o = cos_w.cmpgt(cos_o);
+            let cos_x = Vec4::select(within_o, one, cos_w * cos_o + sin_w * sin_o);
+            let sin_x = Vec4::select(within_o, zero, sin_w * cos_o - cos_w * sin_o);
+            let cos_p = Vec4::select(cos_x.cmpgt(cos_b), one, cos_x * cos_b + sin_x * sin_b);
+            Vec4::select(everywhere, one, cos_p)
+        };
         let dark = cos_p.cmplt(cos_e) | self.phi.cmple(zero);
-        let t = ((cos_p - cos_e) / (one - cos_e).max(Vec4::splat(1e-12))).clamp(zero, one);
-        let smooth = t * t * (3.0 - 2.0 * t);
-        let emission = Vec4::select(cos_e.cmple(zero) | cos_p.cmpge(one), cos_p, smooth);
+        let lambertian = cos_e.cmple(zero) | cos_p.cmpge(one);
+        let emission = if lambertian.all() {
+            cos_p
+        } else {
+            let t = ((cos_p - cos_e) / (one - cos_e).max(Vec4::splat(1e-12))).clamp(zero, one);
+            Vec4::select(lambertian, cos_p, t * t * (3.0 - 2.0 * t))
+        };
         let mut value = self.phi * emission / d2;
 
         if n != Vec3::ZERO {
@@ -234,6 +245,73 @@ impl WideTree {
     #[inline]
     pub fn parent_slot(&self, w: usize) -> Option<(usize, usize)> {
         let slot = self.slot_of[self.nodes[w].origin as usize];
-        (slot != NONE).then(|| (slot as usize / 4, slot as usize % 4))
+        (slot != NONE).then_some((slot as usize / 4, slot as usize % 4))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::LightBounds;
+
+    #[test]
+    fn lanes_match_the_scalar_importance() {
+        let clusters = [
+            LightBounds {
+                min: Vec3::new(-1.0, 2.0, 0.0),
+                max: Vec3::new(3.0, 4.0, 1.0),
+                phi: 5.0,
+                w: Vec3::Z,
+                cos_theta_o: -1.0,
+                cos_theta_e: 0.0,
+                two_sided: false,
+            },
+            LightBounds {
+                min: Vec3::ONE,
+                max: Vec3::ONE,
+                phi: 2.0,
+                w: Vec3::NEG_Y,
+                cos_theta_o: 0.9,
+                cos_theta_e: 0.95,
+                two_sided: false,
+            },
+            LightBounds {
+                min: Vec3::new(0.0, 3.0, 0.0),
+                max: Vec3::new(2.0, 3.0, 2.0),
+                phi: 1.0,
+                w: Vec3::NEG_Y,
+                cos_theta_o: 1.0,
+                cos_theta_e: 0.0,
+                two_sided: true,
+            },
+            EMPTY_BOUNDS,
+        ];
+        let mut node = WideNode::empty(0);
+        for (lane, b) in clusters.iter().enumerate() {
+            node.set_lane(lane, &ClusterQuery::from(b));
+        }
+        for (p, n) in
+            [(Vec3::ZERO, Vec3::Y), (Vec3::new(1.0, 0.5, 1.0), Vec3::ZERO), (Vec3::new(5.0, 6.0, -2.0), Vec3::X)]
+        {
+            let wide = node.importance(p, n).to_array();
+            for (lane, b) in clusters.iter().enumerate() {
+                let scalar = ClusterQuery::from(b).importance(p, n);
+                assert!(
+                    (wide[lane] - scalar).abs() <= 1e-5 * scalar.abs().max(1e-6),
+                    "lane {lane} at {p}: {} vs {scalar}",
+                    wide[lane]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn lane_choice_follows_the_weights() {
+        let w = Vec4::new(1.0, 0.0, 3.0, 0.0);
+        assert_eq!(choose_lane(w, 0.1).map(|c| c.0), Some(0));
+        assert_eq!(choose_lane(w, 0.3).map(|c| (c.0, c.1)), Some((2, 0.75)));
+        assert_eq!(choose_lane(w, 0.999_999).map(|c| c.0), Some(2));
+        assert_eq!(choose_lane(Vec4::ZERO, 0.5), None);
+        assert_eq!(lane_probability(w, 1), 0.0);
     }
 }

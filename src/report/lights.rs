@@ -86,7 +86,7 @@ pub struct SamplerFigures {
     pub biased_points: f64,
 }
 
-/// Update times for one light count, ms (medians over frames).
+/// Update times for one light count, ms (the fastest of the timed frames).
 #[derive(Clone, Debug, Default)]
 pub struct UpdateFigures {
     pub power_move_1pct_ms: f64,
@@ -185,6 +185,15 @@ fn exact_relative_variance(
         })
         .collect();
     (exact, variances)
+}
+
+/// The mean over `points` of the exact relative variance of `sampler`'s one-sample estimate.
+pub fn mean_relative_variance(sampler: &LightSampler, table: &LightTable, points: &[LightSampleContext]) -> f64 {
+    let per_point: Vec<f64> = points
+        .par_iter()
+        .map(|ctx| exact_relative_variance(std::slice::from_ref(sampler), table, ctx).1[0].0)
+        .collect();
+    per_point.iter().sum::<f64>() / points.len().max(1) as f64
 }
 
 /// Time per sample (ns) and measured relative RMSE with `samples` samples per point. With
@@ -518,7 +527,8 @@ pub fn write_plots(rows: &[LightBenchRow], dir: &Path) -> Result<Vec<PathBuf>, P
         "log10 relative RMSE",
         &per_sampler(|f| f.rel_rmse_equal_time_with_ray),
     )?;
-    let updates: [(&str, fn(&UpdateFigures) -> f64); 4] = [
+    type Curve = (&'static str, fn(&UpdateFigures) -> f64);
+    let updates: [Curve; 4] = [
         ("BVH refit, 1% move", |u| u.bvh_refit_1pct_ms),
         ("BVH refit, 10% move", |u| u.bvh_refit_10pct_ms),
         ("BVH full rebuild", |u| u.bvh_rebuild_ms),
