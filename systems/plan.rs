@@ -47,12 +47,7 @@ pub fn plan_sampler(
     mut work: ResMut<Work>,
     mut report: ResMut<RunReport>,
 ) {
-    // Until the light BVH lands, a Bvh request is served by the power sampler (its stand-in).
-    let wanted = match settings.light_sampler {
-        crate::shading::LightSamplerKind::Bvh => crate::shading::LightSamplerKind::Power,
-        kind => kind,
-    };
-    let (run, why) = if sampler.kind() != wanted {
+    let (run, why) = if sampler.kind() != settings.light_sampler {
         (true, "settings changed the sampler kind")
     } else if table.is_changed() {
         (true, "light table changed")

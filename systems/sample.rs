@@ -55,7 +55,8 @@ impl ShadowRays {
     }
 }
 
-/// Rebuilds or refreshes the light sampler (rebuild on a kind change or changed powers).
+/// Rebuilds or refreshes the light sampler (rebuild on a kind change; otherwise the sampler's
+/// own update, which reads the table's change flags), then clears those flags.
 pub fn update_light_sampler(
     mut table: ResMut<LightTable>,
     settings: Res<Settings>,
@@ -71,6 +72,8 @@ pub fn update_light_sampler(
     // The sampler has caught up; clearing the flags is bookkeeping, not a change to the table.
     table.bypass_change_detection().clear_change_flags();
     report.record("light_sampler", true, what);
+    // The sampler has consumed the change log; clearing it is bookkeeping, not a table change.
+    table.bypass_change_detection().clear_change_flags();
 }
 
 /// Entries per point under `settings` for a table of `n_lights` lights.

@@ -1,4 +1,5 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
+mod bench;
 mod ies;
 mod render;
 mod report;
@@ -24,6 +25,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Reports: `report accuracy` prices each accuracy knob in render time.
     Report(report::ReportArgs),
+    /// Benchmarks with a printed table and plots.
+    Bench(bench::BenchArgs),
 }
 
 /// Errors the CLI reports: a message that names what failed.
@@ -36,5 +39,6 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Ies(args) => ies::run(args),
         Command::Render(args) => render::run(args),
         Command::Report(args) => report::run(args),
+        Command::Bench(args) => bench::run(args),
     }
 }

@@ -99,6 +99,13 @@ pub struct LightTable {
     pub powers_changed: bool,
     /// Set when a light moved (same power) since the flags were cleared.
     pub moved: bool,
+    /// Rows set in place (moved or re-powered) since the flags were cleared, in order, possibly
+    /// repeated: what an incremental sampler refits.
+    pub changed_rows: Vec<LightId>,
+    /// Set when rows were added or removed since the flags were cleared (rows may have moved).
+    pub rows_reordered: bool,
+    /// `generation` when the flags were last cleared: the flags describe every change after it.
+    pub changes_since: u64,
 }
 
 macro_rules! for_block {
@@ -291,11 +298,11 @@ impl LightTable {
         casts_shadows: bool,
     ) {
         self.generation += 1;
-        if let Some([id]) = self.rows_of.get(&entity).map(Vec::as_slice)
+        if let Some(&[id]) = self.rows_of.get(&entity).map(Vec::as_slice)
             && id.kind == kind
         {
-            let i = id.row as usize;
-            block(self).set(i, row, casts_shadows);
+            block(self).set(id.row as usize, row, casts_shadows);
+            self.changed_rows.push(id);
             self.moved = true;
             self.powers_changed |= power_changed;
             return;
@@ -306,6 +313,7 @@ impl LightTable {
         b.push(entity, row, casts_shadows);
         self.rows_of.insert(entity, vec![LightId { kind, row: i }]);
         self.powers_changed = true;
+        self.rows_reordered = true;
     }
 
     /// Removes every row of `entity`, keeping blocks dense. Returns how many rows went.
@@ -330,6 +338,7 @@ impl LightTable {
         }
         self.generation += 1;
         self.powers_changed = true;
+        self.rows_reordered = true;
         ids.len()
     }
 
@@ -357,5 +366,8 @@ impl LightTable {
     pub fn clear_change_flags(&mut self) {
         self.powers_changed = false;
         self.moved = false;
+        self.changed_rows.clear();
+        self.rows_reordered = false;
+        self.changes_since = self.generation;
     }
 }

@@ -1,14 +1,19 @@
-//! Choosing a light (separate from sampling a point on it): uniform and power samplers behind one
-//! `sample(ctx, u) -> (light, pmf)` / `pmf(ctx, light)` pair.
+//! Choosing a light (separate from sampling a point on it): uniform, power and light-BVH samplers
+//! behind one `sample(ctx, u) -> (light, pmf)` / `pmf(ctx, light)` pair.
 
+mod bvh;
+mod bvh_build;
+pub mod importance;
 mod power;
 mod uniform;
+mod wide;
 
 use bevy_ecs::resource::Resource;
 
 use crate::light::{LightId, LightSampleContext, LightTable};
 use crate::shading::LightSamplerKind;
 
+pub use bvh::{BvhSampler, BvhUpdate, LIGHT_TREE_REBUILD_RATIO};
 pub use power::PowerSampler;
 pub use uniform::UniformSampler;
 
@@ -17,6 +22,7 @@ pub use uniform::UniformSampler;
 pub enum LightSampler {
     Uniform(UniformSampler),
     Power(PowerSampler),
+    Bvh(BvhSampler),
 }
 
 impl Default for LightSampler {
@@ -30,8 +36,8 @@ impl LightSampler {
     pub fn build(kind: LightSamplerKind, table: &LightTable) -> Self {
         match kind {
             LightSamplerKind::Uniform => Self::Uniform(UniformSampler::build(table)),
-            // The BVH sampler arrives with the many-lights work; power is the closest stand-in.
-            LightSamplerKind::Power | LightSamplerKind::Bvh => Self::Power(PowerSampler::build(table)),
+            LightSamplerKind::Power => Self::Power(PowerSampler::build(table)),
+            LightSamplerKind::Bvh => Self::Bvh(BvhSampler::build(table)),
         }
     }
 
@@ -40,15 +46,17 @@ impl LightSampler {
         match self {
             Self::Uniform(_) => LightSamplerKind::Uniform,
             Self::Power(_) => LightSamplerKind::Power,
+            Self::Bvh(_) => LightSamplerKind::Bvh,
         }
     }
 
-    /// Brings the sampler up to date with `table`: rebuilds what depends on powers when they
-    /// changed, and only the id list otherwise. Returns what it did, for the run report.
+    /// Brings the sampler up to date with `table`, doing only what its changes call for (see
+    /// each sampler's `update`). Returns what it did, for the run report.
     pub fn update(&mut self, table: &LightTable) -> &'static str {
         match self {
             Self::Uniform(s) => s.update(table),
             Self::Power(s) => s.update(table),
+            Self::Bvh(s) => s.update(table),
         }
     }
 
@@ -58,16 +66,30 @@ impl LightSampler {
         match self {
             Self::Uniform(s) => s.sample(u),
             Self::Power(s) => s.sample(u),
+            Self::Bvh(s) => s.sample(ctx, u),
         }
         .filter(|_| ctx.p.is_finite())
     }
 
+    /// Calls `f` with every light and its pmf at `ctx`, in one pass (for exact variances).
+    pub fn for_each_pmf(&self, ctx: &LightSampleContext, f: impl FnMut(LightId, f32)) {
+        match self {
+            Self::Uniform(s) => s.for_each_pmf(f),
+            Self::Power(s) => s.for_each_pmf(f),
+            Self::Bvh(s) => s.for_each_pmf(ctx, f),
+        }
+    }
+
     /// Probability that `sample` returns `light` at `ctx`.
     #[inline]
-    pub fn pmf(&self, _ctx: &LightSampleContext, light: LightId) -> f32 {
+    pub fn pmf(&self, ctx: &LightSampleContext, light: LightId) -> f32 {
+        if !ctx.p.is_finite() {
+            return 0.0;
+        }
         match self {
             Self::Uniform(s) => s.pmf(light),
             Self::Power(s) => s.pmf(light),
+            Self::Bvh(s) => s.pmf(ctx, light),
         }
     }
 }

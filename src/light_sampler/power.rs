@@ -43,6 +43,11 @@ impl PowerSampler {
         self.alias.sample(u).map(|(i, pmf)| (self.ids[i], pmf))
     }
 
+    /// Calls `f` with every light and its pmf.
+    pub fn for_each_pmf(&self, mut f: impl FnMut(LightId, f32)) {
+        self.ids.iter().enumerate().for_each(|(i, &id)| f(id, self.alias.pmf(i)));
+    }
+
     /// Probability of choosing `light`.
     pub fn pmf(&self, light: LightId) -> f32 {
         let i = (self.offsets[light.kind.order()] + light.row) as usize;

@@ -37,6 +37,12 @@ impl UniformSampler {
         Some((self.ids[i], 1.0 / n as f32))
     }
 
+    /// Calls `f` with every light and its pmf.
+    pub fn for_each_pmf(&self, mut f: impl FnMut(LightId, f32)) {
+        let pmf = self.pmf(LightId { kind: crate::light::LightKind::Point, row: 0 });
+        self.ids.iter().for_each(|&id| f(id, pmf));
+    }
+
     /// 1/n for any light of the table.
     pub fn pmf(&self, _light: LightId) -> f32 {
         if self.ids.is_empty() { 0.0 } else { 1.0 / self.ids.len() as f32 }

@@ -1,3 +1,4 @@
 //! Reports and plots: spectrum and IES plots, accuracy-vs-time and scaling reports.
 pub mod accuracy;
+pub mod lights;
 pub mod plot;

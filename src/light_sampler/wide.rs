@@ -1,0 +1,239 @@
+//! The traversal form of the light BVH: the binary tree collapsed two levels at a time into
+//! nodes of up to four slots, stored as structure-of-arrays lanes so one SIMD pass computes all
+//! four importances. Half the depth and a quarter of the dependent importance chains of the
+//! binary walk: the binary tree stays the source of truth (build, refit, cost), and every slot
+//! is a copy of one binary node's bounds, updated when that node is refitted.
+
+use glam::{Vec3, Vec4};
+
+use super::bvh_build::Node;
+use super::importance::{ClusterQuery, EMPTY_BOUNDS, MAX_IMPORTANCE, MIN_DISTANCE_SQUARED};
+use crate::light::{LightId, LightKind};
+
+/// Marks "no slot" in `slot_of` and "no parent" for the root.
+pub(super) const NONE: u32 = u32::MAX;
+
+/// Up to four clusters side by side, one per SIMD lane. Empty lanes have zero power.
+#[derive(Clone, Copy, Debug)]
+#[repr(align(64))]
+pub(super) struct WideNode {
+    min: [Vec4; 3],
+    max: [Vec4; 3],
+    w: [Vec4; 3],
+    phi: Vec4,
+    radius: Vec4,
+    cos_theta_o: Vec4,
+    sin_theta_o: Vec4,
+    cos_theta_e: Vec4,
+    /// 1 in the lanes of two-sided clusters.
+    two_sided: Vec4,
+    /// Per lane: a light's row (leaf lanes) or the wide node below (interior lanes).
+    pub child: [u32; 4],
+    /// Per lane: the light's kind for leaf lanes; None for interior and empty lanes.
+    pub kind: [Option<LightKind>; 4],
+    /// The binary node this wide node was collapsed from (its slot in the parent gives the way up).
+    pub origin: u32,
+}
+
+impl WideNode {
+    fn empty(origin: u32) -> Self {
+        let mut n = Self {
+            min: [Vec4::ZERO; 3],
+            max: [Vec4::ZERO; 3],
+            w: [Vec4::ZERO; 3],
+            phi: Vec4::ZERO,
+            radius: Vec4::ZERO,
+            cos_theta_o: Vec4::ZERO,
+            sin_theta_o: Vec4::ZERO,
+            cos_theta_e: Vec4::ZERO,
+            two_sided: Vec4::ZERO,
+            child: [NONE; 4],
+            kind: [None; 4],
+            origin,
+        };
+        let empty = ClusterQuery::from(&EMPTY_BOUNDS);
+        for lane in 0..4 {
+            n.set_lane(lane, &empty);
+        }
+        n
+    }
+
+    /// Writes the cluster `q` into `lane`.
+    pub fn set_lane(&mut self, lane: usize, q: &ClusterQuery) {
+        for axis in 0..3 {
+            self.min[axis][lane] = q.min[axis];
+            self.max[axis][lane] = q.max[axis];
+            self.w[axis][lane] = q.w[axis];
+        }
+        self.phi[lane] = q.phi;
+        self.radius[lane] = q.signed_radius.abs();
+        self.cos_theta_o[lane] = q.cos_theta_o;
+        self.sin_theta_o[lane] = q.sin_theta_o;
+        self.cos_theta_e[lane] = q.cos_theta_e;
+        self.two_sided[lane] = if q.two_sided() { 1.0 } else { 0.0 };
+    }
+
+    /// The light in `lane`, for leaf lanes.
+    #[inline]
+    pub fn light(&self, lane: usize) -> Option<LightId> {
+        self.kind[lane].map(|kind| LightId { kind, row: self.child[lane] })
+    }
+
+    /// The four importances at `p` with normal `n` (zero for no normal): lane by lane the same
+    /// formula as `ClusterQuery::importance` (see there for the model and its sources).
+    #[inline(always)]
+    pub fn importance(&self, p: Vec3, n: Vec3) -> Vec4 {
+        let zero = Vec4::ZERO;
+        let one = Vec4::ONE;
+        let (px, py, pz) = (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z));
+        let [min_x, min_y, min_z] = self.min;
+        let [max_x, max_y, max_z] = self.max;
+        let (tx, ty, tz) = (px - 0.5 * (min_x + max_x), py - 0.5 * (min_y + max_y), pz - 0.5 * (min_z + max_z));
+        let dist2 = tx * tx + ty * ty + tz * tz;
+        let (gx, gy, gz) = (
+            (min_x - px).max(px - max_x).max(zero),
+            (min_y - py).max(py - max_y).max(zero),
+            (min_z - pz).max(pz - max_z).max(zero),
+        );
+        let gap = (gx * gx + gy * gy + gz * gz).sqrt();
+        let radius = self.radius;
+        let dist = dist2.sqrt();
+        let d2 = (dist * gap).max(radius * radius / 64.0).max(Vec4::splat(MIN_DISTANCE_SQUARED));
+        let inv_dist = Vec4::select(dist2.cmpgt(zero), dist.recip(), zero);
+        let (wx, wy, wz) = (tx * inv_dist, ty * inv_dist, tz * inv_dist);
+
+        let inside = dist2.cmple(radius * radius);
+        let sin_b = Vec4::select(inside, zero, radius * inv_dist);
+        let cos_b = Vec4::select(inside, -one, (one - sin_b * sin_b).max(zero).sqrt());
+
+        let [ax, ay, az] = self.w;
+        let cos_w0 = ax * wx + ay * wy + az * wz;
+        let cos_w = Vec4::select(self.two_sided.cmpgt(zero), cos_w0.abs(), cos_w0);
+        let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
+        let (cos_o, sin_o) = (self.cos_theta_o, self.sin_theta_o);
+        let within_o = cos_w.cmpgt(cos_o);
+        let cos_x = Vec4::select(within_o, one, cos_w * cos_o + sin_w * sin_o);
+        let sin_x = Vec4::select(within_o, zero, sin_w * cos_o - cos_w * sin_o);
+        let cos_p = Vec4::select(cos_x.cmpgt(cos_b), one, cos_x * cos_b + sin_x * sin_b);
+        let cos_p = Vec4::select(cos_o.cmple(-one), one, cos_p);
+        let cos_e = self.cos_theta_e;
+        let dark = cos_p.cmplt(cos_e) | self.phi.cmple(zero);
+        let t = ((cos_p - cos_e) / (one - cos_e).max(Vec4::splat(1e-12))).clamp(zero, one);
+        let smooth = t * t * (3.0 - 2.0 * t);
+        let emission = Vec4::select(cos_e.cmple(zero) | cos_p.cmpge(one), cos_p, smooth);
+        let mut value = self.phi * emission / d2;
+
+        if n != Vec3::ZERO {
+            let cos_i = (wx * n.x + wy * n.y + wz * n.z).abs();
+            let sin_i = (one - cos_i * cos_i).max(zero).sqrt();
+            let cone_bound = Vec4::select(cos_i.cmpgt(cos_b), one, cos_i * cos_b + sin_i * sin_b);
+            let axis = |lo: Vec4, hi: Vec4, pc: Vec4, nc: f32| ((lo - pc) * nc, (hi - pc) * nc);
+            let (lx, hx) = axis(min_x, max_x, px, n.x);
+            let (ly, hy) = axis(min_y, max_y, py, n.y);
+            let (lz, hz) = axis(min_z, max_z, pz, n.z);
+            let above = lx.max(hx) + ly.max(hy) + lz.max(hz);
+            let below = -(lx.min(hx) + ly.min(hy) + lz.min(hz));
+            let offset = above.max(below);
+            let plane_bound = Vec4::select(offset.cmpge(gap), one, offset / gap);
+            value *= cone_bound.min(plane_bound);
+        }
+        Vec4::select(dark, zero, value.clamp(zero, Vec4::splat(MAX_IMPORTANCE)))
+    }
+}
+
+/// Picks a lane in proportion to `weights` with `u` in [0, 1): (lane, its probability, `u`
+/// remapped to [0, 1) within the lane), or None when every weight is 0.
+#[inline]
+pub(super) fn choose_lane(weights: Vec4, u: f32) -> Option<(usize, f32, f32)> {
+    let w = weights.to_array();
+    let total = ((w[0] + w[1]) + w[2]) + w[3];
+    if !(total > 0.0) {
+        return None;
+    }
+    let target = u * total;
+    let (mut lane, mut before) = (0, 0.0);
+    let mut acc = 0.0;
+    for (k, &wk) in w.iter().enumerate() {
+        if wk > 0.0 {
+            (lane, before) = (k, acc);
+            if target < acc + wk {
+                break;
+            }
+        }
+        acc += wk;
+    }
+    let remapped = ((target - before) / w[lane]).clamp(0.0, super::bvh::ONE_MINUS_EPSILON);
+    Some((lane, w[lane] / total, remapped))
+}
+
+/// The probability `choose_lane` gives `lane`.
+#[inline]
+pub(super) fn lane_probability(weights: Vec4, lane: usize) -> f32 {
+    let w = weights.to_array();
+    let total = ((w[0] + w[1]) + w[2]) + w[3];
+    if total > 0.0 { w[lane] / total } else { 0.0 }
+}
+
+/// The wide form of a binary tree, and where each binary node sits in it.
+#[derive(Clone, Debug, Default)]
+pub(super) struct WideTree {
+    pub nodes: Vec<WideNode>,
+    /// Per binary node: `4 * wide node + lane` of its slot, or [`NONE`] (the root, and interior
+    /// nodes collapsed into their parent's wide node).
+    pub slot_of: Vec<u32>,
+}
+
+impl WideTree {
+    /// Collapses the binary tree `binary` (root first, children adjacent, interior root).
+    pub fn build(binary: &[Node]) -> Self {
+        let mut tree = Self { nodes: Vec::with_capacity(binary.len() / 3 + 1), slot_of: vec![NONE; binary.len()] };
+        if binary.first().is_some_and(|root| root.light().is_none()) {
+            tree.collapse(binary, 0);
+        }
+        tree
+    }
+
+    /// Appends the wide node of binary interior node `b` (and everything below it); returns its index.
+    fn collapse(&mut self, binary: &[Node], b: usize) -> u32 {
+        let me = self.nodes.len();
+        self.nodes.push(WideNode::empty(b as u32));
+        let c = binary[b].index as usize;
+        let (mut slots, mut count) = ([0usize; 4], 0);
+        for child in [c, c + 1] {
+            match binary[child].light() {
+                Some(_) => (slots[count], count) = (child, count + 1),
+                None => {
+                    let g = binary[child].index as usize;
+                    (slots[count], slots[count + 1], count) = (g, g + 1, count + 2);
+                }
+            }
+        }
+        for (lane, &s) in slots[..count].iter().enumerate() {
+            self.slot_of[s] = (4 * me + lane) as u32;
+            self.nodes[me].set_lane(lane, &binary[s].query);
+            match binary[s].light() {
+                Some(id) => (self.nodes[me].child[lane], self.nodes[me].kind[lane]) = (id.row, Some(id.kind)),
+                None => {
+                    let below = self.collapse(binary, s);
+                    self.nodes[me].child[lane] = below;
+                }
+            }
+        }
+        me as u32
+    }
+
+    /// Writes a binary node's new bounds into its `slot` (from `slot_of`), if it has one.
+    #[inline]
+    pub fn set_slot(&mut self, slot: u32, q: &ClusterQuery) {
+        if slot != NONE {
+            self.nodes[slot as usize / 4].set_lane(slot as usize % 4, q);
+        }
+    }
+
+    /// The slot above wide node `w`: (parent wide node, lane), or None for the root.
+    #[inline]
+    pub fn parent_slot(&self, w: usize) -> Option<(usize, usize)> {
+        let slot = self.slot_of[self.nodes[w].origin as usize];
+        (slot != NONE).then(|| (slot as usize / 4, slot as usize % 4))
+    }
+}
