@@ -449,3 +449,18 @@ fn lat_long_mapping_round_trips_and_matches_the_stated_convention() {
     eprintln!("lat-long round trip: worst direction error {worst_dir:.2e}, worst uv error {worst_uv:.2e}");
     assert!(worst_dir < 1e-6 && worst_uv < 1e-6, "{worst_dir} {worst_uv}");
 }
+
+#[test]
+fn read_exr_gives_back_exactly_what_write_exr_wrote_negatives_included() {
+    use kelvin::render::film_io::{read_exr, write_exr};
+    let dir = std::env::temp_dir().join(format!("kelvin-read-exr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("exact.exr");
+    let rgb: Vec<glam::Vec3> =
+        (0..12).map(|i| glam::Vec3::new(i as f32 * 0.37 - 2.0, -1e-7 * i as f32, 1e5 / (i + 1) as f32)).collect();
+    write_exr(&path, 4, 3, &rgb).unwrap();
+    let (w, h, back) = read_exr(&path).unwrap();
+    assert_eq!((w, h), (4, 3));
+    assert_eq!(back, rgb);
+    let _ = std::fs::remove_dir_all(&dir);
+}

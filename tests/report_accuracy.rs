@@ -57,6 +57,21 @@ fn quick_report_is_written_and_its_numbers_are_sane() {
         eprintln!("F11: dE00 rgb {:.2}, spectral {:.2}", de("rgb"), de("spectral"));
         assert!(de("rgb") > 0.5, "RGB should be visibly off under F11");
     }
+    // A second run reads the cached references back exactly (negative sRGB values of saturated
+    // spectral pixels included), so every error is the same.
+    let again = AccuracyOptions { scenes: vec![SceneId::CheckerF11], ..opts };
+    let second = run_accuracy(&again, &mut |m| eprintln!("{m}")).expect("second run");
+    let first = reports.iter().find(|r| r.scene == SceneId::CheckerF11).expect("checker-f11 reported");
+    assert!(second[0].references.iter().all(|r| r.cached), "references should come from the cache");
+    for (a, b) in first.rows.iter().zip(&second[0].rows) {
+        assert_eq!(
+            (a.rel_mse, a.de00),
+            (b.rel_mse, b.de00),
+            "{} {}: cached reference differs",
+            a.knob.name(),
+            a.setting
+        );
+    }
     let _ = std::fs::remove_dir_all(&out);
 }
 

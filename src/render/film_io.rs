@@ -48,6 +48,29 @@ pub fn write_exr(path: &Path, width: usize, height: usize, rgb: &[Vec3]) -> Resu
     write_file(path, &what, &bytes)
 }
 
+/// Reads an OpenEXR written by [`write_exr`] back exactly (negative values included, unlike the
+/// validating loader for light maps in `scene::image`): width, height and the row-major pixels.
+pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<Vec3>), ImageIoError> {
+    use exr::prelude::{ReadChannels, ReadLayers};
+    let what = path.display().to_string();
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |size, _| (size.width(), vec![Vec3::ZERO; size.width() * size.height()]),
+            |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b): (f32, f32, f32)| {
+                px[pos.y() * *w + pos.x()] = Vec3::new(r, g, b)
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .non_parallel()
+        .from_file(path)
+        .map_err(|e| ImageIoError::Io { what: what.clone(), msg: e.to_string() })?;
+    let size = image.layer_data.size;
+    Ok((size.width(), size.height(), image.layer_data.channel_data.pixels.1))
+}
+
 /// Writes a tone-mapped 8-bit sRGB PNG; `exposure` is in stops (0 = unchanged). See the module docs.
 pub fn write_png(path: &Path, width: usize, height: usize, rgb: &[Vec3], exposure: f32) -> Result<(), ImageIoError> {
     use image::ImageEncoder;

@@ -99,6 +99,10 @@ pub struct Row {
     pub config: Config,
     /// Fastest render of the setting, s.
     pub seconds: f64,
+    /// `time_ratio` times the spp knob's baseline time, s: the time on a common footing, since
+    /// the machine's load may drift between knobs (each knob re-times its own baseline). The
+    /// plots and the Pareto front use it.
+    pub norm_seconds: f64,
     /// Camera samples per second of that render.
     pub samples_per_s: f64,
     /// Mean over the renders of [`rel_mse`] and [`max_error`].
@@ -120,7 +124,8 @@ pub struct Row {
     pub time_ratio: f64,
     pub error_ratio: f64,
     pub efficiency: f64,
-    /// On the Pareto front of (time, relative MSE) among the rows compared with the main reference.
+    /// On the Pareto front of (`norm_seconds`, relative MSE) among the rows compared with the main
+    /// reference.
     pub pareto: bool,
 }
 

@@ -38,7 +38,7 @@ pub fn write_index(reports: &[SceneReport], out: &Path) -> Result<(), AccuracyEr
 }
 
 const CSV_HEADER: &str = "scene,knob,setting,spp,color,sampler,selection,strategy,shadow_offset,light_math,env_table,\
-against,seconds,samples_per_s,rel_mse,max_err,bias2,bias2_se,de00_mean,de00_max,time_ratio,error_ratio,efficiency,baseline,pareto";
+against,seconds,norm_seconds,samples_per_s,rel_mse,max_err,bias2,bias2_se,de00_mean,de00_max,time_ratio,error_ratio,efficiency,baseline,pareto";
 
 fn csv_row(scene: &str, knob: &str, r: &Row) -> String {
     let c = &r.config;
@@ -50,7 +50,7 @@ fn csv_row(scene: &str, knob: &str, r: &Row) -> String {
     let (de_mean, de_max) =
         r.de00.map_or((String::new(), String::new()), |(a, b)| (format!("{a:.6}"), format!("{b:.6}")));
     format!(
-        "{scene},{knob},{},{},{:?},{:?},{:?},{:?},{offset},{:?},{env},{:?},{:.6},{:.1},{:.6e},{:.6e},{:.6e},{:.6e},{de_mean},{de_max},{:.4},{:.4},{:.4},{},{}",
+        "{scene},{knob},{},{},{:?},{:?},{:?},{:?},{offset},{:?},{env},{:?},{:.6},{:.6},{:.1},{:.6e},{:.6e},{:.6e},{:.6e},{de_mean},{de_max},{:.4},{:.4},{:.4},{},{}",
         r.setting.replace(',', ";"),
         c.spp,
         c.color,
@@ -60,6 +60,7 @@ fn csv_row(scene: &str, knob: &str, r: &Row) -> String {
         c.precision,
         r.against,
         r.seconds,
+        r.norm_seconds,
         r.samples_per_s,
         r.rel_mse,
         r.max_err,
@@ -151,9 +152,9 @@ pub fn markdown(report: &SceneReport) -> String {
             None => s.push('\n'),
         }
     }
-    s += "\n(base): the knob's baseline; \\*: on the Pareto front of time and relative MSE. bias^2: the relative MSE \
-          left at infinite spp, estimated from the renders' spread (~0: below two standard errors; its floor is the \
-          reference's own noise). Ratios \
-          are against the knob's baseline; efficiency x = (MSE x time of the baseline) / (MSE x time).\n";
+    s += "\n(base): the knob's baseline. \\*: on the Pareto front of relative MSE and time (each knob is timed \
+          against its own baseline run, then scaled to the spp baseline). bias^2: the relative MSE left at infinite \
+          spp, estimated from the renders' spread (~0: below two standard errors; its floor is the reference's own \
+          noise). Ratios are against the knob's baseline; efficiency x = (MSE x time of the baseline) / (MSE x time).\n";
     s
 }

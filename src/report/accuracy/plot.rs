@@ -33,9 +33,9 @@ pub fn error_vs_time(path: &Path, report: &SceneReport) -> Result<(), PlotError>
     }
 }
 
-/// (time in ms, relative MSE) of a row, if it fits a log axis.
+/// (normalised time in ms, relative MSE) of a row, if it fits a log axis.
 fn point(r: &Row) -> Option<(f64, f64)> {
-    let p = (r.seconds * 1e3, r.rel_mse);
+    let p = (r.norm_seconds * 1e3, r.rel_mse);
     (p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite()).then_some(p)
 }
 
@@ -89,7 +89,7 @@ where
         .map_err(|x| e(&x))?;
     chart
         .configure_mesh()
-        .x_desc("render time (ms)")
+        .x_desc("render time (ms; ratio to the knob's baseline x the spp baseline's time)")
         .y_desc("relative MSE")
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .x_label_formatter(&|v| format!("{v:.0}"))

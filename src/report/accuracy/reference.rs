@@ -9,7 +9,7 @@ use glam::Vec3;
 
 use super::knobs::Config;
 use super::{AccuracyError, scenes::BuiltScene};
-use crate::render::film_io::write_exr;
+use crate::render::film_io::{read_exr, write_exr};
 use crate::render::renderer::render;
 use crate::shading::ColorMode;
 
@@ -73,7 +73,6 @@ pub fn reference(
 fn read_cached(path: &Path, meta: &Path, width: u32, height: u32) -> Option<(Vec<Vec3>, f64)> {
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(meta).ok()?).ok()?;
     let seconds = json.get("seconds")?.as_f64()?;
-    let loaded = crate::scene::image::load_image(path).ok()?;
-    let img = loaded.image;
-    (img.width == width as usize && img.height == height as usize).then_some((img.pixels, seconds))
+    let (w, h, pixels) = read_exr(path).ok()?;
+    (w == width as usize && h == height as usize).then_some((pixels, seconds))
 }

@@ -26,7 +26,8 @@ pub const MANY_LIGHTS: usize = 256;
 pub enum SceneId {
     /// The embedded default scene (area, spot, blackbody point light and sky).
     Default,
-    /// [`MANY_LIGHTS`] point and spot lights over a ground with occluders.
+    /// [`MANY_LIGHTS`] point and spot lights over a ground with occluders
+    /// ([`crate::scenes::spawn_scaling_scene`]).
     ManyLights,
     /// Objects under a real sky with its sun ([`ENV_MAP`]).
     EnvSun,
@@ -85,7 +86,7 @@ impl SceneId {
     /// A description of everything the scene depends on, for the reference cache key.
     pub fn describe(self) -> String {
         match self {
-            SceneId::ManyLights => format!("many-lights n={MANY_LIGHTS} seed=1 v1"),
+            SceneId::ManyLights => format!("scaling-scene n={MANY_LIGHTS} seed=1 v2"),
             SceneId::EnvSun => format!("env-sun {ENV_MAP} nits={ENV_NITS} v1"),
             s => format!("{} v1", s.name()),
         }
@@ -112,7 +113,17 @@ pub fn build(id: SceneId, data_dir: &Path) -> Result<Result<BuiltScene, String>,
     let mut checker = None;
     match id {
         SceneId::Default => crate::scenes::default_scene::spawn_default_scene(&mut world),
-        SceneId::ManyLights => crate::scenes::many_lights::spawn_many_lights(&mut world, MANY_LIGHTS, 1),
+        SceneId::ManyLights => {
+            // The many-lights benchmark scene, seen from above at an angle.
+            let s = crate::scenes::spawn_scaling_scene(&mut world, MANY_LIGHTS, 1);
+            let eye = glam::Vec3::new(0.0, 0.9, 1.3) * s.half_extent;
+            let target = glam::Vec3::new(0.0, 0.0, -0.1 * s.half_extent);
+            let camera = crate::render::camera::Camera { yfov: 50f32.to_radians() };
+            world.spawn((
+                camera,
+                crate::geometry::Transform::from_translation(eye).looking_to(target - eye, glam::Vec3::Y),
+            ));
+        }
         SceneId::EnvSun => {
             let path = data_dir.join(ENV_MAP);
             if !path.exists() {

@@ -94,6 +94,7 @@ pub fn measure(
         setting,
         config: r.config,
         seconds: r.seconds,
+        norm_seconds: r.seconds,
         samples_per_s: r.samples as f64 / r.seconds.max(1e-9),
         rel_mse: mean(&|im| rel_mse(im, &reference.pixels)),
         max_err: mean(&|im| max_error(im, &reference.pixels)),
@@ -109,7 +110,8 @@ pub fn measure(
     }
 }
 
-/// Fills each row's ratios against its knob's baseline row and marks the Pareto front.
+/// Fills each row's ratios against its knob's baseline row and its normalised time, and marks
+/// the Pareto front.
 pub fn finish_rows(rows: &mut [Row], base: &Config) {
     for knob in Knob::ALL {
         let Some(b) = rows.iter().find(|r| r.knob == knob && r.config == *base).cloned() else { continue };
@@ -119,6 +121,10 @@ pub fn finish_rows(rows: &mut [Row], base: &Config) {
             r.error_ratio = r.rel_mse / b.rel_mse.max(1e-300);
             r.efficiency = (b.rel_mse * b.seconds) / (r.rel_mse * r.seconds).max(1e-300);
         }
+    }
+    let t0 = rows.iter().find(|r| r.knob == Knob::Spp && r.baseline).map(|r| r.seconds);
+    for r in rows.iter_mut() {
+        r.norm_seconds = t0.map_or(r.seconds, |t| r.time_ratio * t);
     }
     let main: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].against == Against::Main).collect();
     for &i in &main {
