@@ -101,7 +101,7 @@ pub fn markdown(report: &SceneReport) -> String {
         .collect();
     let _ = writeln!(
         s,
-        "{}x{} pixels, {} lights; references: {}. Baseline: {:?}, power sampler, one light per sample, MIS, \
+        "{}x{} pixels, {} lights; references: {}. Baseline: {:?}, {} sampler, one light per sample, MIS, \
          error-bound offsets, f32, {} spp; {} renders per setting. Relative MSE falls as spp^{:.2} on the spp ladder; \
          the reference against itself: relative MSE {}, max error {}.\n",
         b.width,
@@ -109,6 +109,7 @@ pub fn markdown(report: &SceneReport) -> String {
         report.n_lights,
         refs.join(", "),
         report.rows.first().map(|r| r.config.color).unwrap_or_default(),
+        format!("{:?}", report.scene.baseline_sampler()).to_lowercase(),
         b.base_spp,
         b.reps,
         report.spp_slope,
