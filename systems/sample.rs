@@ -168,20 +168,23 @@ pub fn sample_direct_lighting(
     if !settings.shadows {
         return;
     }
-    for e in 0..n * k {
-        let r = &out.radiance[e];
-        if out.pdf[e] > 0.0 && r.0.iter().any(|&v| v > 0.0) && table.casts_shadows(out.light[e]) {
-            let i = e / k;
-            let flags = table.flags(out.light[e]);
-            rays.origin.push(batch.position[i]);
-            rays.origin_error.push(batch.position_error[i]);
-            rays.origin_normal.push(batch.normal[i]);
-            rays.target.push(p_light[e]);
-            rays.target_normal.push(n_light[e]);
-            rays.to_infinity.push(flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION));
-            rays.entry.push(e as u32);
-        }
+    // Entries that need a shadow ray, found in parallel and listed in entry order.
+    let out = &*out;
+    let needs_ray =
+        |e: usize| out.pdf[e] > 0.0 && out.radiance[e].0.iter().any(|&v| v > 0.0) && table.casts_shadows(out.light[e]);
+    let entries: Vec<u32> =
+        (0..n * k).into_par_iter().with_min_len(CHUNK).filter(|&e| needs_ray(e)).map(|e| e as u32).collect();
+    for &e in &entries {
+        let (e, i) = (e as usize, e as usize / k);
+        let flags = table.flags(out.light[e]);
+        rays.origin.push(batch.position[i]);
+        rays.origin_error.push(batch.position_error[i]);
+        rays.origin_normal.push(batch.normal[i]);
+        rays.target.push(p_light[e]);
+        rays.target_normal.push(n_light[e]);
+        rays.to_infinity.push(flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION));
     }
+    rays.entry = entries;
     let count = rays.len();
     rays.occluded.resize(count, false);
 }

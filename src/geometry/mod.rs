@@ -20,7 +20,7 @@ pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};
 pub use transform::Transform;
 pub use triangle::MAX_COORDINATE;
-pub use visibility::{Hit, closest_hits, occluded};
+pub use visibility::{Hit, RAY_CHUNK, closest_hits, occluded};
 
 use glam::Vec3;
 use thiserror::Error;

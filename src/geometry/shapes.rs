@@ -57,6 +57,11 @@ pub struct PlacedShape {
     pub shape: Shape,
     to_world: DAffine3,
     to_object: DAffine3,
+    /// |to_world's linear part| and |its translation|, for point error bounds.
+    abs_linear: DMat3,
+    abs_translation: DVec3,
+    /// The inverse transpose of to_world's linear part, which maps normals.
+    normal_matrix: DMat3,
 }
 
 /// A ray-shape hit in world space.
@@ -292,7 +297,15 @@ impl PlacedShape {
         if !invertible || !transform.rotation.is_finite() || transform.rotation.length_squared() == 0.0 {
             return Err(GeometryError::InvalidTransform { transform: *transform });
         }
-        let placed = Self { shape, to_world, to_object: to_world.inverse() };
+        let to_object = to_world.inverse();
+        let placed = Self {
+            shape,
+            to_world,
+            to_object,
+            abs_linear: to_world.matrix3.abs(),
+            abs_translation: to_world.translation.abs(),
+            normal_matrix: to_object.matrix3.transpose(),
+        };
         let (lo, hi) = placed.world_bounds();
         if !(lo.is_finite() && hi.is_finite()) {
             return Err(GeometryError::InvalidTransform { transform: *transform });
@@ -361,10 +374,8 @@ impl PlacedShape {
 
     fn surface_point(&self, p_obj: DVec3, n_obj: DVec3) -> SurfacePoint {
         let p64 = self.to_world.transform_point3(p_obj);
-        let m_abs: DMat3 = self.to_world.matrix3.abs();
-        let terms = m_abs * p_obj.abs() + self.to_world.translation.abs();
-        // Normals map by the inverse transpose.
-        let n = (self.to_object.matrix3.transpose() * n_obj).normalize();
+        let terms = self.abs_linear * p_obj.abs() + self.abs_translation;
+        let n = (self.normal_matrix * n_obj).normalize();
         SurfacePoint { p: p64.as_vec3(), p_error: f64_point_error(p64, terms), n: n.as_vec3() }
     }
 }

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::film::Film;
 use super::material::Material;
-use crate::geometry::{Hit, Ray, SceneBvh, closest_hits};
+use crate::geometry::{Hit, RAY_CHUNK, Ray, SceneBvh};
 use crate::light::{ColorQuery, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
@@ -18,7 +18,7 @@ use crate::spectrum::{SampledSpectrum, SampledWavelengths, color};
 use crate::systems::GeometryIndex;
 
 /// Camera samples per batch handed to the light system.
-const BATCH_SAMPLES: usize = 1 << 16;
+const BATCH_SAMPLES: usize = 1 << 14;
 /// Salt that keeps the renderer's random dimensions apart from the light systems'.
 const RENDER_SALT: u64 = 0x5eed_ca3e_7a11_0b0e;
 
@@ -110,7 +110,12 @@ struct CameraSample {
     ray: Ray,
     hit: Option<Hit>,
     wavelengths: Option<SampledWavelengths>,
+    /// Index of the point in the `ShadingBatch`, or `NOT_SHADED` for rays that escaped.
+    point: u32,
 }
+
+/// `CameraSample::point` of a sample that hit nothing.
+const NOT_SHADED: u32 = u32::MAX;
 
 /// The camera of the world (the first `Camera` with a `Transform`), or one framing the scene.
 fn find_camera(world: &mut World, width: u32, height: u32) -> PinholeCamera {
@@ -177,37 +182,31 @@ pub fn render_with(
     let mut stats = RenderStats::default();
     let total = opts.width as usize * opts.height as usize * opts.spp as usize;
     let mut samples: Vec<CameraSample> = Vec::with_capacity(BATCH_SAMPLES.min(total));
-    let mut rays: Vec<Ray> = Vec::new();
-    let mut hits: Vec<Option<Hit>> = Vec::new();
-    let mut contributions: Vec<Vec3> = Vec::new();
+    let mut contributions: Vec<(Vec3, bool)> = Vec::new();
     let mut first = 0usize;
     while first < total {
         let last = (first + BATCH_SAMPLES).min(total);
         // Sample index s of pixel p is camera sample p * spp + s: a pixel's samples are adjacent.
-        samples.clear();
+        // Camera rays and their closest hits in one parallel pass.
+        let bvh = world.resource::<SceneBvh>();
         (first..last)
             .into_par_iter()
+            .with_min_len(RAY_CHUNK)
             .map(|k| {
                 let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
                 let mut rng = SampleStream::new(seed, pixel, sample);
                 let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
                 let wavelengths = spectral.then(|| SampledWavelengths::sample_visible(rng.next_f32()));
-                CameraSample { pixel, sample, ray, hit: None, wavelengths }
+                CameraSample { pixel, sample, ray, hit: bvh.closest_hit(&ray), wavelengths, point: NOT_SHADED }
             })
             .collect_into_vec(&mut samples);
-        rays.clear();
-        rays.extend(samples.iter().map(|s| s.ray));
-        closest_hits(world.resource::<SceneBvh>(), &rays, &mut hits);
-        for (s, h) in samples.iter_mut().zip(&hits) {
-            s.hit = *h;
-        }
         // Points on surfaces go to the light system; normals face the viewer.
-        let shaded: Vec<usize> = (0..samples.len()).filter(|&i| samples[i].hit.is_some()).collect();
         {
             let mut batch = world.resource_mut::<ShadingBatch>();
             batch.clear();
-            for &i in &shaded {
-                let (s, h) = (&samples[i], samples[i].hit.unwrap());
+            for s in samples.iter_mut() {
+                let Some(h) = s.hit else { continue };
+                s.point = batch.len() as u32;
                 let flip = if h.ng.dot(s.ray.dir) > 0.0 { -1.0 } else { 1.0 };
                 let ns = if h.ns.dot(h.ng) * flip < 0.0 { h.ng * flip } else { h.ns * flip };
                 batch.push_with_error(h.p, h.p_error, h.ng * flip, ns, s.pixel, s.sample);
@@ -235,27 +234,24 @@ pub fn render_with(
         };
         let escape_ids: Vec<_> = shade.table.escape_lights().collect();
         let bsdf_sampling = opts.strategy != Strategy::LightOnly && shade.table.has_non_delta_lights();
-        contributions.clear();
-        contributions.resize(samples.len(), Vec3::ZERO);
-        // Escaped camera rays see the infinite lights directly.
-        for (c, s) in contributions.iter_mut().zip(&samples).filter(|(_, s)| s.hit.is_none()) {
-            let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
-            let le = escape_ids
-                .iter()
-                .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.ray.dir, query)));
-            *c = to_rgb(le, s.wavelengths.as_ref());
-        }
-        let shaded_values: Vec<(Vec3, bool)> = shaded
+        samples
             .par_iter()
-            .enumerate()
-            .map(|(j, &i)| shade.shade(j, &samples[i], &escape_ids, bsdf_sampling))
-            .collect();
-        for (&i, (rgb, traced)) in shaded.iter().zip(shaded_values) {
-            contributions[i] = rgb;
+            .with_min_len(RAY_CHUNK)
+            .map(|s| {
+                if s.point != NOT_SHADED {
+                    return shade.shade(s.point as usize, s, &escape_ids, bsdf_sampling);
+                }
+                // Escaped camera rays see the infinite lights directly.
+                let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
+                let le = escape_ids
+                    .iter()
+                    .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.ray.dir, query)));
+                (to_rgb(le, s.wavelengths.as_ref()), false)
+            })
+            .collect_into_vec(&mut contributions);
+        for (s, &(rgb, traced)) in samples.iter().zip(&contributions) {
+            film.add(s.pixel, rgb);
             stats.bsdf_rays += traced as u64;
-        }
-        for (s, c) in samples.iter().zip(&contributions) {
-            film.add(s.pixel, *c);
         }
         stats.camera_samples += samples.len() as u64;
         first = last;
