@@ -4,7 +4,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use kelvin::light_sampler::{BvhSampler, LightSampler};
 use kelvin::report::lights::{move_fraction, scaling_scene_table};
-use kelvin::scenes::SceneRng;
+use kelvin::scenes::scene_rng;
 use kelvin::shading::LightSamplerKind;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -26,7 +26,7 @@ fn refit(c: &mut Criterion) {
     for n in COUNTS {
         let (mut table, _) = scaling_scene_table(n, 1, 1);
         let mut sampler = BvhSampler::build(&table);
-        let mut rng = SceneRng::new(2);
+        let mut rng = scene_rng(2);
         // Each iteration is a frame: 1% of the lights move by up to 0.25 m (not timed), the sampler
         // follows.
         group.bench_function(format!("{n}"), |b| {

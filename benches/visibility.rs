@@ -9,26 +9,13 @@ use glam::{EulerRot, Quat, Vec2, Vec3};
 use kelvin::geometry::{
     Disk, GeometryInstance, GeometryRef, Hit, Mesh, Ray, SceneBvh, Sphere, Transform, closest_hits, occluded,
 };
+use kelvin::rng::SplitMix64;
 use obvhs::BvhBuildParams;
 use std::hint::black_box;
 
-/// SplitMix64: deterministic scenes and rays.
-struct Rng(u64);
-
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f()
-    }
-    fn vec(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        Vec3::new(self.range(lo.x, hi.x), self.range(lo.y, hi.y), self.range(lo.z, hi.z))
-    }
+/// A uniform point in the box [lo, hi).
+fn point_in_box(rng: &mut SplitMix64, lo: Vec3, hi: Vec3) -> Vec3 {
+    Vec3::new(rng.range(lo.x, hi.x), rng.range(lo.y, hi.y), rng.range(lo.z, hi.z))
 }
 
 /// Scene extent: objects are scattered over a 100 m x 100 m area, 0 to 8 m high.
@@ -46,7 +33,7 @@ impl Scene {
     /// `objects` copies of a 96-triangle sphere with random placement, rotation and scale, a
     /// 2-triangle ground, and 40 analytic shapes (spheres and disks, as area lights would be).
     fn new(objects: usize, seed: u64) -> Self {
-        let mut rng = Rng(seed);
+        let mut rng = SplitMix64::new(seed);
         let transforms = (0..objects).map(|_| random_transform(&mut rng)).collect();
         let g = 60.0;
         let ground = Mesh::from_triangles(&[
@@ -75,9 +62,10 @@ impl Scene {
             entity_index: out.len() as u32,
             material: 1,
         });
-        let mut rng = Rng(99);
+        let mut rng = SplitMix64::new(99);
         for i in 0..40 {
-            let transform = Transform::from_translation(rng.vec(LO, HI)).looking_to(Vec3::NEG_Y, Vec3::Z);
+            let transform =
+                Transform::from_translation(point_in_box(&mut rng, LO, HI)).looking_to(Vec3::NEG_Y, Vec3::Z);
             let geometry = if i % 2 == 0 {
                 GeometryRef::Shape(Sphere { radius: 0.3 }.into())
             } else {
@@ -93,10 +81,10 @@ impl Scene {
     }
 }
 
-fn random_transform(rng: &mut Rng) -> Transform {
+fn random_transform(rng: &mut SplitMix64) -> Transform {
     let tau = std::f32::consts::TAU;
     Transform {
-        translation: rng.vec(LO + Vec3::Y, HI),
+        translation: point_in_box(rng, LO + Vec3::Y, HI),
         rotation: Quat::from_euler(EulerRot::XYZ, rng.range(0.0, tau), rng.range(0.0, tau), 0.0),
         scale: Vec3::splat(rng.range(0.3, 1.5)),
     }
@@ -118,13 +106,13 @@ fn camera_rays() -> Vec<Ray> {
 
 /// Random origins in the scene box, uniformly random directions, to infinity.
 fn random_rays() -> Vec<Ray> {
-    let mut rng = Rng(7);
+    let mut rng = SplitMix64::new(7);
     (0..RAYS)
         .map(|_| {
             let z = rng.range(-1.0, 1.0);
             let phi = rng.range(0.0, std::f32::consts::TAU);
             let r = (1.0 - z * z).sqrt();
-            Ray::new(rng.vec(LO, HI), Vec3::new(r * phi.cos(), z, r * phi.sin()))
+            Ray::new(point_in_box(&mut rng, LO, HI), Vec3::new(r * phi.cos(), z, r * phi.sin()))
         })
         .collect()
 }
@@ -180,8 +168,8 @@ fn bench_refit(c: &mut Criterion) {
     let mut group = c.benchmark_group("update_100k_tris");
     group.sample_size(20);
     for (label, step) in [("1pct", 100), ("100pct", 1)] {
-        let mut rng = Rng(11);
-        let jitter = |rng: &mut Rng, t: Transform| Transform {
+        let mut rng = SplitMix64::new(11);
+        let jitter = |rng: &mut SplitMix64, t: Transform| Transform {
             translation: t.translation + Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0)),
             ..t
         };
@@ -209,7 +197,7 @@ fn bench_refit(c: &mut Criterion) {
     // Worst case for refit: every object jumps to an unrelated place. Trace the same rays
     // through the refitted tree and through a fresh build.
     let mut refitted = SceneBvh::build(&instances);
-    let mut rng = Rng(5);
+    let mut rng = SplitMix64::new(5);
     let scatter: Vec<(u32, Transform)> =
         (0..scene.transforms.len() as u32).map(|i| (i, random_transform(&mut rng))).collect();
     refitted.refit(&scatter).unwrap();

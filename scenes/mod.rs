@@ -19,30 +19,10 @@ pub mod sunlit_objects;
 pub use panel::{PanelScene, spawn_emissive_panel_room};
 pub use scaling::{LIGHT_SPACING, ScalingScene, spawn_scaling_scene};
 
-/// A small deterministic generator (splitmix64) for the scene generators.
-#[derive(Clone, Debug)]
-pub struct SceneRng(u64);
+use crate::rng::{SplitMix64, mix64};
 
-impl SceneRng {
-    /// A stream for `seed`.
-    pub fn new(seed: u64) -> Self {
-        Self(crate::rng::mix64(seed ^ 0x6b65_6c76_696e))
-    }
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        crate::rng::mix64(self.0)
-    }
-    /// Uniform in [0, 1).
-    pub fn f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u32 << 24) as f32)
-    }
-    /// Uniform in [lo, hi).
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f32()
-    }
-    /// Log-uniform in [lo, hi) (lo > 0).
-    pub fn log_range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo * (hi / lo).powf(self.f32())
-    }
+/// The scene generators' stream for `seed`: a [`SplitMix64`] whose state starts at the mixed seed,
+/// so nearby seeds give unrelated scenes.
+pub fn scene_rng(seed: u64) -> SplitMix64 {
+    SplitMix64::new(mix64(seed ^ 0x6b65_6c76_696e))
 }

@@ -12,9 +12,10 @@ use std::f32::consts::PI;
 use bevy_ecs::prelude::*;
 use glam::{Quat, Vec2, Vec3};
 
-use super::SceneRng;
+use super::scene_rng;
 use crate::geometry::{Mesh, Rectangle, Sphere, Transform};
 use crate::light::{Amount, LightSampleContext, SpotLight};
+use crate::rng::SplitMix64;
 use crate::spectrum::Spectrum;
 
 /// Room size (x, y, z), m; the floor is y = 0.
@@ -38,7 +39,7 @@ pub struct PanelScene {
 impl PanelScene {
     /// `count` points on the floor (normal +Y), uniform over the room.
     pub fn floor_points(&self, count: usize, seed: u64) -> Vec<LightSampleContext> {
-        let mut rng = SceneRng::new(seed ^ 0x7a_11e1);
+        let mut rng = scene_rng(seed ^ 0x7a_11e1);
         let h = 0.5 * ROOM.x * 0.95;
         (0..count)
             .map(|_| LightSampleContext::on_surface(Vec3::new(rng.range(-h, h), 0.0, rng.range(-h, h)), Vec3::Y))
@@ -48,7 +49,7 @@ impl PanelScene {
 
 /// Relative luminance of the cell (i, j) of `tiles` x `tiles`: concentric bands of full, half and
 /// no light, with a few random dark cells.
-fn cell_pattern(i: usize, j: usize, tiles: usize, rng: &mut SceneRng) -> f32 {
+fn cell_pattern(i: usize, j: usize, tiles: usize, rng: &mut SplitMix64) -> f32 {
     let c = (tiles as f32 - 1.0) / 2.0;
     let ring = (i as f32 - c).abs().max((j as f32 - c).abs()) as usize;
     let band = [1.0, 0.5, 0.0, 0.5][ring % 4];
@@ -59,7 +60,7 @@ fn cell_pattern(i: usize, j: usize, tiles: usize, rng: &mut SceneRng) -> f32 {
 /// and a few sphere occluders, deterministically from `seed`.
 pub fn spawn_emissive_panel_room(world: &mut World, tiles: usize, seed: u64) -> PanelScene {
     let tiles = tiles.max(1);
-    let mut rng = SceneRng::new(seed);
+    let mut rng = scene_rng(seed);
     let y = ROOM.y - 0.05;
     let step = PANEL_SIZE / tiles as f32;
     let corner =

@@ -10,9 +10,10 @@ use std::f32::consts::PI;
 use bevy_ecs::prelude::*;
 use glam::{Quat, Vec2, Vec3};
 
-use super::SceneRng;
+use super::scene_rng;
 use crate::geometry::{Rectangle, Sphere, Transform};
 use crate::light::{Amount, LightSampleContext, PointLight, SpotLight};
+use crate::rng::SplitMix64;
 use crate::spectrum::Spectrum;
 
 /// Mean distance between neighbouring lights, m: one light per `LIGHT_SPACING^2` of ground.
@@ -43,7 +44,7 @@ pub struct ScalingScene {
 impl ScalingScene {
     /// `count` points on the ground (normal +Y), uniform over the central 80% of the lit square.
     pub fn ground_points(&self, count: usize, seed: u64) -> Vec<LightSampleContext> {
-        let mut rng = SceneRng::new(seed ^ 0x9_0123);
+        let mut rng = scene_rng(seed ^ 0x9_0123);
         let h = 0.8 * self.half_extent;
         (0..count)
             .map(|_| LightSampleContext::on_surface(Vec3::new(rng.range(-h, h), 0.0, rng.range(-h, h)), Vec3::Y))
@@ -54,9 +55,9 @@ impl ScalingScene {
 /// Spawns `n` lights (half point, half spot), a ground plane and sphere occluders into `world`,
 /// deterministically from `seed`. The lit square grows with `n` (constant light density).
 pub fn spawn_scaling_scene(world: &mut World, n: usize, seed: u64) -> ScalingScene {
-    let mut rng = SceneRng::new(seed);
+    let mut rng = scene_rng(seed);
     let half_extent = 0.5 * LIGHT_SPACING * (n.max(1) as f32).sqrt();
-    let position = |rng: &mut SceneRng| {
+    let position = |rng: &mut SplitMix64| {
         Vec3::new(
             rng.range(-half_extent, half_extent),
             rng.range(HEIGHT.0, HEIGHT.1),
@@ -64,7 +65,7 @@ pub fn spawn_scaling_scene(world: &mut World, n: usize, seed: u64) -> ScalingSce
         )
     };
     // The colour temperatures lamps are sold in (a handful, as in real scenes).
-    let warm_to_daylight = |rng: &mut SceneRng| {
+    let warm_to_daylight = |rng: &mut SplitMix64| {
         let t = CCT_K[(rng.next_u64() % CCT_K.len() as u64) as usize];
         Spectrum::Blackbody { temperature_k: t }
     };

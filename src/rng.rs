@@ -1,5 +1,6 @@
-//! Counter-based random numbers: a value is a pure function of (seed, pixel, sample, dimension),
-//! so images are bit-identical for any thread count and any batch order.
+//! Random numbers. Renders use counter-based streams: a value is a pure function of (seed, pixel,
+//! sample, dimension), so images are bit-identical for any thread count and any batch order. Scene
+//! generators, tests and benchmarks use the sequential [`SplitMix64`].
 
 /// A stream of uniform numbers for one (seed, pixel, sample); `dim` advances per draw.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,5 +43,80 @@ impl SampleStream {
     pub fn at_dimension(mut self, dim: u32) -> Self {
         self.dim = dim;
         self
+    }
+}
+
+/// A sequential generator (SplitMix64, Steele, Lea and Flood 2014) for code that draws numbers in order:
+/// scene generators, tests and benchmarks. Renders use the counter-based [`SampleStream`] instead.
+#[derive(Clone, Debug)]
+pub struct SplitMix64(u64);
+
+impl SplitMix64 {
+    /// A generator whose state starts at `seed` (the seed is used as is, not mixed).
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+
+    /// The next 64 random bits: the state advances by the golden-ratio increment, then is mixed.
+    #[inline]
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        mix64(self.0)
+    }
+
+    /// Uniform in [0, 1) on the 2^-24 grid, like a renderer's f32 samples.
+    #[inline]
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+
+    /// Two uniform f32 in [0, 1), x drawn first.
+    #[inline]
+    pub fn vec2(&mut self) -> glam::Vec2 {
+        glam::Vec2::new(self.f32(), self.f32())
+    }
+
+    /// Uniform in [0, 1) on the 2^-53 grid.
+    #[inline]
+    pub fn f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f32()
+    }
+
+    /// Log-uniform in [lo, hi) (lo > 0).
+    pub fn log_range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo * (hi / lo).powf(self.f32())
+    }
+
+    /// An index in 0..n by the modulo of 64 bits (bias below 2^-40 for n < 2^24); `n` must be > 0.
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The first outputs for seed 1234567 of the reference splitmix64.c (Vigna, prng.di.unimi.it).
+    #[test]
+    fn split_mix64_matches_the_reference_sequence() {
+        let mut rng = SplitMix64::new(1234567);
+        let got: Vec<u64> = (0..3).map(|_| rng.next_u64()).collect();
+        assert_eq!(got, [6457827717110365317, 3203168211198807973, 9817491932198370423]);
+    }
+
+    #[test]
+    fn split_mix64_floats_lie_in_the_unit_interval() {
+        let mut rng = SplitMix64::new(0);
+        for _ in 0..10_000 {
+            let (a, b) = (rng.f32(), rng.f64());
+            assert!((0.0..1.0).contains(&a) && (0.0..1.0).contains(&b));
+            assert!(rng.below(7) < 7);
+        }
     }
 }

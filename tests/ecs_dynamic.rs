@@ -8,29 +8,18 @@ use kelvin::geometry::Transform;
 use kelvin::light::{
     Amount, ColorQuery, DistantLight, LightKind, LightSampleContext, LightTable, PointLight, SpotLight,
 };
+use kelvin::rng::SplitMix64;
 use kelvin::shading::{DirectLighting, LightSelection, RunReport, SceneBounds, Settings, ShadingBatch};
 use kelvin::spectrum::{SampledSpectrum, Spectrum};
 use kelvin::systems::LightingPlugin;
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        kelvin::rng::mix64(self.0)
-    }
-    fn f32(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-    fn vec3(&mut self, r: f32) -> Vec3 {
-        Vec3::new(self.f32() - 0.5, self.f32() - 0.5, self.f32() - 0.5) * 2.0 * r
-    }
+/// A uniform point in the cube [-r, r)^3.
+fn in_cube(rng: &mut SplitMix64, r: f32) -> Vec3 {
+    Vec3::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5) * 2.0 * r
 }
 
-fn spawn_random(world: &mut World, rng: &mut Rng) -> Entity {
-    let t = Transform::from_translation(rng.vec3(50.0) + Vec3::Y * 60.0).looking_to(rng.vec3(1.0), Vec3::Y);
+fn spawn_random(world: &mut World, rng: &mut SplitMix64) -> Entity {
+    let t = Transform::from_translation(in_cube(rng, 50.0) + Vec3::Y * 60.0).looking_to(in_cube(rng, 1.0), Vec3::Y);
     let temp = 2000.0 + 100.0 * rng.below(40) as f64;
     let spectrum = Spectrum::blackbody(temp).unwrap();
     match rng.below(10) {
@@ -127,7 +116,7 @@ fn ten_thousand_lights_over_a_thousand_frames_stay_consistent() {
     let mut schedule = Schedule::default();
     world.insert_resource(Settings { selection: LightSelection::All, shadows: false, ..Default::default() });
     LightingPlugin::build(&mut world, &mut schedule);
-    let mut rng = Rng(7);
+    let mut rng = SplitMix64::new(7);
     let mut lights: Vec<Entity> = (0..10_000).map(|_| spawn_random(&mut world, &mut rng)).collect();
     let points = [Vec3::ZERO, Vec3::new(10.0, 0.0, -5.0), Vec3::new(-20.0, 1.0, 30.0)];
     {
@@ -145,7 +134,7 @@ fn ten_thousand_lights_over_a_thousand_frames_stay_consistent() {
         // 1% move, 0.5% change intensity, 0.5% disappear, 0.5% appear.
         for _ in 0..100 {
             let e = lights[rng.below(lights.len())];
-            let delta = rng.vec3(1.0);
+            let delta = in_cube(&mut rng, 1.0);
             world.get_mut::<Transform>(e).unwrap().translation += delta;
         }
         for _ in 0..50 {

@@ -5,23 +5,9 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Vec3, Vec4};
+use kelvin::rng::SplitMix64;
 use kelvin::scene::gltf::{GltfError, GltfScene, IesSource, LightKind, load_gltf, load_gltf_from_bytes};
 use serde_json::{Value, json};
-
-/// A tiny deterministic RNG (splitmix64).
-struct SplitMix(u64);
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-}
 
 /// A fresh directory under the system temp dir, unique to this test and process, removed when dropped.
 struct TempDir(PathBuf);
@@ -370,7 +356,7 @@ fn textured_triangle_loads_with_textures_and_transforms() {
 fn missing_and_garbage_textures_leave_factors_and_geometry() {
     let dir = temp_dir("bad-textures");
     std::fs::write(dir.join("tri.bin"), triangle_bin(TRIANGLE)).unwrap();
-    let mut rng = SplitMix(7);
+    let mut rng = SplitMix64::new(7);
     let garbage: Vec<u8> = (0..500).map(|_| rng.next_u64() as u8).collect();
     std::fs::write(dir.join("garbage.png"), garbage).unwrap();
     write_json(&dir.join("tri.gltf"), &triangle_json("tri.bin", 66, "no_such_texture.png", "garbage.png"));
@@ -519,7 +505,7 @@ fn real_gltf_with_truncated_bin_is_an_error_naming_it() {
 #[test]
 fn mutated_files_never_panic() {
     let Some(dir) = gltf_dir() else { return };
-    let mut rng = SplitMix(2024);
+    let mut rng = SplitMix64::new(2024);
     for file in ["bevy/CornellBox.glb", "kajiya/emissive_triangle/triangle.glb", "renderling/spot_lights.glb"] {
         let original = std::fs::read(dir.join(file)).unwrap();
         let (mut loaded, mut failed) = (0, 0);
@@ -677,7 +663,7 @@ fn mutated_json_numbers_never_panic() {
         json!(5125),
         json!(u64::MAX),
     ];
-    let mut rng = SplitMix(99);
+    let mut rng = SplitMix64::new(99);
     let (mut loaded, mut failed) = (0, 0);
     for _ in 0..200 {
         let mut json = original.clone();

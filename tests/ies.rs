@@ -6,32 +6,20 @@ use std::f64::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
+use kelvin::rng::SplitMix64;
 use kelvin::scene::ies::{IesError, IesProfile, IesVersion, PhotometricType, Symmetry, Tilt};
 
-/// Tiny deterministic generator (splitmix64) for directions and mutations.
-struct SplitMix(u64);
+/// An index in 0..n from one f64 draw (so the mutation sequences stay as they were).
+fn index_below(rng: &mut SplitMix64, n: usize) -> usize {
+    (rng.f64() * n as f64) as usize % n.max(1)
+}
 
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.f64() * n as f64) as usize % n.max(1)
-    }
-    /// Uniform direction on the sphere.
-    fn direction(&mut self) -> Vec3 {
-        let z = 1.0 - 2.0 * self.f64();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let phi = TAU * self.f64();
-        Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32)
-    }
+/// A uniform direction on the sphere.
+fn direction(rng: &mut SplitMix64) -> Vec3 {
+    let z = 1.0 - 2.0 * rng.f64();
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = TAU * rng.f64();
+    Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32)
 }
 
 /// Flux by a midpoint rule over (theta from -Z, phi) on an n_theta x 2 n_theta grid, through
@@ -172,9 +160,9 @@ fn isotropic_100_cd_integrates_to_400_pi() {
     let p = parse(&ies_file(1, &steps(0.0, 180.0, 5.0), &[0.0], |_, _| 100.0));
     assert_eq!(p.symmetry(), Symmetry::Rotational);
     assert!(rel(p.integrated_flux_lm(), 400.0 * PI) < 1e-12);
-    let mut rng = SplitMix(1);
+    let mut rng = SplitMix64::new(1);
     for _ in 0..1000 {
-        assert!((p.candela_dir(rng.direction()) - 100.0).abs() < 1e-9);
+        assert!((p.candela_dir(direction(&mut rng)) - 100.0).abs() < 1e-9);
     }
     assert!(rel(numeric_flux(&p, 200), 400.0 * PI) < 1e-4);
 }
@@ -202,9 +190,9 @@ fn check_c_symmetry(h: Vec<f64>, expected: Symmetry, g: fn(f64) -> f64) {
     let numeric = numeric_flux(&p, 400);
     assert!(rel(numeric, flux) < 2e-3, "{expected:?}: {numeric} vs {flux}");
     // The unfolded interpolant follows the full-sphere function everywhere.
-    let mut rng = SplitMix(7);
+    let mut rng = SplitMix64::new(7);
     for _ in 0..2000 {
-        let d = rng.direction().as_dvec3();
+        let d = direction(&mut rng).as_dvec3();
         let gamma = d.x.hypot(d.y).atan2(-d.z).to_degrees();
         let c = d.y.atan2(d.x).to_degrees();
         let got = p.candela_dir(d.as_vec3());
@@ -289,9 +277,9 @@ fn check_ab_cosine(kind: u8, h: Vec<f64>, v: Vec<f64>, expected: Symmetry) {
     eprintln!("type {kind} {expected:?}: {flux} lm, numeric {numeric}, pi I0 = {}", PI * 1000.0);
     assert!(rel(flux, PI * 1000.0) < 2e-3);
     assert!(rel(numeric, flux) < 2e-3);
-    let mut rng = SplitMix(3);
+    let mut rng = SplitMix64::new(3);
     for _ in 0..1000 {
-        let d = rng.direction();
+        let d = direction(&mut rng);
         let truth = 1000.0 * f64::from(-d.z).max(0.0);
         assert!((p.candela_dir(d) - truth).abs() < 5.0, "{d}: {} vs {truth}", p.candela_dir(d));
     }
@@ -443,21 +431,21 @@ fn mutated_files_never_panic() {
     let mut bases =
         vec![small_file(), ies_file(2, &steps(0.0, 90.0, 30.0), &steps(-90.0, 90.0, 45.0), |v, h| v + h + 100.0)];
     bases.push(bases[0].replace("TILT=NONE", "TILT=INCLUDE\n1 2 0 90 1 0.5"));
-    let mut rng = SplitMix(42);
+    let mut rng = SplitMix64::new(42);
     let pieces = ["-1", "0", "1e9", "nan", ",", "\n", "[MORE] x", "TILT=NONE", "999999", "-0", "360", "3", "\u{1a}"];
     let (mut ok, mut err) = (0, 0);
     for round in 0..3000 {
         let base = &bases[round % bases.len()];
         let mut tokens: Vec<String> = base.split(' ').map(str::to_string).collect();
-        for _ in 0..1 + rng.below(4) {
+        for _ in 0..1 + index_below(&mut rng, 4) {
             if tokens.is_empty() {
                 tokens.push("1".into());
             }
-            let i = rng.below(tokens.len());
-            match rng.below(4) {
+            let i = index_below(&mut rng, tokens.len());
+            match index_below(&mut rng, 4) {
                 0 => drop(tokens.remove(i)),
-                1 => tokens.insert(i, pieces[rng.below(pieces.len())].to_string()),
-                2 => tokens[i] = pieces[rng.below(pieces.len())].to_string(),
+                1 => tokens.insert(i, pieces[index_below(&mut rng, pieces.len())].to_string()),
+                2 => tokens[i] = pieces[index_below(&mut rng, pieces.len())].to_string(),
                 _ => tokens.truncate(i.max(1)),
             }
         }

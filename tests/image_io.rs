@@ -6,24 +6,10 @@ use std::time::Instant;
 
 use glam::{Vec2, Vec3};
 use kelvin::render::film_io::{ImageIoError, write_exr, write_hdr, write_image, write_png};
+use kelvin::rng::SplitMix64;
 use kelvin::scene::image::{
     ImageError, direction_to_lat_long, lat_long_direction, load_image, load_image_from_bytes, srgb_decode,
 };
-
-/// A tiny deterministic RNG (splitmix64).
-struct SplitMix(u64);
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn next_f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
 
 /// A fresh directory under the system temp dir, unique to this test and process, removed when dropped.
 struct TempDir(PathBuf);
@@ -101,10 +87,9 @@ fn real_env_maps_load_with_expected_size_and_dynamic_range() {
 fn exr_write_read_round_trip_is_bit_exact() {
     let dir = temp_dir("exr-round-trip");
     let (w, h) = (37, 23);
-    let mut rng = SplitMix(7);
-    let mut rgb: Vec<Vec3> = (0..w * h)
-        .map(|_| Vec3::new(rng.next_f32(), rng.next_f32() * 1e4, (rng.next_f32() * 80.0 - 40.0).exp2()))
-        .collect();
+    let mut rng = SplitMix64::new(7);
+    let mut rgb: Vec<Vec3> =
+        (0..w * h).map(|_| Vec3::new(rng.f32(), rng.f32() * 1e4, (rng.f32() * 80.0 - 40.0).exp2())).collect();
     rgb[0] = Vec3::new(0.0, f32::MIN_POSITIVE / 8.0, f32::MAX); // zero, a subnormal, the largest finite
     let path = dir.join("round_trip.exr");
     write_exr(&path, w, h, &rgb).unwrap();
@@ -146,8 +131,8 @@ fn png_write_gives_the_documented_tone_curve() {
 fn hdr_write_read_round_trip_within_rgbe_precision() {
     let dir = temp_dir("hdr");
     let (w, h) = (16, 8);
-    let mut rng = SplitMix(11);
-    let rgb: Vec<Vec3> = (0..w * h).map(|_| Vec3::splat(rng.next_f32() * 100.0 + 1e-3)).collect();
+    let mut rng = SplitMix64::new(11);
+    let rgb: Vec<Vec3> = (0..w * h).map(|_| Vec3::splat(rng.f32() * 100.0 + 1e-3)).collect();
     let path = dir.join("rt.hdr");
     write_image(&path, w, h, &rgb, 0.0).unwrap();
     let back = load_image(&path).unwrap().image;
@@ -262,8 +247,8 @@ fn negative_pixels_are_clamped_with_a_warning() {
 fn truncated_files_give_errors_not_panics() {
     let dir = temp_dir("truncated");
     let (w, h) = (9, 5);
-    let mut rng = SplitMix(3);
-    let rgb: Vec<Vec3> = (0..w * h).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0).collect();
+    let mut rng = SplitMix64::new(3);
+    let rgb: Vec<Vec3> = (0..w * h).map(|_| Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 4.0).collect();
     for ext in ["exr", "hdr", "png"] {
         let path = dir.join(format!("whole.{ext}"));
         write_image(&path, w, h, &rgb, 0.0).unwrap();
@@ -393,8 +378,8 @@ fn jpeg_from_memory_is_decoded_with_the_srgb_curve() {
 #[test]
 fn corrupted_bytes_never_panic() {
     let dir = temp_dir("corrupt");
-    let mut rng = SplitMix(99);
-    let rgb: Vec<Vec3> = (0..12 * 10).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())).collect();
+    let mut rng = SplitMix64::new(99);
+    let rgb: Vec<Vec3> = (0..12 * 10).map(|_| Vec3::new(rng.f32(), rng.f32(), rng.f32())).collect();
     for ext in ["exr", "hdr", "png"] {
         let path = dir.join(format!("c.{ext}"));
         write_image(&path, 12, 10, &rgb, 0.0).unwrap();
@@ -403,7 +388,7 @@ fn corrupted_bytes_never_panic() {
         for _ in 0..300 {
             let mut bad = bytes.clone();
             for _ in 0..1 + rng.next_u64() % 4 {
-                let i = (rng.next_u64() % bad.len() as u64) as usize;
+                let i = rng.below(bad.len());
                 bad[i] = rng.next_u64() as u8;
             }
             // Ok (a changed pixel) or an error; either way validated and never a panic.
@@ -431,10 +416,10 @@ fn lat_long_mapping_round_trips_and_matches_the_stated_convention() {
     let seam = direction_to_lat_long(Vec3::NEG_X);
     assert!((0.0..1.0).contains(&seam.x));
 
-    let mut rng = SplitMix(5);
+    let mut rng = SplitMix64::new(5);
     let (mut worst_dir, mut worst_uv) = (0.0f32, 0.0f32);
     for _ in 0..100_000 {
-        let uv = Vec2::new(rng.next_f32(), rng.next_f32());
+        let uv = rng.vec2();
         let dir = lat_long_direction(uv);
         assert!((dir.length() - 1.0).abs() < 1e-6);
         let back = direction_to_lat_long(dir);

@@ -8,28 +8,17 @@ use glam::Vec3;
 use kelvin::geometry::Transform;
 use kelvin::light::{Amount, ColorQuery, DistantLight, LightId, LightSampleContext, LightTable, PointLight, SpotLight};
 use kelvin::light_sampler::{BvhSampler, BvhUpdate, LightSampler};
+use kelvin::rng::SplitMix64;
 use kelvin::shading::{DirectLighting, LightSamplerKind, RunReport, Settings, ShadingBatch};
 use kelvin::spectrum::Spectrum;
 use kelvin::systems::LightingPlugin;
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        kelvin::rng::mix64(self.0)
-    }
-    fn f32(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f32()
-    }
-    fn unit(&mut self) -> Vec3 {
-        loop {
-            let v = Vec3::new(self.range(-1.0, 1.0), self.range(-1.0, 1.0), self.range(-1.0, 1.0));
-            if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
-                return v.normalize();
-            }
+/// A uniform direction by rejection from the cube (|v| in (0.01, 1]).
+fn unit_vector(rng: &mut SplitMix64) -> Vec3 {
+    loop {
+        let v = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+        if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
+            return v.normalize();
         }
     }
 }
@@ -84,7 +73,7 @@ fn table_of(lights: &[L]) -> LightTable {
 /// `n` point and spot lights in a 40 m square, 2-6 m up, powers over two decades; every
 /// `zero_every`-th light (if nonzero) has no power.
 fn random_lights(n: usize, seed: u64, zero_every: usize) -> Vec<L> {
-    let mut rng = Rng(seed);
+    let mut rng = SplitMix64::new(seed);
     (0..n)
         .map(|i| {
             let p = Vec3::new(rng.range(-20.0, 20.0), rng.range(2.0, 6.0), rng.range(-20.0, 20.0));
@@ -93,7 +82,7 @@ fn random_lights(n: usize, seed: u64, zero_every: usize) -> Vec<L> {
             if i % 2 == 0 {
                 L::Point(p, power)
             } else {
-                let dir = (Vec3::NEG_Y + 0.5 * rng.unit()).normalize();
+                let dir = (Vec3::NEG_Y + 0.5 * unit_vector(&mut rng)).normalize();
                 L::Spot(p, dir, 10.0 * power, rng.range(0.3, 1.2))
             }
         })
@@ -101,11 +90,15 @@ fn random_lights(n: usize, seed: u64, zero_every: usize) -> Vec<L> {
 }
 
 fn contexts(seed: u64, count: usize) -> Vec<LightSampleContext> {
-    let mut rng = Rng(seed);
+    let mut rng = SplitMix64::new(seed);
     (0..count)
         .map(|i| {
             let p = Vec3::new(rng.range(-25.0, 25.0), rng.range(0.0, 3.0), rng.range(-25.0, 25.0));
-            if i % 3 == 0 { LightSampleContext::at(p) } else { LightSampleContext::on_surface(p, rng.unit()) }
+            if i % 3 == 0 {
+                LightSampleContext::at(p)
+            } else {
+                LightSampleContext::on_surface(p, unit_vector(&mut rng))
+            }
         })
         .collect()
 }
@@ -185,7 +178,7 @@ fn bvh_sample_frequencies_follow_the_pmf() {
     let s = LightSampler::build(LightSamplerKind::Bvh, &table);
     let ids: Vec<LightId> = table.ids().collect();
     let index_of = |id: LightId| ids.iter().position(|&x| x == id).unwrap();
-    let mut rng = Rng(5);
+    let mut rng = SplitMix64::new(5);
     let samples = 200_000u64;
     for ctx in contexts(6, 3) {
         // One bin per light, and a last one for "no light" with the probability the pmfs leave.
@@ -213,7 +206,7 @@ fn pmf_equals_the_probability_sample_returns() {
     let mut lights = random_lights(200, 7, 9);
     lights.extend([L::Distant(Vec3::NEG_Y, 20.0), L::Distant(Vec3::new(1.0, -1.0, 0.0), 5.0)]);
     let table = table_of(&lights);
-    let mut rng = Rng(8);
+    let mut rng = SplitMix64::new(8);
     for s in &all_samplers(&table) {
         for ctx in contexts(9, 20) {
             for _ in 0..200 {
@@ -270,11 +263,11 @@ fn incremental_refit_equals_refitting_every_leaf() {
     let mut table = table_of(&lights);
     let mut partial = BvhSampler::build(&table);
     let mut full = partial.clone();
-    let mut rng = Rng(12);
+    let mut rng = SplitMix64::new(12);
     let mut moved = lights.clone();
     for i in (0..300).step_by(30) {
         if let L::Point(p, cd) = moved[i] {
-            moved[i] = L::Point(p + 0.5 * rng.unit(), cd);
+            moved[i] = L::Point(p + 0.5 * unit_vector(&mut rng), cd);
         }
     }
     for i in (0..300).step_by(30) {
@@ -303,7 +296,7 @@ fn zero_power_lights_are_never_chosen_and_divide_nothing_by_zero() {
     let table = table_of(&random_lights(200, 14, 3));
     let zero: Vec<LightId> = table.ids().filter(|&id| table.luminous_power(id) == 0.0).collect();
     assert!(zero.len() > 50);
-    let mut rng = Rng(15);
+    let mut rng = SplitMix64::new(15);
     for s in &all_samplers(&table)[1..] {
         for ctx in contexts(16, 10) {
             for &id in &zero {
@@ -339,7 +332,7 @@ fn irradiance(table: &LightTable, id: LightId, ctx: &LightSampleContext) -> f64 
 #[test]
 fn one_sample_estimators_are_unbiased() {
     let table = table_of(&random_lights(1000, 18, 0));
-    let mut rng = Rng(19);
+    let mut rng = SplitMix64::new(19);
     let samples = 40_000;
     for ctx in contexts(20, 4).into_iter().map(|c| LightSampleContext::on_surface(c.p, Vec3::Y)) {
         let exact: f64 = table.ids().map(|id| irradiance(&table, id, &ctx)).sum();
@@ -371,7 +364,7 @@ fn ecs_refits_on_moves_and_rebuilds_on_additions() {
     let settings = Settings { light_sampler: LightSamplerKind::Bvh, shadows: false, ..Default::default() };
     world.insert_resource(settings);
     LightingPlugin::build(&mut world, &mut schedule);
-    let mut rng = Rng(21);
+    let mut rng = SplitMix64::new(21);
     let lights: Vec<Entity> = (0..500)
         .map(|_| {
             let p = Vec3::new(rng.range(-20.0, 20.0), 3.0, rng.range(-20.0, 20.0));
@@ -419,11 +412,11 @@ fn ecs_refits_on_moves_and_rebuilds_on_additions() {
 #[ignore = "a measurement, minutes in the test profile"]
 fn light_tree_quality() {
     use kelvin::report::lights::{mean_relative_variance, move_fraction, scaling_scene_table};
-    use kelvin::scenes::SceneRng;
+    use kelvin::scenes::scene_rng;
     let (mut table, points) = scaling_scene_table(10_000, 1, 64);
     let mut refit = BvhSampler::build(&table);
     refit.rebuild_ratio = Some(f32::INFINITY);
-    let mut rng = SceneRng::new(3);
+    let mut rng = scene_rng(3);
     let mut build_line = String::new();
     println!("frame  cost_ratio  relvar_refit  relvar_fresh  variance_ratio  refit_ms  build_ms");
     for frame in 0..=400 {

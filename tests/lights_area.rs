@@ -14,10 +14,11 @@ use glam::{Vec2, Vec3};
 use kelvin::geometry::Transform;
 use kelvin::light::area::SamplingStrategy;
 use kelvin::light::{Amount, AreaLight, LightSampleContext, LightTexture, ResolvedArea};
+use kelvin::rng::SplitMix64;
 use kelvin::sampling::{Frame, sample_uniform_cone_sin2, sample_uniform_sphere, uniform_cone_pdf_sin2};
 
 use common::area::*;
-use common::{RGB, Rng, Stats, assert_mc, lum};
+use common::{RGB, Stats, assert_mc, lum};
 
 // -------------------------------------------------------------------------------------------
 // (a) power
@@ -25,21 +26,21 @@ use common::{RGB, Rng, Stats, assert_mc, lum};
 /// Monte Carlo power, W: points uniform on the surface, directions uniform on the sphere (drawn in
 /// the local normal frame), both jittered-stratified on a 1000 x 1000 grid (the direction strata
 /// randomly permuted).
-fn mc_power(light: &ResolvedArea, rng: &mut Rng) -> Stats {
+fn mc_power(light: &ResolvedArea, rng: &mut SplitMix64) -> Stats {
     const K: usize = 1000;
     let mut perm: Vec<u32> = (0..(K * K) as u32).collect();
     for i in (1..perm.len()).rev() {
-        perm.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+        perm.swap(i, rng.below(i + 1));
     }
     let strat = |c: usize, j: Vec2| Vec2::new(((c % K) as f32 + j.x) / K as f32, ((c / K) as f32 + j.y) / K as f32);
     let l_rad = light.radiance.radiometric as f64 / nits(light);
     let scale = light.area as f64 * 4.0 * PI;
     let mut s = Stats::default();
     for (i, &pi) in perm.iter().enumerate() {
-        let on = light.shape.sample_area(strat(i, rng.u2()).min(Vec2::splat(0.999_999_9))).unwrap();
+        let on = light.shape.sample_area(strat(i, rng.vec2()).min(Vec2::splat(0.999_999_9))).unwrap();
         // Uniform directions drawn in the normal's frame, so the strata follow cos(theta).
         let w = Frame::from_z(on.n)
-            .from_local(sample_uniform_sphere(strat(pi as usize, rng.u2()).min(Vec2::splat(0.999_999_9))));
+            .from_local(sample_uniform_sphere(strat(pi as usize, rng.vec2()).min(Vec2::splat(0.999_999_9))));
         let l = lum(light.radiance(on.p, on.n, on.uv, w, RGB)) * l_rad;
         s.add(l * on.n.dot(w).abs() as f64 * scale);
     }
@@ -47,7 +48,7 @@ fn mc_power(light: &ResolvedArea, rng: &mut Rng) -> Stats {
 }
 
 fn check_power(name: &str, light: &ResolvedArea, seed: u64) {
-    let s = mc_power(light, &mut Rng::new(seed));
+    let s = mc_power(light, &mut SplitMix64::new(seed));
     let expected = light.phi() as f64;
     assert_mc(&format!("(a) power {name}"), &s, expected);
     assert!((s.mean() - expected).abs() < 1e-3 * expected, "{name}: power off by more than 1e-3");
@@ -107,7 +108,7 @@ fn power_amounts_round_trip_for_every_shape() {
 
 #[test]
 fn sample_pdf_equals_pdf_li_for_every_shape() {
-    let mut rng = Rng::new(2);
+    let mut rng = SplitMix64::new(2);
     for (name, l) in all_shapes() {
         let points = points_around(&l, &mut rng, 200);
         let (worst, n) = max_pdf_mismatch(&l, &points, 200, &mut rng);
@@ -118,7 +119,7 @@ fn sample_pdf_equals_pdf_li_for_every_shape() {
 
 #[test]
 fn sample_pdf_equals_pdf_li_across_strategy_bands() {
-    let mut rng = Rng::new(3);
+    let mut rng = SplitMix64::new(3);
     let l = light();
     let cases = [
         ("rectangle far tiny", far_tiny_rectangle(&l).0, far_tiny_rectangle(&l).1, SamplingStrategy::Area),
@@ -167,14 +168,14 @@ fn sample_pdf_equals_pdf_li_across_strategy_bands() {
 
 /// Integral of pdf_li over directions from `p`: uniform over the sphere, or over a cone around
 /// `axis` (sin^2 of its half-angle given) that contains the light.
-fn pdf_integral(light: &ResolvedArea, p: Vec3, cone: Option<(Vec3, f32)>, n: usize, rng: &mut Rng) -> Stats {
+fn pdf_integral(light: &ResolvedArea, p: Vec3, cone: Option<(Vec3, f32)>, n: usize, rng: &mut SplitMix64) -> Stats {
     let ctx = LightSampleContext::at(p);
     let mut s = Stats::default();
     for _ in 0..n {
         let (w, density) = match cone {
-            None => (sample_uniform_sphere(rng.u2()), 1.0 / (4.0 * PI)),
+            None => (sample_uniform_sphere(rng.vec2()), 1.0 / (4.0 * PI)),
             Some((axis, sin2)) => {
-                let w = Frame::from_z(axis).from_local(sample_uniform_cone_sin2(rng.u2(), sin2));
+                let w = Frame::from_z(axis).from_local(sample_uniform_cone_sin2(rng.vec2(), sin2));
                 (w, uniform_cone_pdf_sin2(sin2) as f64)
             }
         };
@@ -187,7 +188,7 @@ fn pdf_integral(light: &ResolvedArea, p: Vec3, cone: Option<(Vec3, f32)>, n: usi
 
 #[test]
 fn pdf_li_integrates_to_one_for_every_shape() {
-    let mut rng = Rng::new(4);
+    let mut rng = SplitMix64::new(4);
     for (name, l) in all_shapes() {
         for (k, p) in points_around(&l, &mut rng, 3).into_iter().enumerate() {
             let s = pdf_integral(&l, p, None, 400_000, &mut rng);
@@ -201,7 +202,7 @@ fn pdf_li_integrates_to_one_for_every_shape() {
 
 #[test]
 fn pdf_li_integrates_to_one_across_strategy_bands() {
-    let mut rng = Rng::new(5);
+    let mut rng = SplitMix64::new(5);
     let l = light();
     let (r, ctx) = unit_rectangle_above(&l, 0.01);
     assert_mc("(c) pdf integral rectangle near huge (Area)", &pdf_integral(&r, ctx.p, None, 1_000_000, &mut rng), 1.0);

@@ -11,18 +11,19 @@ use kelvin::light::area::{ShapeSample, sphere_from_point_light};
 use kelvin::light::{
     Amount, AreaLight, AreaShape, ColorQuery, LightError, LightSampleContext, LightTexture, PointLight, ResolvedArea,
 };
+use kelvin::rng::SplitMix64;
 use kelvin::sampling::sample_uniform_sphere;
 use kelvin::spectrum::SampledWavelengths;
 
 use common::area::*;
-use common::{RGB, Rng, assert_mc, lum};
+use common::{RGB, assert_mc, lum};
 
 // -------------------------------------------------------------------------------------------
 // Hard cases and bad input
 
 #[test]
 fn grazing_cos_1e_7_stays_finite_and_consistent() {
-    let mut rng = Rng::new(16);
+    let mut rng = SplitMix64::new(16);
     let l = light();
     for (name, light) in [
         ("rectangle", l.resolve_rectangle(1.0, 1.0, &Transform::IDENTITY).unwrap()),
@@ -39,7 +40,7 @@ fn grazing_cos_1e_7_stays_finite_and_consistent() {
             assert_mc("(d) irradiance rectangle at grazing cos 1e-7", &s, want);
         }
         for _ in 0..10_000 {
-            assert!(light.pdf_li(&ctx, sample_uniform_sphere(rng.u2())).is_finite());
+            assert!(light.pdf_li(&ctx, sample_uniform_sphere(rng.vec2())).is_finite());
         }
         eprintln!("(b) pdf consistency {name} grazing cos 1e-7: max rel diff {worst:.2e} over {n} samples");
     }
@@ -81,10 +82,10 @@ fn zero_area_and_collinear_triangles_are_skipped_and_safe() {
             None,
         );
         let ctx = LightSampleContext::at(Vec3::new(0.3, 1.0, -0.2));
-        let mut rng = Rng::new(17);
+        let mut rng = SplitMix64::new(17);
         for _ in 0..1000 {
-            assert!(t.sample_li(&ctx, rng.u2(), RGB).is_none());
-            assert_eq!(t.pdf_li(&ctx, sample_uniform_sphere(rng.u2())), 0.0);
+            assert!(t.sample_li(&ctx, rng.vec2(), RGB).is_none());
+            assert_eq!(t.pdf_li(&ctx, sample_uniform_sphere(rng.vec2())), 0.0);
         }
         assert!(t.phi() == 0.0 && t.bounds().min.is_finite() && t.bounds().max.is_finite());
     }
@@ -92,7 +93,7 @@ fn zero_area_and_collinear_triangles_are_skipped_and_safe() {
 
 #[test]
 fn sphere_hard_points_all_outputs_finite() {
-    let mut rng = Rng::new(18);
+    let mut rng = SplitMix64::new(18);
     let l = two_sided();
     let s = l.resolve_sphere(1.0, &Transform::IDENTITY).unwrap();
     let points = [
@@ -106,7 +107,7 @@ fn sphere_hard_points_all_outputs_finite() {
     for p in points {
         let ctx = LightSampleContext::on_surface(p, Vec3::Y);
         for _ in 0..5000 {
-            if let Some(ls) = s.sample_li(&ctx, rng.u2(), RGB) {
+            if let Some(ls) = s.sample_li(&ctx, rng.vec2(), RGB) {
                 assert!(
                     ls.pdf.is_finite()
                         && ls.pdf > 0.0
@@ -115,7 +116,7 @@ fn sphere_hard_points_all_outputs_finite() {
                         && ls.n_light.is_finite()
                 );
             }
-            assert!(s.pdf_li(&ctx, sample_uniform_sphere(rng.u2())).is_finite());
+            assert!(s.pdf_li(&ctx, sample_uniform_sphere(rng.vec2())).is_finite());
         }
     }
     let (worst, n) = max_pdf_mismatch(&s, &points, 5000, &mut rng);
@@ -152,9 +153,9 @@ fn texture_lookup_is_bilinear_with_wrap() {
     };
     let r = l.resolve_rectangle(1.0, 1.0, &Transform::IDENTITY).unwrap();
     let ctx = LightSampleContext::at(Vec3::new(0.0, 0.0, 1.0));
-    let mut rng = Rng::new(19);
+    let mut rng = SplitMix64::new(19);
     for _ in 0..1000 {
-        if let Some(ls) = r.sample_li(&ctx, rng.u2(), RGB) {
+        if let Some(ls) = r.sample_li(&ctx, rng.vec2(), RGB) {
             let h: ShapeSample = r.shape.hit(ctx.p, ls.wi).unwrap();
             let want = 2.0 * nits(&r) * r.texture.as_ref().unwrap().lookup(h.point.uv).x as f64 / 2.0;
             assert!((lum(ls.radiance) - want).abs() <= 1e-4 * nits(&r));
@@ -174,9 +175,9 @@ fn bounds_follow_pbrt_diffuse_area_light() {
         let b = r.bounds();
         assert_eq!((b.cos_theta_o, b.cos_theta_e, b.two_sided), (1.0, 0.0, r.two_sided));
         assert!((b.w - r.shape.plane_normal().unwrap()).length() < 1e-6 && (b.phi - r.phi()).abs() <= 1e-6 * r.phi());
-        let mut rng = Rng::new(20);
+        let mut rng = SplitMix64::new(20);
         for _ in 0..1000 {
-            let p = r.shape.sample_area(rng.u2()).unwrap().p;
+            let p = r.shape.sample_area(rng.vec2()).unwrap().p;
             assert!(p.cmpge(b.min - 1e-6).all() && p.cmple(b.max + 1e-6).all(), "{p} outside {b:?}");
         }
     }
@@ -237,7 +238,7 @@ fn point_light_with_radius_is_a_sphere_of_the_same_power_and_far_intensity() {
     assert!((s.phi() - point.phi()).abs() <= 1e-5 * point.phi());
     // 10 m away, facing it: E = pi L (r/d)^2 = I / d^2.
     let ctx = LightSampleContext::on_surface(Vec3::new(1.0, 12.0, 3.0), Vec3::NEG_Y);
-    let mut rng = Rng::new(21);
+    let mut rng = SplitMix64::new(21);
     assert_mc(
         "(d) point light with radius 5 cm at 10 m vs I/d^2",
         &irradiance(&s, &ctx, 10_000, &mut rng),

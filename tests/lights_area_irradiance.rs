@@ -11,13 +11,14 @@ use glam::{Quat, Vec3};
 use kelvin::geometry::Transform;
 use kelvin::light::area::SamplingStrategy;
 use kelvin::light::{AreaShape, LightSampleContext};
+use kelvin::rng::SplitMix64;
 
 use common::area::*;
-use common::{Rng, assert_mc};
+use common::assert_mc;
 
 #[test]
 fn irradiance_of_disk_on_axis() {
-    let mut rng = Rng::new(6);
+    let mut rng = SplitMix64::new(6);
     for l in [light(), two_sided()] {
         let d = disk(&l);
         let AreaShape::Disk { center, normal, radius } = d.shape else { unreachable!() };
@@ -36,7 +37,7 @@ fn irradiance_of_disk_on_axis() {
 
 #[test]
 fn irradiance_of_sphere_from_outside() {
-    let mut rng = Rng::new(7);
+    let mut rng = SplitMix64::new(7);
     let s = sphere(&light());
     let AreaShape::Sphere { center, .. } = s.shape else { unreachable!() };
     for (k, (offset, tilt)) in
@@ -58,7 +59,7 @@ fn irradiance_of_tiny_sphere_below_taylor_threshold() {
     assert_eq!(s.strategy(ctx.p), SamplingStrategy::Cone);
     assert_mc(
         "(d) irradiance tiny sphere sin^2 = 1e-8",
-        &irradiance(&s, &ctx, 200_000, &mut Rng::new(8)),
+        &irradiance(&s, &ctx, 200_000, &mut SplitMix64::new(8)),
         sphere_irradiance(&s, &ctx),
     );
     // Near pbrt's Taylor threshold sin^2 = 6.85e-4.
@@ -66,7 +67,7 @@ fn irradiance_of_tiny_sphere_below_taylor_threshold() {
     let ctx = LightSampleContext::on_surface(Vec3::new(0.0, 1.0, 0.0), Vec3::NEG_Y);
     assert_mc(
         "(d) irradiance sphere sin^2 = 6.86e-4",
-        &irradiance(&s, &ctx, 200_000, &mut Rng::new(9)),
+        &irradiance(&s, &ctx, 200_000, &mut SplitMix64::new(9)),
         sphere_irradiance(&s, &ctx),
     );
 }
@@ -77,7 +78,7 @@ fn irradiance_of_sphere_at_1e_3_r_outside() {
     assert_eq!(s.strategy(ctx.p), SamplingStrategy::Cone);
     assert_mc(
         "(d) irradiance sphere d = r (1 + 1e-3)",
-        &irradiance(&s, &ctx, 1_000_000, &mut Rng::new(10)),
+        &irradiance(&s, &ctx, 1_000_000, &mut SplitMix64::new(10)),
         sphere_irradiance(&s, &ctx),
     );
 }
@@ -88,14 +89,14 @@ fn irradiance_of_sphere_at_1e_7_r_outside() {
     assert_eq!(s.strategy(ctx.p), SamplingStrategy::Area);
     assert_mc(
         "(d) irradiance sphere d = r (1 + 1.2e-7)",
-        &irradiance(&s, &ctx, 1_000_000, &mut Rng::new(11)),
+        &irradiance(&s, &ctx, 1_000_000, &mut SplitMix64::new(11)),
         sphere_irradiance(&s, &ctx),
     );
 }
 
 #[test]
 fn irradiance_at_shading_point_on_sphere_surface() {
-    let mut rng = Rng::new(12);
+    let mut rng = SplitMix64::new(12);
     for l in [light(), two_sided()] {
         let (s, _) = sphere_at_origin(&l, 1.0);
         let p = Vec3::new(0.0, 0.0, 1.0); // exactly on the surface
@@ -116,7 +117,7 @@ fn irradiance_at_shading_point_on_sphere_surface() {
 
 #[test]
 fn irradiance_inside_sphere() {
-    let mut rng = Rng::new(13);
+    let mut rng = SplitMix64::new(13);
     for l in [light(), two_sided()] {
         let (s, _) = sphere_at_origin(&l, 1.0);
         let ctx = LightSampleContext::on_surface(Vec3::new(0.3, -0.4, 0.2), Vec3::new(1.0, 2.0, -0.5).normalize());
@@ -132,7 +133,7 @@ fn irradiance_inside_sphere() {
 
 #[test]
 fn irradiance_of_rectangle_in_both_strategy_bands() {
-    let mut rng = Rng::new(14);
+    let mut rng = SplitMix64::new(14);
     let l = light();
     let (r, ctx) = far_tiny_rectangle(&l);
     assert_eq!(r.strategy(ctx.p), SamplingStrategy::Area);
@@ -165,7 +166,7 @@ fn irradiance_of_rectangle_in_both_strategy_bands() {
 
 #[test]
 fn irradiance_of_triangles_1e_8_sr_moderate_and_nearly_2_pi_sr() {
-    let mut rng = Rng::new(15);
+    let mut rng = SplitMix64::new(15);
     let l = light();
     let (t, ctx) = tiny_triangle(&l);
     let omega = kelvin::sampling::triangle_solid_angle(corners(&t.shape).try_into().unwrap(), ctx.p);

@@ -10,9 +10,10 @@ use glam::{Quat, Vec2, Vec3};
 use kelvin::geometry::Transform;
 use kelvin::light::distant::SUN_ANGULAR_DIAMETER;
 use kelvin::light::{Amount, DistantLight, LightSampleContext, PointLight, SceneSphere, SpotLight};
+use kelvin::rng::SplitMix64;
 use kelvin::sampling::sample_uniform_sphere;
 
-use common::{RGB, Rng, Stats, assert_mc, lum};
+use common::{RGB, Stats, assert_mc, lum};
 
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-30)
@@ -20,10 +21,10 @@ fn rel(a: f64, b: f64) -> f64 {
 
 /// Receivers around `center`: positions and unit normals tilted by up to ~80 degrees from the
 /// direction toward it.
-fn receivers(center: Vec3, rng: &mut Rng, n: usize) -> Vec<LightSampleContext> {
+fn receivers(center: Vec3, rng: &mut SplitMix64, n: usize) -> Vec<LightSampleContext> {
     (0..n)
         .map(|_| {
-            let d = sample_uniform_sphere(rng.u2());
+            let d = sample_uniform_sphere(rng.vec2());
             let p = center + d * (0.3 + 4.0 * rng.f32());
             let axis = d.any_orthonormal_vector();
             LightSampleContext::on_surface(p, Quat::from_axis_angle(axis, 1.4 * rng.f32()) * -d)
@@ -36,7 +37,7 @@ fn point_light_irradiance_is_i_cos_over_r2() {
     let center = Vec3::new(1.0, 2.0, -3.0);
     let light = PointLight::candela(150.0).resolve(&Transform::from_translation(center)).unwrap();
     let mut worst: f64 = 0.0;
-    for ctx in receivers(center, &mut Rng::new(1), 1000) {
+    for ctx in receivers(center, &mut SplitMix64::new(1), 1000) {
         let s = light.sample_li(&ctx, RGB).unwrap();
         let e = lum(s.radiance) * ctx.n.dot(s.wi).max(0.0) as f64;
         let d = center.as_dvec3() - ctx.p.as_dvec3();
@@ -102,10 +103,10 @@ fn spot_light_power_matches_monte_carlo_of_its_falloff() {
     let light = SpotLight { amount: Amount::Lumens(800.0), inner_angle: 0.2, outer_angle: 0.7, ..Default::default() };
     let r = light.resolve(&Transform::IDENTITY).unwrap();
     // Integrate I(w) over the sphere of directions: sample_li from points on a unit sphere.
-    let mut rng = Rng::new(2);
+    let mut rng = SplitMix64::new(2);
     let mut s = Stats::default();
     for _ in 0..400_000 {
-        let w = sample_uniform_sphere(rng.u2());
+        let w = sample_uniform_sphere(rng.vec2());
         let i = r.sample_li(&LightSampleContext::at(w), RGB).map_or(0.0, |ls| lum(ls.radiance));
         s.add(i * 4.0 * PI);
     }
@@ -120,7 +121,7 @@ fn distant_light_irradiance_is_e_cos() {
         .resolve(&Transform::IDENTITY.looking_to(dir, Vec3::Y), SceneSphere::default())
         .unwrap();
     let mut worst: f64 = 0.0;
-    for ctx in receivers(Vec3::ZERO, &mut Rng::new(3), 1000) {
+    for ctx in receivers(Vec3::ZERO, &mut SplitMix64::new(3), 1000) {
         let s = light.sample_li(&ctx, Vec2::ZERO, RGB).unwrap();
         let e = lum(s.radiance) * ctx.n.dot(s.wi).max(0.0) as f64;
         let want = 10_000.0 * ctx.n.as_dvec3().dot(-dir.as_dvec3()).max(0.0);
@@ -138,14 +139,14 @@ fn sun_sized_disc_integrates_to_e_cos() {
         DistantLight { amount: Amount::Lux(100_000.0), angular_diameter: SUN_ANGULAR_DIAMETER, ..Default::default() }
             .resolve(&Transform::IDENTITY.looking_to(dir, Vec3::Y), SceneSphere::default())
             .unwrap();
-    let mut rng = Rng::new(4);
+    let mut rng = SplitMix64::new(4);
     for tilt in [0.0f32, 0.7, 1.5] {
         let n = Quat::from_axis_angle(dir.any_orthonormal_vector(), tilt) * -dir;
         let ctx = LightSampleContext::on_surface(Vec3::new(0.1, 0.0, 0.2), n);
         let mut s = Stats::default();
         let mut worst_pdf: f64 = 0.0;
         for _ in 0..200_000 {
-            let ls = light.sample_li(&ctx, rng.u2(), RGB).unwrap();
+            let ls = light.sample_li(&ctx, rng.vec2(), RGB).unwrap();
             worst_pdf = worst_pdf.max(rel(light.pdf_li(ls.wi) as f64, ls.pdf as f64));
             s.add(lum(ls.radiance) * ctx.n.dot(ls.wi).max(0.0) as f64 / ls.pdf as f64);
         }

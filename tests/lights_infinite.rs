@@ -15,10 +15,11 @@ use kelvin::light::{
     Amount, ColorQuery, EnvLookup, ImageInfiniteLight, LightError, LightFlags, LightSampleContext,
     ResolvedImageInfinite, SceneSphere, UniformInfiniteLight,
 };
+use kelvin::rng::SplitMix64;
 use kelvin::sampling::{sample_uniform_sphere, uniform_sphere_pdf};
 use kelvin::scene::image::{LUMINANCE_WEIGHTS, RgbImage, direction_to_lat_long};
 use kelvin::spectrum::{SampledSpectrum, SampledWavelengths};
-use support::{Rng, Stats, image, rel_diff, resolve, surface_ctx, test_sky, tilted, y_of};
+use support::{Stats, image, rel_diff, resolve, surface_ctx, test_sky, tilted, y_of};
 
 // ---------------------------------------------------------------------------------------------
 // Uniform sky
@@ -28,7 +29,7 @@ use support::{Rng, Stats, image, rel_diff, resolve, surface_ctx, test_sky, tilte
 fn uniform_sky_irradiance_is_pi_l() {
     let l_nits = 1234.5;
     let sky = UniformInfiniteLight::nits(l_nits).resolve(SceneSphere::default()).unwrap();
-    let mut rng = Rng(1);
+    let mut rng = SplitMix64::new(1);
     let n = surface_ctx().n;
     // On a surface: cosine sampling, zero variance. Off a surface: uniform sphere, estimate of
     // the integral of L max(0, cos) about the same normal.
@@ -48,7 +49,7 @@ fn uniform_sky_irradiance_is_pi_l() {
 fn uniform_sky_pdf_of_samples_matches_pdf_li_and_integrates_to_one() {
     let sky = UniformInfiniteLight::default().resolve(SceneSphere::default()).unwrap();
     assert_eq!(sky.flags(), LightFlags::INFINITE);
-    let mut rng = Rng(2);
+    let mut rng = SplitMix64::new(2);
     for ctx in [surface_ctx(), LightSampleContext::at(Vec3::ONE)] {
         let mut worst = 0.0f32;
         for _ in 0..20_000 {
@@ -95,7 +96,7 @@ fn uniform_sky_rejects_wrong_units_and_bad_values() {
 
 #[test]
 fn image_light_pdf_of_samples_matches_pdf_li() {
-    let mut rng = Rng(3);
+    let mut rng = SplitMix64::new(3);
     for lookup in [EnvLookup::Nearest, EnvLookup::Bilinear] {
         let light = resolve(&ImageInfiniteLight { lookup, ..ImageInfiniteLight::new(test_sky(64, 32)) }, tilted());
         assert_eq!(light.flags(), LightFlags::INFINITE);
@@ -122,7 +123,7 @@ fn image_light_pdf_of_samples_matches_pdf_li() {
 
 #[test]
 fn image_light_pdf_integrates_to_one() {
-    let mut rng = Rng(4);
+    let mut rng = SplitMix64::new(4);
     for lookup in [EnvLookup::Nearest, EnvLookup::Bilinear] {
         let light = resolve(&ImageInfiniteLight { lookup, ..ImageInfiniteLight::new(test_sky(64, 32)) }, tilted());
         for mis in [false, true] {
@@ -139,7 +140,7 @@ fn image_light_pdf_integrates_to_one() {
 
 #[test]
 fn image_light_phi_matches_monte_carlo_integral_of_le() {
-    let mut rng = Rng(5);
+    let mut rng = SplitMix64::new(5);
     for lookup in [EnvLookup::Nearest, EnvLookup::Bilinear] {
         let comp = ImageInfiniteLight { lookup, scale: 3.0, ..ImageInfiniteLight::new(test_sky(48, 24)) };
         let light = resolve(&comp, tilted());
@@ -169,7 +170,7 @@ fn nearest_lookup_importance_is_perfect_for_grey_maps() {
     // sample (pbrt-v4 lights_test: "importance should be perfect").
     let grey = image(32, 16, |x, y| Vec3::splat(0.1 + ((x * 13 + y * 7) % 11) as f32));
     let light = resolve(&ImageInfiniteLight { lookup: EnvLookup::Nearest, ..ImageInfiniteLight::new(grey) }, tilted());
-    let mut rng = Rng(6);
+    let mut rng = SplitMix64::new(6);
     let mut est = Stats::default();
     for _ in 0..20_000 {
         let s = light.sample_li(&surface_ctx(), rng.vec2(), ColorQuery::Rgb).unwrap();
@@ -183,7 +184,7 @@ fn nearest_lookup_importance_is_perfect_for_grey_maps() {
 
 #[test]
 fn constant_image_irradiance_is_pi_l() {
-    let mut rng = Rng(7);
+    let mut rng = SplitMix64::new(7);
     let (c, scale) = (Vec3::new(0.8, 0.8, 0.8), 250.0);
     let l_nits = scale as f64 * c.dot(LUMINANCE_WEIGHTS) as f64;
     for (w, h) in [(16, 8), (1, 1), (7, 3)] {
@@ -213,7 +214,7 @@ fn compensated_mis_matches_complete_light_sampling() {
     assert!(light.tables.compensated.is_some());
     let ctx = surface_ctx();
     let frame = kelvin::sampling::Frame::from_z(ctx.n);
-    let mut rng = Rng(8);
+    let mut rng = SplitMix64::new(8);
     let (mut mis, mut complete) = (Stats::default(), Stats::default());
     for _ in 0..200_000 {
         let mut f = 0.0;
@@ -249,7 +250,7 @@ fn rotation_turns_the_map() {
     let rot = tilted();
     let (turned, plain) =
         (resolve(&ImageInfiniteLight::new(sky.clone()), rot), resolve(&ImageInfiniteLight::new(sky), Quat::IDENTITY));
-    let mut rng = Rng(9);
+    let mut rng = SplitMix64::new(9);
     for _ in 0..1000 {
         let d = sample_uniform_sphere(rng.vec2());
         assert!(
@@ -267,7 +268,7 @@ fn rotation_turns_the_map() {
 fn spectral_mode_samples_are_finite_and_match_le() {
     let light = resolve(&ImageInfiniteLight::new(test_sky(32, 16)), tilted());
     let lambda = SampledWavelengths::sample_visible(0.37);
-    let mut rng = Rng(10);
+    let mut rng = SplitMix64::new(10);
     for _ in 0..1000 {
         let s = light.sample_li(&surface_ctx(), rng.vec2(), ColorQuery::Spectral(&lambda)).unwrap();
         assert!(s.radiance.is_finite() && s.radiance.0.iter().all(|&v| v >= 0.0));
@@ -281,7 +282,7 @@ fn spectral_mode_samples_are_finite_and_match_le() {
 
 /// Every public output of `light` is finite over a batch of samples and directions.
 fn assert_outputs_finite(light: &ResolvedImageInfinite, name: &str) {
-    let mut rng = Rng(11);
+    let mut rng = SplitMix64::new(11);
     assert!(light.phi().is_finite() && light.luminous_phi().is_finite(), "{name}: phi");
     for _ in 0..2000 {
         let w = sample_uniform_sphere(rng.vec2());
@@ -311,7 +312,7 @@ fn all_zero_map_never_samples_has_zero_pdf_and_zero_power() {
             tilted(),
         );
         assert!(light.tables.distribution.is_none() && light.tables.compensated.is_none());
-        let mut rng = Rng(12);
+        let mut rng = SplitMix64::new(12);
         for _ in 0..100 {
             assert!(light.sample_li(&surface_ctx(), rng.vec2(), ColorQuery::Rgb).is_none());
             assert!(light.sample_li_mis(&surface_ctx(), rng.vec2(), ColorQuery::Rgb).is_none());
@@ -331,7 +332,7 @@ fn single_1e9_texel_draws_most_samples_into_its_cell() {
     for lookup in [EnvLookup::Nearest, EnvLookup::Bilinear] {
         let light = resolve(&ImageInfiniteLight { lookup, ..ImageInfiniteLight::new(img.clone()) }, Quat::IDENTITY);
         assert_outputs_finite(&light, "1e9 texel");
-        let mut rng = Rng(13);
+        let mut rng = SplitMix64::new(13);
         let (n, mut in_cell, mut in_block) = (100_000, 0, 0);
         let mut phi = Stats::default();
         for _ in 0..n {
@@ -362,7 +363,7 @@ fn one_by_one_and_one_by_n_maps_sample_consistently() {
         ("1x16", image(1, 16, |_, y| Vec3::splat(1.0 + y as f32))),
         ("16x1", image(16, 1, |x, _| Vec3::splat(1.0 + (x % 5) as f32))),
     ];
-    let mut rng = Rng(14);
+    let mut rng = SplitMix64::new(14);
     for (name, img) in maps {
         for lookup in [EnvLookup::Nearest, EnvLookup::Bilinear] {
             let light = resolve(&ImageInfiniteLight { lookup, ..ImageInfiniteLight::new(img.clone()) }, tilted());

@@ -10,8 +10,9 @@ use std::sync::Arc;
 
 use glam::{Quat, Vec2, Vec3};
 use kelvin::light::{ColorQuery, EnvLookup, ImageInfiniteLight, LightSampleContext};
+use kelvin::rng::SplitMix64;
 use kelvin::scene::image::{LUMINANCE_WEIGHTS, RgbImage, direction_to_lat_long, lat_long_direction, load_image};
-use support::{Rng, Stats, rel_diff, resolve, surface_ctx, tilted, y_of};
+use support::{Stats, rel_diff, resolve, surface_ctx, tilted, y_of};
 
 /// The real map at `rel` under ../shared/data/env, or None (with a message) when absent.
 fn env_map(rel: &str) -> Option<(String, Arc<RgbImage>)> {
@@ -93,7 +94,7 @@ fn check_sampling_matches_luminance(name: &str, img: &Arc<RgbImage>) {
         let light = resolve(&comp, Quat::IDENTITY);
         let probs = expected_cell_probabilities(img, lookup, cw, ch);
         let mut counts = vec![0u64; cw * ch];
-        let mut rng = Rng(15);
+        let mut rng = SplitMix64::new(15);
         let mut worst = 0.0f32;
         for _ in 0..n {
             let s = light.sample_li(&surface_ctx(), rng.vec2(), ColorQuery::Rgb).expect("lit map");
@@ -161,7 +162,7 @@ fn check_pdf_integral_and_power(name: &str, img: &Arc<RgbImage>) {
     }
     eprintln!("{name}: integral of pdf_li {:.6}, of pdf_li_mis {:.6}", integral[0], integral[1]);
     assert!(integral.iter().all(|i| (i - 1.0).abs() < 1e-3));
-    let mut rng = Rng(16);
+    let mut rng = SplitMix64::new(16);
     let mut phi = Stats::default();
     for _ in 0..200_000 {
         let s = light.sample_li(&LightSampleContext::at(Vec3::ZERO), rng.vec2(), ColorQuery::Rgb).unwrap();

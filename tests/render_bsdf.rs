@@ -4,17 +4,7 @@
 use glam::{Vec2, Vec3};
 use kelvin::light::ColorQuery;
 use kelvin::render::material::Material;
-
-struct Rng(u64);
-impl Rng {
-    fn f32(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        (kelvin::rng::mix64(self.0) >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn v2(&mut self) -> Vec2 {
-        Vec2::new(self.f32(), self.f32())
-    }
-}
+use kelvin::rng::SplitMix64;
 
 fn materials() -> Vec<(&'static str, Material)> {
     vec![
@@ -31,13 +21,13 @@ fn materials() -> Vec<(&'static str, Material)> {
 
 #[test]
 fn sample_pdf_matches_pdf_function() {
-    let mut rng = Rng(1);
+    let mut rng = SplitMix64::new(1);
     let n = Vec3::new(0.3, 0.9, 0.1).normalize();
     for (name, m) in materials() {
         let bsdf = m.bsdf(Vec2::ZERO, n, ColorQuery::Rgb);
         let wo = (n + Vec3::new(0.5, 0.0, 0.2)).normalize();
         for _ in 0..10_000 {
-            if let Some(s) = bsdf.sample(wo, rng.f32(), rng.v2()) {
+            if let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2()) {
                 let p = bsdf.pdf(wo, s.wi);
                 // f32 round trip of the half vector (sampled h vs normalize(wo + wi)) for sharp lobes.
                 assert!((s.pdf / p - 1.0).abs() < 2e-3, "{name}: {} vs {p}", s.pdf);
@@ -52,20 +42,20 @@ fn sample_pdf_matches_pdf_function() {
 fn pdf_integrates_to_the_probability_of_a_valid_sample() {
     // Microfacet samples that reflect below the horizon are rejected, so the pdf integrates to
     // the fraction of samples that succeed (1 for the diffuse lobe).
-    let mut rng = Rng(2);
+    let mut rng = SplitMix64::new(2);
     for (name, m) in materials() {
         let bsdf = m.bsdf(Vec2::ZERO, Vec3::Z, ColorQuery::Rgb);
         let wo = Vec3::new(0.4, 0.1, 0.9).normalize();
         let n = 400_000;
         let (mut pdf_sum, mut refl) = (0.0f64, 0.0f64);
         for _ in 0..n {
-            let wi = kelvin::sampling::sample_uniform_sphere(rng.v2());
+            let wi = kelvin::sampling::sample_uniform_sphere(rng.vec2());
             let inv = 1.0 / kelvin::sampling::uniform_sphere_pdf() as f64;
             pdf_sum += bsdf.pdf(wo, wi) as f64 * inv;
             refl += bsdf.f(wo, wi).0[1] as f64 * wi.z.max(0.0) as f64 * inv;
         }
         let (pdf_int, albedo) = (pdf_sum / n as f64, refl / n as f64);
-        let valid = (0..n).filter(|_| bsdf.sample(wo, rng.f32(), rng.v2()).is_some()).count() as f64 / n as f64;
+        let valid = (0..n).filter(|_| bsdf.sample(wo, rng.f32(), rng.vec2()).is_some()).count() as f64 / n as f64;
         eprintln!("{name}: integral of pdf {pdf_int:.4}, valid samples {valid:.4}, directional albedo {albedo:.4}");
         assert!((pdf_int - valid).abs() < 0.03, "{name}: pdf integrates to {pdf_int}, {valid} of samples valid");
         assert!(albedo < 1.0 + 0.02, "{name}: albedo {albedo}");

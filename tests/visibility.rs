@@ -5,31 +5,17 @@ use kelvin::geometry::{
     Disk, GeometryError, GeometryInstance, GeometryRef, Hit, Mesh, Ray, Rectangle, SceneBvh, Shape, Sphere,
     SurfacePoint, Transform, closest_hits, occluded, triangle_surface_point,
 };
+use kelvin::rng::SplitMix64;
 
-/// SplitMix64 (Steele, Lea, Flood 2014): a tiny deterministic generator for test scenes.
-struct Rng(u64);
+/// A point with each coordinate uniform in [lo, hi).
+fn uniform_vec3(rng: &mut SplitMix64, lo: f32, hi: f32) -> Vec3 {
+    Vec3::new(rng.range(lo, hi), rng.range(lo, hi), rng.range(lo, hi))
+}
 
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn f(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f()
-    }
-    fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
-        Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-    }
-    fn rotation(&mut self) -> Quat {
-        let tau = std::f32::consts::TAU;
-        Quat::from_euler(EulerRot::XYZ, self.range(0.0, tau), self.range(0.0, tau), self.range(0.0, tau))
-    }
+/// A rotation from three uniform Euler angles (varied, not uniform over rotations).
+fn random_rotation(rng: &mut SplitMix64) -> Quat {
+    let tau = std::f32::consts::TAU;
+    Quat::from_euler(EulerRot::XYZ, rng.range(0.0, tau), rng.range(0.0, tau), rng.range(0.0, tau))
 }
 
 fn instance(geometry: GeometryRef<'_>, transform: Transform, entity_index: u32) -> GeometryInstance<'_> {
@@ -38,13 +24,17 @@ fn instance(geometry: GeometryRef<'_>, transform: Transform, entity_index: u32) 
 
 /// 10 meshes x 100 random triangles, 20 spheres, 20 disks (some annuli), 10 rectangles, in a
 /// 14 m box, with random rotations and (for all but spheres) non-uniform scales.
-fn random_meshes(rng: &mut Rng) -> Vec<Mesh> {
+fn random_meshes(rng: &mut SplitMix64) -> Vec<Mesh> {
     (0..10)
         .map(|_| {
             let tris: Vec<[Vec3; 3]> = (0..100)
                 .map(|_| {
-                    let c = rng.vec(-1.5, 1.5);
-                    [c + rng.vec(-0.4, 0.4), c + rng.vec(-0.4, 0.4), c + rng.vec(-0.4, 0.4)]
+                    let c = uniform_vec3(rng, -1.5, 1.5);
+                    [
+                        c + uniform_vec3(rng, -0.4, 0.4),
+                        c + uniform_vec3(rng, -0.4, 0.4),
+                        c + uniform_vec3(rng, -0.4, 0.4),
+                    ]
                 })
                 .collect();
             Mesh::from_triangles(&tris).unwrap()
@@ -52,10 +42,14 @@ fn random_meshes(rng: &mut Rng) -> Vec<Mesh> {
         .collect()
 }
 
-fn random_scene<'a>(rng: &mut Rng, meshes: &'a [Mesh]) -> Vec<GeometryInstance<'a>> {
+fn random_scene<'a>(rng: &mut SplitMix64, meshes: &'a [Mesh]) -> Vec<GeometryInstance<'a>> {
     let mut out = Vec::new();
     for m in meshes {
-        let t = Transform { translation: rng.vec(-4.0, 4.0), rotation: rng.rotation(), scale: rng.vec(0.5, 1.5) };
+        let t = Transform {
+            translation: uniform_vec3(rng, -4.0, 4.0),
+            rotation: random_rotation(rng),
+            scale: uniform_vec3(rng, 0.5, 1.5),
+        };
         out.push(instance(GeometryRef::Mesh(m), t, out.len() as u32));
     }
     for i in 0..50 {
@@ -63,31 +57,38 @@ fn random_scene<'a>(rng: &mut Rng, meshes: &'a [Mesh]) -> Vec<GeometryInstance<'
             0 | 1 => Sphere { radius: rng.range(0.1, 0.6) }.into(),
             2 | 3 => {
                 let radius = rng.range(0.2, 0.8);
-                let inner_radius = if i % 2 == 0 { 0.0 } else { radius * rng.f() * 0.8 };
+                let inner_radius = if i % 2 == 0 { 0.0 } else { radius * rng.f32() * 0.8 };
                 Disk { radius, inner_radius }.into()
             }
             _ => Rectangle { half_size: Vec2::new(rng.range(0.1, 0.7), rng.range(0.1, 0.7)) }.into(),
         };
-        let scale =
-            if matches!(shape, Shape::Sphere(_)) { Vec3::splat(rng.range(0.5, 2.0)) } else { rng.vec(0.5, 2.0) };
-        let t = Transform { translation: rng.vec(-6.0, 6.0), rotation: rng.rotation(), scale };
+        let scale = if matches!(shape, Shape::Sphere(_)) {
+            Vec3::splat(rng.range(0.5, 2.0))
+        } else {
+            uniform_vec3(rng, 0.5, 2.0)
+        };
+        let t = Transform { translation: uniform_vec3(rng, -6.0, 6.0), rotation: random_rotation(rng), scale };
         out.push(instance(GeometryRef::Shape(shape), t, out.len() as u32));
     }
     out
 }
 
 /// Segments, rays to infinity, and rays starting exactly on surfaces (no offset).
-fn random_rays(rng: &mut Rng, bvh: &SceneBvh, n: usize) -> Vec<Ray> {
+fn random_rays(rng: &mut SplitMix64, bvh: &SceneBvh, n: usize) -> Vec<Ray> {
     let mut rays: Vec<Ray> = (0..n)
         .map(|i| {
-            let p0 = rng.vec(-7.0, 7.0);
-            if i % 3 == 0 { Ray::new(p0, rng.vec(-1.0, 1.0)) } else { Ray::segment(p0, rng.vec(-7.0, 7.0)) }
+            let p0 = uniform_vec3(rng, -7.0, 7.0);
+            if i % 3 == 0 {
+                Ray::new(p0, uniform_vec3(rng, -1.0, 1.0))
+            } else {
+                Ray::segment(p0, uniform_vec3(rng, -7.0, 7.0))
+            }
         })
         .collect();
     // Replace a fifth with rays leaving hit points: t near 0 and grazing starts.
     for i in (0..n).step_by(5) {
         if let Some(h) = bvh.closest_hit(&rays[i]) {
-            rays[i] = Ray::segment(h.p, rng.vec(-7.0, 7.0));
+            rays[i] = Ray::segment(h.p, uniform_vec3(rng, -7.0, 7.0));
         }
     }
     rays
@@ -112,7 +113,7 @@ fn assert_agrees(bvh: &SceneBvh, rays: &[Ray]) -> (usize, usize) {
 
 #[test]
 fn bvh_queries_equal_brute_force_on_random_scenes() {
-    let mut rng = Rng(0x5eed);
+    let mut rng = SplitMix64::new(0x5eed);
     let meshes = random_meshes(&mut rng);
     let scene = random_scene(&mut rng, &meshes);
     let mut bvh = SceneBvh::build(&scene);
@@ -126,8 +127,8 @@ fn bvh_queries_equal_brute_force_on_random_scenes() {
         .step_by(3)
         .map(|i| {
             let mut t = scene[i as usize].transform;
-            t.translation += rng.vec(-2.0, 2.0);
-            t.rotation = rng.rotation();
+            t.translation += uniform_vec3(&mut rng, -2.0, 2.0);
+            t.rotation = random_rotation(&mut rng);
             (i, t)
         })
         .collect();
@@ -212,13 +213,13 @@ fn segments_ending_on_area_lights_are_unoccluded() {
             let light = Transform { translation: offset + p, rotation, scale };
             let bvh =
                 SceneBvh::build(&[instance(GeometryRef::Mesh(&floor_mesh), floor, 0), instance(geometry, light, 1)]);
-            let mut rng = Rng(42 + k as u64);
+            let mut rng = SplitMix64::new(42 + k as u64);
             let (mut tested, mut blocked, mut naive) = (0, 0, 0);
             for _ in 0..2000 {
                 // Floor points up to 60 m away: light arrives at grazing angles.
                 let q = offset + Vec3::new(rng.range(-60.0, 60.0), 0.0, rng.range(-60.0, 60.0));
                 let from = SurfacePoint::from_point(q, Vec3::Y);
-                let u = Vec2::new(rng.f(), rng.f());
+                let u = rng.vec2();
                 let to = match bvh.placed_shape(1) {
                     Some(shape) => shape.sample_area(u),
                     None => {
@@ -320,7 +321,7 @@ fn closest_hit_reports_normals_uvs_and_ids() {
             material: 4,
         },
     ]);
-    let mut rng = Rng(3);
+    let mut rng = SplitMix64::new(3);
     for _ in 0..200 {
         let d = Vec3::new(rng.range(-0.3, 0.3), rng.range(-0.3, 0.3), -1.0);
         let Some(h) = bvh.closest_hit(&Ray::new(Vec3::ZERO, d)) else { continue };

@@ -22,7 +22,8 @@ use super::plot::{PlotError, PlotSpec, Series, line_plot};
 use crate::geometry::{SceneBvh, SurfacePoint};
 use crate::light::{ColorQuery, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::{BvhSampler, BvhUpdate, LightSampler, PowerSampler};
-use crate::scenes::{SceneRng, spawn_emissive_panel_room, spawn_scaling_scene};
+use crate::rng::SplitMix64;
+use crate::scenes::{scene_rng, spawn_emissive_panel_room, spawn_scaling_scene};
 use crate::shading::{LightSamplerKind, Settings};
 use crate::systems::LightingPlugin;
 
@@ -208,7 +209,7 @@ fn time_and_measure(
     seed: u64,
     shadows: Option<&SceneBvh>,
 ) -> (f64, f64) {
-    let mut rng = SceneRng::new(seed);
+    let mut rng = scene_rng(seed);
     let us: Vec<f32> = (0..samples).map(|_| rng.f32()).collect();
     let t = Instant::now();
     let mut estimates = Vec::with_capacity(points.len());
@@ -306,19 +307,19 @@ pub fn move_light(table: &mut LightTable, id: LightId, delta: Vec3) -> bool {
 
 /// Moves `fraction` of the lights (chosen at random) by up to `step` metres along each
 /// horizontal axis (and a fifth of it vertically).
-pub fn move_fraction(table: &mut LightTable, fraction: f64, step: f32, rng: &mut SceneRng) {
+pub fn move_fraction(table: &mut LightTable, fraction: f64, step: f32, rng: &mut SplitMix64) {
     let n = table.len();
     let k = ((n as f64 * fraction).round() as usize).max(1);
     let ids: Vec<LightId> = table.ids().collect();
     for _ in 0..k {
-        let id = ids[(rng.next_u64() % n as u64) as usize];
+        let id = ids[rng.below(n)];
         let delta = step * Vec3::new(rng.range(-1.0, 1.0), rng.range(-0.2, 0.2), rng.range(-1.0, 1.0));
         move_light(table, id, delta);
     }
 }
 
 fn update_figures(table: &mut LightTable, frames: usize, step: f32, seed: u64) -> UpdateFigures {
-    let mut rng = SceneRng::new(seed);
+    let mut rng = scene_rng(seed);
     let mut out = UpdateFigures::default();
     let (mut power, mut bvh) = (PowerSampler::build(table), BvhSampler::build(table));
     let mut times = |fraction: f64, bvh_only: bool, out: &mut UpdateFigures| {

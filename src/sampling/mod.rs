@@ -40,35 +40,3 @@ pub enum SamplingError {
 
 /// The largest f32 below 1: samples are clamped to it so that `floor(u * n) < n`.
 pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
-
-/// Helpers shared by the unit tests: a deterministic RNG.
-#[cfg(test)]
-pub(crate) mod test_util {
-    use glam::Vec2;
-
-    /// SplitMix64 (Steele, Lea, Flood 2014): tiny, deterministic, good enough for tests.
-    pub struct Rng(u64);
-
-    impl Rng {
-        pub fn new(seed: u64) -> Self {
-            Self(seed)
-        }
-        pub fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        }
-        /// Uniform in [0, 1) on the 2^-24 grid, like a renderer's f32 samples.
-        pub fn uniform(&mut self) -> f32 {
-            (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-        }
-        pub fn uniform2(&mut self) -> Vec2 {
-            Vec2::new(self.uniform(), self.uniform())
-        }
-        pub fn uniform_f64(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-        }
-    }
-}

@@ -348,7 +348,7 @@ mod tests {
     use std::f64::consts::PI;
 
     use super::*;
-    use crate::sampling::test_util::Rng;
+    use crate::rng::SplitMix64;
 
     fn hits_inside(v: [Vec3; 3], p: Vec3, u: Vec2, tol: f64) -> bool {
         let tri = SphericalTriangle::new(rel(v, p)).unwrap();
@@ -368,10 +368,10 @@ mod tests {
                 Vec3::new(0.0, 1e-3, -0.33),
             ),
         ];
-        let mut rng = Rng::new(3);
+        let mut rng = SplitMix64::new(3);
         for (v, p) in cases {
             for _ in 0..20_000 {
-                assert!(hits_inside(v, p, rng.uniform2(), 1e-6), "{v:?} from {p:?}");
+                assert!(hits_inside(v, p, rng.vec2(), 1e-6), "{v:?} from {p:?}");
             }
         }
     }
@@ -400,11 +400,11 @@ mod tests {
                 1e-4,
             ),
         ];
-        let mut rng = Rng::new(17);
+        let mut rng = SplitMix64::new(17);
         for (v, p, h) in tri_cases {
             let tri = SphericalTriangle::new(rel(v, p)).unwrap();
             for _ in 0..2000 {
-                let u = DVec2::new(rng.uniform_f64(), rng.uniform_f64()) * 0.9 + 0.05;
+                let u = DVec2::new(rng.f64(), rng.f64()) * 0.9 + 0.05;
                 let j = direction_jacobian(|u| tri.sample(u), u, h);
                 assert!((j / tri.area - 1.0).abs() < 1e-5, "{v:?} at {u}: {j} vs {}", tri.area);
             }
@@ -416,7 +416,7 @@ mod tests {
         for (p, corner, ex, ey, h) in rect_cases {
             let rect = SphericalRectangle::new(p, corner, ex, ey).unwrap();
             for _ in 0..2000 {
-                let u = DVec2::new(rng.uniform_f64(), rng.uniform_f64()) * 0.9 + 0.05;
+                let u = DVec2::new(rng.f64(), rng.f64()) * 0.9 + 0.05;
                 let j = direction_jacobian(|u| (rect.sample(u) - rect.p_ref).normalize(), u, h);
                 assert!((j / rect.solid_angle - 1.0).abs() < 1e-5, "rect at {u}: {j} vs {}", rect.solid_angle);
             }

@@ -6,8 +6,9 @@ use std::f64::consts::PI;
 use glam::{DVec3, Quat, Vec3};
 use kelvin::geometry::Transform;
 use kelvin::light::{Amount, AreaLight, AreaShape, LightSampleContext, ResolvedArea};
+use kelvin::rng::SplitMix64;
 
-use super::{RGB, Rng, Stats, lum};
+use super::{RGB, Stats, lum};
 
 /// Photometric radiance (nit) of an untextured light.
 pub fn nits(light: &ResolvedArea) -> f64 {
@@ -55,7 +56,7 @@ pub fn all_shapes() -> Vec<(&'static str, ResolvedArea)> {
 }
 
 /// Reference points around a light (in a box 3x its size around its centre).
-pub fn points_around(light: &ResolvedArea, rng: &mut Rng, n: usize) -> Vec<Vec3> {
+pub fn points_around(light: &ResolvedArea, rng: &mut SplitMix64, n: usize) -> Vec<Vec3> {
     let (min, max) = light.shape.bounds();
     let (c, half) = ((min + max) * 0.5, ((max - min) * 0.5).max_element() * 3.0 + 0.1);
     (0..n).map(|_| c + (Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - 1.0) * half).collect()
@@ -63,12 +64,12 @@ pub fn points_around(light: &ResolvedArea, rng: &mut Rng, n: usize) -> Vec<Vec3>
 
 /// Max relative difference between sample pdfs and `pdf_li` (of both `shape.sample`, which
 /// includes directions toward a light's back, and `sample_li`).
-pub fn max_pdf_mismatch(light: &ResolvedArea, points: &[Vec3], per_point: usize, rng: &mut Rng) -> (f64, usize) {
+pub fn max_pdf_mismatch(light: &ResolvedArea, points: &[Vec3], per_point: usize, rng: &mut SplitMix64) -> (f64, usize) {
     let (mut worst, mut count) = (0.0f64, 0);
     for &p in points {
         let ctx = LightSampleContext::at(p);
         for _ in 0..per_point {
-            let u = rng.u2();
+            let u = rng.vec2();
             let mut check = |pdf: f32, wi: Vec3| {
                 let other = light.pdf_li(&ctx, wi);
                 assert!(pdf.is_finite() && pdf > 0.0 && other.is_finite(), "pdf {pdf} / pdf_li {other} at {p}");
@@ -88,10 +89,10 @@ pub fn max_pdf_mismatch(light: &ResolvedArea, points: &[Vec3], per_point: usize,
 }
 
 /// Mean of L cos / pdf over `sample_li` samples (cos clamped to the receiving hemisphere).
-pub fn irradiance(light: &ResolvedArea, ctx: &LightSampleContext, n: usize, rng: &mut Rng) -> Stats {
+pub fn irradiance(light: &ResolvedArea, ctx: &LightSampleContext, n: usize, rng: &mut SplitMix64) -> Stats {
     let mut s = Stats::default();
     for _ in 0..n {
-        let x = match light.sample_li(ctx, rng.u2(), RGB) {
+        let x = match light.sample_li(ctx, rng.vec2(), RGB) {
             Some(ls) => {
                 assert!(ls.pdf.is_finite() && ls.pdf > 0.0 && ls.radiance.is_finite());
                 lum(ls.radiance) * ctx.n.dot(ls.wi).max(0.0) as f64 / ls.pdf as f64

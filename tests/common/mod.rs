@@ -1,34 +1,11 @@
-//! Shared by the light tests: a deterministic RNG, Monte Carlo statistics and their assertion, and
+//! Shared by the light tests: Monte Carlo statistics and their assertion, and
 //! the area-light fixtures. Each test binary uses part of it.
 #![allow(dead_code)]
 
 pub mod area;
 
-use glam::Vec2;
 use kelvin::light::ColorQuery;
 use kelvin::spectrum::SampledSpectrum;
-
-/// SplitMix64 (Steele, Lea, Flood 2014).
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    pub fn f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    pub fn u2(&mut self) -> Vec2 {
-        Vec2::new(self.f32(), self.f32())
-    }
-}
 
 /// Running mean and standard error.
 #[derive(Default)]

@@ -1,28 +1,9 @@
-//! Shared helpers: a deterministic RNG, stratified Monte Carlo with honest error bars, and the
+//! Shared helpers: stratified Monte Carlo with honest error bars, and the
 //! pdf-agreement check.
 
 use glam::{Vec2, Vec3};
 use kelvin::geometry::Transform;
-
-/// SplitMix64 (Steele, Lea, Flood 2014).
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1) on the 2^-24 grid, like a renderer's f32 samples.
-    pub fn uniform(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
-}
+use kelvin::rng::SplitMix64;
 
 pub const REPLICATES: usize = 64;
 pub const SIDE: usize = 128;
@@ -37,14 +18,13 @@ pub struct Estimate {
 
 /// The mean of `f` over the unit square from `REPLICATES` independent jittered `SIDE` x `SIDE` grids.
 pub fn estimate(seed: u64, mut f: impl FnMut(Vec2) -> f64) -> Estimate {
-    let mut rng = Rng::new(seed);
+    let mut rng = SplitMix64::new(seed);
     let means: Vec<f64> = (0..REPLICATES)
         .map(|_| {
             let mut sum = 0.0;
             for j in 0..SIDE {
                 for i in 0..SIDE {
-                    let u =
-                        Vec2::new((i as f32 + rng.uniform()) / SIDE as f32, (j as f32 + rng.uniform()) / SIDE as f32);
+                    let u = Vec2::new((i as f32 + rng.f32()) / SIDE as f32, (j as f32 + rng.f32()) / SIDE as f32);
                     sum += f(u.min(Vec2::splat(1.0 - f32::EPSILON / 2.0)));
                 }
             }
@@ -97,10 +77,10 @@ pub fn check_pdf_agreement(
     pdf: impl Fn(Vec3) -> f32,
     on_edge: impl Fn(Vec3) -> bool,
 ) -> f64 {
-    let mut rng = Rng::new(seed);
+    let mut rng = SplitMix64::new(seed);
     let (mut drawn, mut worst, mut edge_mismatches) = (0usize, 0.0f64, 0usize);
     for _ in 0..SAMPLES {
-        let u = Vec2::new(rng.uniform(), rng.uniform());
+        let u = Vec2::new(rng.f32(), rng.f32());
         let Some((w, p)) = sample(u) else { continue };
         drawn += 1;
         assert!((w.length() - 1.0).abs() < 1e-5 && p.is_finite() && p > 0.0, "{test}: bad sample {w} pdf {p}");

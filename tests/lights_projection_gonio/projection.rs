@@ -8,6 +8,7 @@ use kelvin::geometry::Transform;
 use kelvin::light::{
     Amount, ColorQuery, LightError, LightSampleContext, PointLight, ProjectionLight, ResolvedProjection,
 };
+use kelvin::rng::SplitMix64;
 use kelvin::sampling::sample_uniform_sphere;
 use kelvin::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
 use kelvin::spectrum::{SampledWavelengths, Spectrum};
@@ -195,12 +196,12 @@ fn projection_white_image_matches_point_light_inside_frustum() {
             .resolve(&transform)
             .unwrap();
     let point = PointLight::candela(cd).resolve(&transform).unwrap();
-    let mut rng = Rng::new(41);
+    let mut rng = SplitMix64::new(41);
     let (mut inside, mut outside, mut worst) = (0, 0, 0.0f32);
     for _ in 0..20_000 {
-        let p = Vec3::new(rng.uniform() * 10.0 - 5.0, rng.uniform() * 6.0 - 5.0, rng.uniform() * 10.0 - 5.0);
+        let p = Vec3::new(rng.f32() * 10.0 - 5.0, rng.f32() * 6.0 - 5.0, rng.f32() * 10.0 - 5.0);
         let ctx = LightSampleContext::at(p);
-        let lambda = SampledWavelengths::sample_visible(rng.uniform());
+        let lambda = SampledWavelengths::sample_visible(rng.f32());
         let to_light = (transform.translation - p).normalize();
         let local = transform.to_local_direction(-to_light);
         let x = local.x / -local.z;

@@ -2,31 +2,32 @@
 //! sample == pdf function, inverses, the 1e9 "sun pixel" outlier, zero weights.
 
 use glam::Vec2;
+use kelvin::rng::SplitMix64;
 use kelvin::sampling::*;
 
 use crate::common::*;
 
 /// A function with zeros, a spread of magnitudes and one negative value (counts as its magnitude).
-fn bumpy(n: usize, rng: &mut Rng) -> Vec<f32> {
+fn bumpy(n: usize, rng: &mut SplitMix64) -> Vec<f32> {
     (0..n)
         .map(|i| match i % 7 {
             0 => 0.0,
-            3 => -(rng.uniform() * 2.0),
-            _ => 0.05 + rng.uniform() * 3.0,
+            3 => -(rng.f32() * 2.0),
+            _ => 0.05 + rng.f32() * 3.0,
         })
         .collect()
 }
 
 #[test]
 fn piecewise_1d_sample_frequencies_match_function_chi_square() {
-    let mut rng = Rng::new(1);
+    let mut rng = SplitMix64::new(1);
     let f = bumpy(40, &mut rng);
     let d = PiecewiseConstant1D::new(&f, -2.0, 3.0);
     let sum: f64 = f.iter().map(|v| v.abs() as f64).sum();
     let probs: Vec<f64> = f.iter().map(|v| v.abs() as f64 / sum).collect();
     let mut counts = vec![0u64; f.len()];
     for _ in 0..200_000 {
-        let (_, _, o) = d.sample(rng.uniform());
+        let (_, _, o) = d.sample(rng.f32());
         counts[o] += 1;
     }
     let stat = assert_chi_square("1D", &counts, &probs);
@@ -36,12 +37,12 @@ fn piecewise_1d_sample_frequencies_match_function_chi_square() {
 
 #[test]
 fn piecewise_1d_pdf_of_sample_equals_pdf_function_and_invert_round_trips() {
-    let mut rng = Rng::new(2);
+    let mut rng = SplitMix64::new(2);
     let f = bumpy(33, &mut rng);
     let d = PiecewiseConstant1D::new(&f, 1.0, 4.0);
     let (mut worst_pdf, mut worst_u) = (0.0f64, 0.0f32);
     for _ in 0..20_000 {
-        let u = rng.uniform();
+        let u = rng.f32();
         let (x, pdf, o) = d.sample(u);
         assert!(f[o] != 0.0, "zero bin {o} sampled at u = {u}");
         worst_pdf = worst_pdf.max(rel(d.pdf(x) as f64, pdf as f64));
@@ -98,7 +99,7 @@ fn piecewise_1d_sun_outlier_1e9_keeps_the_mass_of_the_sky() {
 
 #[test]
 fn piecewise_2d_sample_frequencies_match_function_chi_square() {
-    let mut rng = Rng::new(3);
+    let mut rng = SplitMix64::new(3);
     let (nu, nv) = (8, 5);
     let mut f = bumpy(nu * nv, &mut rng);
     f[nu..2 * nu].iter_mut().for_each(|v| *v = 0.0); // an all-zero row
@@ -107,7 +108,7 @@ fn piecewise_2d_sample_frequencies_match_function_chi_square() {
     let probs: Vec<f64> = f.iter().map(|v| v.abs() as f64 / sum).collect();
     let mut counts = vec![0u64; nu * nv];
     for _ in 0..200_000 {
-        let (_, _, [iu, iv]) = d.sample(rng.uniform2());
+        let (_, _, [iu, iv]) = d.sample(rng.vec2());
         counts[iv * nu + iu] += 1;
     }
     let stat = assert_chi_square("2D", &counts, &probs);
@@ -116,14 +117,14 @@ fn piecewise_2d_sample_frequencies_match_function_chi_square() {
 
 #[test]
 fn piecewise_2d_pdf_of_sample_equals_pdf_function_and_invert_round_trips_on_a_domain() {
-    let mut rng = Rng::new(4);
+    let mut rng = SplitMix64::new(4);
     let (nu, nv) = (16, 9);
     let f = bumpy(nu * nv, &mut rng);
     let (lo, hi) = (Vec2::new(-1.0, 0.0), Vec2::new(1.0, std::f32::consts::PI));
     let d = PiecewiseConstant2D::try_new(&f, nu, nv, lo, hi).unwrap();
     let (mut worst_pdf, mut worst_u) = (0.0f64, 0.0f32);
     for _ in 0..20_000 {
-        let u = rng.uniform2();
+        let u = rng.vec2();
         let (p, pdf, [iu, iv]) = d.sample(u);
         assert!(f[iv * nu + iu] != 0.0);
         worst_pdf = worst_pdf.max(rel(d.pdf(p) as f64, pdf as f64));
@@ -133,7 +134,7 @@ fn piecewise_2d_pdf_of_sample_equals_pdf_function_and_invert_round_trips_on_a_do
     println!("piecewise 2D: pdf mismatch {worst_pdf:.1e}, inverse round trip {worst_u:.1e}");
     assert!(worst_pdf < 1e-5 && worst_u < 1e-5);
     let area = (hi - lo).x as f64 * (hi - lo).y as f64;
-    let (m, e) = mean_and_error(200_000, || d.pdf(lo + (hi - lo) * rng.uniform2()) as f64 * area);
+    let (m, e) = mean_and_error(200_000, || d.pdf(lo + (hi - lo) * rng.vec2()) as f64 * area);
     assert!((m - 1.0).abs() < 3.0 * e, "pdf integrates to {m} +- {e}");
     assert_eq!(d.pdf(Vec2::new(1.5, 1.0)), 0.0);
 }
@@ -157,14 +158,14 @@ fn piecewise_2d_sun_pixel_1e9_env_map_keeps_sky_rows() {
 
 #[test]
 fn alias_table_frequencies_match_weights_chi_square() {
-    let mut rng = Rng::new(5);
+    let mut rng = SplitMix64::new(5);
     let w = bumpy(50, &mut rng);
     let t = AliasTable::new(&w);
     let sum: f64 = w.iter().map(|&v| if v > 0.0 { v as f64 } else { 0.0 }).sum();
     let probs: Vec<f64> = w.iter().map(|&v| if v > 0.0 { v as f64 / sum } else { 0.0 }).collect();
     let mut counts = vec![0u64; w.len()];
     for _ in 0..500_000 {
-        let (i, pmf) = t.sample(rng.uniform()).unwrap();
+        let (i, pmf) = t.sample(rng.f32()).unwrap();
         assert_eq!(pmf, t.pmf(i));
         counts[i] += 1;
     }
@@ -191,8 +192,8 @@ fn alias_table_is_exact_on_a_stratified_grid() {
 
 #[test]
 fn alias_pmf_sums_to_one_within_f32_rounding_over_wide_magnitudes() {
-    let mut rng = Rng::new(6);
-    let w: Vec<f32> = (0..10_000).map(|_| 10f32.powf(rng.uniform() * 60.0 - 30.0)).collect();
+    let mut rng = SplitMix64::new(6);
+    let w: Vec<f32> = (0..10_000).map(|_| 10f32.powf(rng.f32() * 60.0 - 30.0)).collect();
     let t = AliasTable::new(&w);
     let sum: f64 = (0..t.len()).map(|i| t.pmf(i) as f64).sum();
     println!("alias table: pmf sum - 1 = {:.1e}", sum - 1.0);

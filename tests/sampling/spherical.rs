@@ -5,6 +5,7 @@
 use std::f64::consts::PI;
 
 use glam::{DVec3, Vec2, Vec3};
+use kelvin::rng::SplitMix64;
 use kelvin::sampling::*;
 
 use crate::common::*;
@@ -112,7 +113,7 @@ fn cell_of(cells: &[[(f64, f64); 3]], b1: f64, b2: f64) -> usize {
 #[test]
 fn spherical_triangle_samples_are_uniform_chi_square_ordinary_tiny_near_2pi_grazing_sliver() {
     let cells = sub_triangles(8);
-    let mut rng = Rng::new(21);
+    let mut rng = SplitMix64::new(21);
     for (name, v, p) in triangles() {
         let at = |(b1, b2): (f64, f64)| (point(v, [(1.0 - b1 - b2) as f32, b1 as f32, b2 as f32])).as_vec3();
         let omegas: Vec<f64> =
@@ -122,7 +123,7 @@ fn spherical_triangle_samples_are_uniform_chi_square_ordinary_tiny_near_2pi_graz
         let probs: Vec<f64> = omegas.iter().map(|o| o / total).collect();
         let mut counts = vec![0u64; cells.len()];
         for _ in 0..200_000 {
-            let (b, _) = sample_spherical_triangle(v, p, rng.uniform2()).unwrap();
+            let (b, _) = sample_spherical_triangle(v, p, rng.vec2()).unwrap();
             counts[cell_of(&cells, b[1] as f64, b[2] as f64)] += 1;
         }
         let stat = assert_chi_square(name, &counts, &probs);
@@ -143,7 +144,7 @@ fn hits(v: [DVec3; 3], p: DVec3, w: DVec3) -> bool {
 
 #[test]
 fn spherical_triangle_solid_angle_matches_monte_carlo_ordinary_tiny_1e8_near_2pi() {
-    let mut rng = Rng::new(33);
+    let mut rng = SplitMix64::new(33);
     for (name, v, p) in triangles() {
         let [v0, v1, v2] = v.map(|q| q.as_dvec3());
         let (pd, cross) = (p.as_dvec3(), (v1 - v0).cross(v2 - v0));
@@ -151,12 +152,12 @@ fn spherical_triangle_solid_angle_matches_monte_carlo_ordinary_tiny_1e8_near_2pi
         let (estimate, err) = if name.starts_with("near 2 pi") {
             // Area sampling has huge variance under a low viewpoint: count uniform-sphere hits.
             mean_and_error(400_000, || {
-                let w = sample_uniform_sphere(rng.uniform2()).as_dvec3();
+                let w = sample_uniform_sphere(rng.vec2()).as_dvec3();
                 if hits([v0, v1, v2], pd, w) { 4.0 * PI } else { 0.0 }
             })
         } else {
             mean_and_error(200_000, || {
-                let u = Vec2::new(rng.uniform_f64() as f32, rng.uniform_f64() as f32);
+                let u = Vec2::new(rng.f64() as f32, rng.f64() as f32);
                 let b = sample_uniform_triangle(u);
                 0.5 * cross.length() * area_to_solid_angle(point(v, b), pd, cross.normalize())
             })
@@ -170,11 +171,11 @@ fn spherical_triangle_solid_angle_matches_monte_carlo_ordinary_tiny_1e8_near_2pi
 
 #[test]
 fn spherical_triangle_inverse_round_trips_ordinary_tiny_near_2pi_grazing_sliver() {
-    let mut rng = Rng::new(4);
+    let mut rng = SplitMix64::new(4);
     for (name, v, p) in triangles() {
         let mut worst = 0.0f32;
         for _ in 0..5000 {
-            let u = rng.uniform2();
+            let u = rng.vec2();
             let (b, _) = sample_spherical_triangle(v, p, u).unwrap();
             let w = (point(v, b) - p.as_dvec3()).as_vec3();
             let back = invert_spherical_triangle_sample(v, p, w).unwrap();
@@ -233,7 +234,7 @@ fn spherical_rectangle_pdf_equals_inverse_jacobian_ordinary_tiny_near_2pi_grazin
 
 #[test]
 fn spherical_rectangle_samples_are_uniform_chi_square_ordinary_tiny_near_2pi_grazing() {
-    let mut rng = Rng::new(8);
+    let mut rng = SplitMix64::new(8);
     let k = 8;
     for (name, p, corner, ex, ey) in rectangles() {
         let (cx, cy) = (ex / k as f32, ey / k as f32);
@@ -248,7 +249,7 @@ fn spherical_rectangle_samples_are_uniform_chi_square_ordinary_tiny_near_2pi_gra
         let probs: Vec<f64> = probs.iter().map(|o| o / total).collect();
         let mut counts = vec![0u64; k * k];
         for _ in 0..200_000 {
-            let (q, _) = sample_spherical_rectangle(p, corner, ex, ey, rng.uniform2()).unwrap();
+            let (q, _) = sample_spherical_rectangle(p, corner, ex, ey, rng.vec2()).unwrap();
             let [s, t] = st(q.as_dvec3(), corner, ex, ey);
             let (i, j) = (((s * k as f64) as usize).min(k - 1), ((t * k as f64) as usize).min(k - 1));
             counts[j * k + i] += 1;
@@ -283,11 +284,11 @@ fn spherical_rectangle_solid_angle_matches_closed_form_and_monte_carlo() {
         println!("rectangle {name}: closed form {exact:.9e}, Van Oosterom-Strackee {omega:.9e}");
         assert!(rel(omega, exact) < 1e-6, "{name}: {omega} vs {exact}");
     }
-    let mut rng = Rng::new(12);
+    let mut rng = SplitMix64::new(12);
     for (name, p, corner, ex, ey) in rectangles().into_iter().filter(|r| !r.0.starts_with("near 2 pi")) {
         let cross = ex.as_dvec3().cross(ey.as_dvec3());
         let (m, e) = mean_and_error(200_000, || {
-            let q = corner.as_dvec3() + ex.as_dvec3() * rng.uniform_f64() + ey.as_dvec3() * rng.uniform_f64();
+            let q = corner.as_dvec3() + ex.as_dvec3() * rng.f64() + ey.as_dvec3() * rng.f64();
             cross.length() * area_to_solid_angle(q, p.as_dvec3(), cross.normalize())
         });
         let omega = spherical_rectangle_solid_angle(p, corner, ex, ey) as f64;
@@ -298,11 +299,11 @@ fn spherical_rectangle_solid_angle_matches_closed_form_and_monte_carlo() {
 
 #[test]
 fn spherical_rectangle_inverse_round_trips_ordinary_tiny_near_2pi_grazing() {
-    let mut rng = Rng::new(6);
+    let mut rng = SplitMix64::new(6);
     for (name, p, corner, ex, ey) in rectangles() {
         let mut worst = 0.0f32;
         for _ in 0..5000 {
-            let u = rng.uniform2();
+            let u = rng.vec2();
             let (q, _) = sample_spherical_rectangle(p, corner, ex, ey, u).unwrap();
             let back = invert_spherical_rectangle_sample(p, corner, ex, ey, q).unwrap();
             worst = worst.max((back - u).abs().max_element());

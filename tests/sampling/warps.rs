@@ -3,6 +3,7 @@
 use std::f64::consts::PI;
 
 use glam::{Vec2, Vec3};
+use kelvin::rng::SplitMix64;
 use kelvin::sampling::*;
 
 use crate::common::*;
@@ -141,7 +142,7 @@ fn planar_warps_pdf_equals_inverse_jacobian_within_1e4() {
 
 #[test]
 fn pdfs_integrate_to_one_monte_carlo_within_3_sigma() {
-    let mut rng = Rng::new(11);
+    let mut rng = SplitMix64::new(11);
     let n = 400_000;
     let four_pi = 4.0 * PI;
     // Directions: integrate each pdf over the sphere with uniform-sphere samples.
@@ -153,20 +154,20 @@ fn pdfs_integrate_to_one_monte_carlo_within_3_sigma() {
         ("cone sin2 0.75", Box::new(|w| if w.z >= 0.5 { uniform_cone_pdf_sin2(0.75) as f64 } else { 0.0 })),
     ];
     for (name, pdf) in sphere_pdfs {
-        let (m, e) = mean_and_error(n, || pdf(sample_uniform_sphere(rng.uniform2())) * four_pi);
+        let (m, e) = mean_and_error(n, || pdf(sample_uniform_sphere(rng.vec2())) * four_pi);
         assert!((m - 1.0).abs() < 3.0 * e + 1e-6, "{name}: integral {m} +- {e}");
     }
     let (m, e) = mean_and_error(n, || {
-        let p = 2.0 * rng.uniform2() - Vec2::ONE;
+        let p = 2.0 * rng.vec2() - Vec2::ONE;
         if p.length_squared() <= 1.0 { uniform_disk_pdf() as f64 * 4.0 } else { 0.0 }
     });
     assert!((m - 1.0).abs() < 3.0 * e, "disk: {m} +- {e}");
     for (a, b) in [(1.0, 3.0), (0.0, 2.0)] {
-        let (m, e) = mean_and_error(n, || linear_pdf(rng.uniform(), a, b) as f64);
+        let (m, e) = mean_and_error(n, || linear_pdf(rng.f32(), a, b) as f64);
         assert!((m - 1.0).abs() < 3.0 * e, "linear({a}, {b}): {m} +- {e}");
     }
     let w = [0.0, 1.0, 0.5, 2.0];
-    let (m, e) = mean_and_error(n, || bilinear_pdf(rng.uniform2(), w) as f64);
+    let (m, e) = mean_and_error(n, || bilinear_pdf(rng.vec2(), w) as f64);
     assert!((m - 1.0).abs() < 3.0 * e, "bilinear: {m} +- {e}");
 }
 
@@ -193,8 +194,8 @@ fn inverses_round_trip() {
 
 #[test]
 fn equal_area_sphere_to_square_round_trips_near_poles_and_equator() {
-    let mut rng = Rng::new(5);
-    let mut dirs: Vec<Vec3> = (0..20_000).map(|_| sample_uniform_sphere(rng.uniform2())).collect();
+    let mut rng = SplitMix64::new(5);
+    let mut dirs: Vec<Vec3> = (0..20_000).map(|_| sample_uniform_sphere(rng.vec2())).collect();
     dirs.extend([
         Vec3::new(1e-4, 2e-4, 1.0).normalize(),
         Vec3::new(-3e-5, 1e-5, -1.0).normalize(),
@@ -217,9 +218,9 @@ fn equal_area_sphere_to_square_round_trips_near_poles_and_equator() {
 
 #[test]
 fn spherical_coordinates_round_trip() {
-    let mut rng = Rng::new(9);
+    let mut rng = SplitMix64::new(9);
     for _ in 0..10_000 {
-        let w = sample_uniform_sphere(rng.uniform2());
+        let w = sample_uniform_sphere(rng.vec2());
         let (theta, phi) = (spherical_theta(w), spherical_phi(w));
         assert!((0.0..std::f32::consts::TAU).contains(&phi));
         let back = spherical_direction(theta.sin(), theta.cos(), phi);

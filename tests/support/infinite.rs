@@ -1,32 +1,14 @@
-//! Helpers shared by the infinite-light tests: a deterministic RNG, running Monte Carlo
+//! Helpers shared by the infinite-light tests: running Monte Carlo
 //! statistics, and small constructors.
 #![allow(dead_code)]
 
 use std::sync::Arc;
 
-use glam::{Quat, Vec2, Vec3};
+use glam::{Quat, Vec3};
 use kelvin::geometry::Transform;
 use kelvin::light::{ImageInfiniteLight, LightSampleContext, ResolvedImageInfinite, SceneSphere};
 use kelvin::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
 use kelvin::spectrum::SampledSpectrum;
-
-/// SplitMix64: a tiny deterministic RNG.
-pub struct Rng(pub u64);
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    pub fn f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    pub fn vec2(&mut self) -> Vec2 {
-        Vec2::new(self.f32(), self.f32())
-    }
-}
 
 /// Running mean and standard error.
 #[derive(Default)]
