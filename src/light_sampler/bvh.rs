@@ -23,6 +23,7 @@ use glam::Vec3;
 
 use super::bvh_build::{BuildItem, Node, build_tree};
 use super::importance::{ClusterQuery, cluster_cost_with, orientation_measure, union};
+use super::prefetch;
 use super::wide::{WideTree, choose_lane, lane_probability};
 use crate::light::{LightBounds, LightId, LightSampleContext, LightTable};
 
@@ -34,6 +35,9 @@ use crate::light::{LightBounds, LightId, LightSampleContext, LightTable};
 /// lights (~0.8 ms); at 1.5 this scenario rebuilds every ~130 frames, ~0.3 ms per frame amortised,
 /// and keeps the variance within ~10-20% of a fresh tree's.
 pub const LIGHT_TREE_REBUILD_RATIO: f32 = 1.5;
+
+/// How many changed lights ahead a refit prefetches leaf nodes.
+const PREFETCH_DISTANCE: usize = 8;
 
 /// Number of [`LightKind`]s (rows of `leaf_of`).
 const KINDS: usize = 8;
@@ -238,9 +242,15 @@ impl BvhSampler {
     /// Returns the number of nodes recomputed, or None (changing nothing further) if a light
     /// would have to enter or leave the tree.
     fn refit(&mut self, table: &LightTable, changed: &[LightId]) -> Option<usize> {
+        // With 100k lights the nodes outgrow the caches and a refit waits on memory, so each step
+        // prefetches the nodes of a later one (1% of 100k lights moving: 1.36 -> 0.58 ms).
         let mut recomputed = 0;
-        for &id in changed {
-            let leaf = *self.leaf_of.get(id.kind as usize)?.get(id.row as usize)?;
+        for (k, &id) in changed.iter().enumerate() {
+            if let Some(&ahead) = changed.get(k + PREFETCH_DISTANCE).and_then(|&a| self.leaf_at(a)) {
+                prefetch(&self.nodes, ahead as usize);
+                prefetch(&self.meta, ahead as usize);
+            }
+            let leaf = *self.leaf_at(id)?;
             let known = self
                 .nodes
                 .get(leaf as usize)
@@ -258,26 +268,60 @@ impl BvhSampler {
         }
         // Children have larger indices than their parent, so taking the highest dirty node first
         // sees every child before its parent; a parent is marked only if a child's bounds changed.
-        for word in (0..self.dirty.len()).rev() {
-            while self.dirty[word] != 0 {
-                let bit = 63 - self.dirty[word].leading_zeros() as usize;
-                self.dirty[word] &= !(1 << bit);
-                let n = 64 * word + bit;
-                let c = self.meta[n].first_child as usize;
-                let b = union(&self.nodes[c].query.bounds(), &self.nodes[c + 1].query.bounds());
-                let q = &self.nodes[n].query;
-                let orientation = if (q.cos_theta_o, q.cos_theta_e) == (b.cos_theta_o, b.cos_theta_e) {
-                    self.meta[n].orientation
-                } else {
-                    orientation_measure(b.cos_theta_o, b.cos_theta_e)
-                };
-                recomputed += 1;
-                if self.set_bounds(n, b, orientation) {
-                    self.mark_parent(n);
+        let mut next = self.next_dirty_below(self.nodes.len());
+        while let Some(n) = next {
+            self.dirty[n / 64] &= !(1 << (n % 64));
+            next = self.next_dirty_below(n);
+            // Two stages ahead: the next node's record now, its children once that has arrived.
+            if let Some(n1) = next {
+                let c1 = self.meta[n1].first_child as usize;
+                prefetch(&self.nodes, c1);
+                prefetch(&self.nodes, n1);
+                self.wide.prefetch_slot(self.meta[n1].slot);
+                if let Some(n2) = self.next_dirty_below(n1) {
+                    prefetch(&self.meta, n2);
                 }
+            }
+            let c = self.meta[n].first_child as usize;
+            let b = union(&self.nodes[c].query.bounds(), &self.nodes[c + 1].query.bounds());
+            let q = &self.nodes[n].query;
+            let orientation = if (q.cos_theta_o, q.cos_theta_e) == (b.cos_theta_o, b.cos_theta_e) {
+                self.meta[n].orientation
+            } else {
+                orientation_measure(b.cos_theta_o, b.cos_theta_e)
+            };
+            recomputed += 1;
+            if self.set_bounds(n, b, orientation) {
+                self.mark_parent(n);
             }
         }
         Some(recomputed)
+    }
+
+    /// The leaf entry of light `id` (a node, [`AT_INFINITY`] or [`ABSENT`]).
+    #[inline]
+    fn leaf_at(&self, id: LightId) -> Option<&u32> {
+        self.leaf_of.get(id.kind as usize)?.get(id.row as usize)
+    }
+
+    /// The highest dirty node below `n`.
+    #[inline]
+    fn next_dirty_below(&self, n: usize) -> Option<usize> {
+        if n == 0 {
+            return None;
+        }
+        let (mut word, bit) = ((n - 1) / 64, (n - 1) % 64);
+        let mut bits = self.dirty[word] & (u64::MAX >> (63 - bit));
+        loop {
+            if bits != 0 {
+                return Some(64 * word + 63 - bits.leading_zeros() as usize);
+            }
+            if word == 0 {
+                return None;
+            }
+            word -= 1;
+            bits = self.dirty[word];
+        }
     }
 
     #[inline]

@@ -241,6 +241,14 @@ impl WideTree {
         }
     }
 
+    /// Starts loading the cache lines `set_slot(slot, ..)` writes.
+    #[inline]
+    pub fn prefetch_slot(&self, slot: u32) {
+        if slot != NONE {
+            super::prefetch(&self.nodes, slot as usize / 4);
+        }
+    }
+
     /// The slot above wide node `w`: (parent wide node, lane), or None for the root.
     #[inline]
     pub fn parent_slot(&self, w: usize) -> Option<(usize, usize)> {
