@@ -5,6 +5,7 @@
 pub mod geometry;
 pub mod light;
 pub mod light_sampler;
+mod prefetch;
 pub mod render;
 pub mod report;
 pub mod rng;

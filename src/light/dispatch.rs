@@ -119,6 +119,38 @@ impl LightTable {
         }
     }
 
+    /// Starts loading what [`Self::bounds`] and [`Self::luminous_power`] read of light `id`: a
+    /// cache hint for walks over many lights in a data-dependent order (the light BVH's refit).
+    pub fn prefetch_bounds(&self, id: LightId) {
+        use crate::prefetch::prefetch;
+        let i = id.row as usize;
+        match id.kind {
+            LightKind::Point => {
+                let c = &self.points;
+                prefetch(&c.position, i);
+                prefetch(&c.rgb, i);
+                prefetch(&c.radiometric, i);
+                prefetch(&c.scale, i);
+                prefetch(&c.spectrum, i);
+            }
+            LightKind::Spot => {
+                let c = &self.spots;
+                prefetch(&c.position, i);
+                prefetch(&c.direction, i);
+                prefetch(&c.cos_inner, i);
+                prefetch(&c.cos_outer, i);
+                prefetch(&c.rgb, i);
+                prefetch(&c.radiometric, i);
+                prefetch(&c.scale, i);
+                prefetch(&c.spectrum, i);
+            }
+            LightKind::Projection => prefetch(&self.projection.items, i),
+            LightKind::Goniometric => prefetch(&self.goniometric.items, i),
+            LightKind::Area => prefetch(&self.area.items, i),
+            LightKind::Distant | LightKind::UniformInfinite | LightKind::ImageInfinite => {}
+        }
+    }
+
     /// Whether shadow rays are traced for light `id`.
     pub fn casts_shadows(&self, id: LightId) -> bool {
         let i = id.row as usize;

@@ -245,7 +245,7 @@ impl WideTree {
     #[inline]
     pub fn prefetch_slot(&self, slot: u32) {
         if slot != NONE {
-            super::prefetch(&self.nodes, slot as usize / 4);
+            crate::prefetch::prefetch(&self.nodes, slot as usize / 4);
         }
     }
 
