@@ -2,7 +2,7 @@
 
 use bevy_ecs::prelude::*;
 
-use crate::geometry::{SceneBvh, SurfacePoint, occluded};
+use crate::geometry::{SceneBvh, SurfacePoint};
 use crate::shading::{RunReport, Settings};
 
 use super::{ShadowRays, Work};
@@ -30,29 +30,26 @@ pub fn plan_shadows(
 }
 
 /// Builds offset segments (off the shading surface and off the light's surface, by
-/// `Settings::shadow_offset`) and traces them in parallel; fills `ShadowRays::occluded`.
-pub fn trace_shadow_rays(
-    mut rays: ResMut<ShadowRays>,
-    bvh: Res<SceneBvh>,
-    settings: Res<Settings>,
-    mut segments: Local<Vec<crate::geometry::Ray>>,
-) {
+/// `Settings::shadow_offset`) and traces them, in one parallel pass; fills `ShadowRays::occluded`.
+pub fn trace_shadow_rays(mut rays: ResMut<ShadowRays>, bvh: Res<SceneBvh>, settings: Res<Settings>) {
     use rayon::prelude::*;
     let r = &mut *rays;
     let offset = settings.shadow_offset;
-    segments.clear();
+    let mut occluded = std::mem::take(&mut r.occluded);
     (0..r.origin.len())
         .into_par_iter()
+        .with_min_len(crate::geometry::RAY_CHUNK)
         .map(|i| {
             let from = SurfacePoint { p: r.origin[i], p_error: r.origin_error[i], n: r.origin_normal[i] };
-            if r.to_infinity[i] {
+            let segment = if r.to_infinity[i] {
                 offset.spawn_ray(&from, (r.target[i] - r.origin[i]).normalize())
             } else if r.target_normal[i] == glam::Vec3::ZERO {
                 offset.spawn_ray_to_point(&from, r.target[i])
             } else {
                 offset.spawn_ray_to(&from, &SurfacePoint::from_point(r.target[i], r.target_normal[i]))
-            }
+            };
+            bvh.occluded(&segment)
         })
-        .collect_into_vec(&mut segments);
-    occluded(&bvh, &segments, &mut r.occluded);
+        .collect_into_vec(&mut occluded);
+    r.occluded = occluded;
 }

@@ -29,6 +29,10 @@ const NODE_PAD: f32 = 1.0 / (1u32 << 18) as f32;
 /// (never inf * 0 = NaN): 2^100, valid for scene coordinates below 2^20.
 const MAX_INV_DIR: f32 = 1.267_650_6e30;
 
+/// Up to this many primitives, queries test each one rather than walk the tree: the same answers
+/// (see the module docs), without the traversal's setup.
+const FEW_PRIMITIVES: usize = 4;
+
 /// A closest hit, in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -159,6 +163,9 @@ impl SceneBvh {
         if !ray.is_valid() || self.leaf.is_empty() {
             return false;
         }
+        if self.leaf.len() <= FEW_PRIMITIVES {
+            return self.occluded_brute_force(ray);
+        }
         let tri_ray = ShearedRay::new(ray);
         let node_ray = NodeRay::new(ray);
         let mut state = self.cwbvh.new_traversal(Vec3A::from(ray.dir));
@@ -179,6 +186,9 @@ impl SceneBvh {
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         if !ray.is_valid() || self.leaf.is_empty() {
             return None;
+        }
+        if self.leaf.len() <= FEW_PRIMITIVES {
+            return self.closest_hit_brute_force(ray);
         }
         let tri_ray = ShearedRay::new(ray);
         let node_ray = NodeRay::new(ray);
