@@ -9,33 +9,15 @@ use kelvin::rng::SplitMix64;
 use kelvin::scene::gltf::{GltfError, GltfScene, IesSource, LightKind, load_gltf, load_gltf_from_bytes};
 use serde_json::{Value, json};
 
-/// A fresh directory under the system temp dir, unique to this test and process, removed when dropped.
-struct TempDir(PathBuf);
-impl TempDir {
-    fn join(&self, name: impl AsRef<Path>) -> PathBuf {
-        self.0.join(name)
-    }
-}
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+mod common;
+use common::files::{TempDir, shared_data};
+
 fn temp_dir(test: &str) -> TempDir {
-    let dir = std::env::temp_dir().join(format!("kelvin-gltf-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create temp dir");
-    TempDir(dir)
+    TempDir::new("gltf", test)
 }
 
 fn gltf_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/gltf");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipping: {} not found (real test data absent)", dir.display());
-        None
-    }
+    shared_data("gltf")
 }
 
 /// Every .gltf / .glb under `dir`, sorted.

@@ -11,33 +11,15 @@ use kelvin::scene::image::{
     ImageError, direction_to_lat_long, lat_long_direction, load_image, load_image_from_bytes, srgb_decode,
 };
 
-/// A fresh directory under the system temp dir, unique to this test and process, removed when dropped.
-struct TempDir(PathBuf);
-impl TempDir {
-    fn join(&self, name: impl AsRef<Path>) -> PathBuf {
-        self.0.join(name)
-    }
-}
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+mod common;
+use common::files::{TempDir, shared_data};
+
 fn temp_dir(test: &str) -> TempDir {
-    let dir = std::env::temp_dir().join(format!("kelvin-image-io-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create temp dir");
-    TempDir(dir)
+    TempDir::new("image-io", test)
 }
 
 fn env_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/env");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipping: {} not found (real test data absent)", dir.display());
-        None
-    }
+    shared_data("env")
 }
 
 /// Writes an RGB f32 EXR directly with the exr crate, bypassing kelvin's writer (which has no say on NaN).

@@ -3,6 +3,7 @@
 //! to 1), MIS compensation, and the hard cases (black map, one 1e9 texel, 1x1 and 1xN maps,
 //! non-finite texels). The real maps are in lights_infinite_maps.rs.
 
+mod common;
 #[path = "support/infinite.rs"]
 mod support;
 
@@ -176,7 +177,7 @@ fn nearest_lookup_importance_is_perfect_for_grey_maps() {
         let s = light.sample_li(&surface_ctx(), rng.vec2(), ColorQuery::Rgb).unwrap();
         est.add(PI * 25.0 * y_of(s.radiance) / s.pdf as f64);
     }
-    let rel_sd = est.std_err() * est.n.sqrt() / est.mean();
+    let rel_sd = est.sigma() * est.n.sqrt() / est.mean();
     let rel = (est.mean() - light.luminous_phi() as f64).abs() / light.luminous_phi() as f64;
     eprintln!("perfect importance: per-sample relative spread {rel_sd:.2e}, phi rel err {rel:.2e}");
     assert!(rel_sd < 1e-3 && rel < 1e-3);
@@ -234,11 +235,11 @@ fn compensated_mis_matches_complete_light_sampling() {
         complete.add(y_of(s.radiance) * ctx.n.dot(s.wi).max(0.0) as f64 / s.pdf as f64);
     }
     let (a, b) = (mis.mean(), complete.mean());
-    let sigma = (mis.std_err().powi(2) + complete.std_err().powi(2)).sqrt();
+    let sigma = (mis.sigma().powi(2) + complete.sigma().powi(2)).sqrt();
     eprintln!(
         "MIS-compensated {a:.5e} (+-{:.1e}) vs complete {b:.5e} (+-{:.1e}), rel diff {:.2e}",
-        mis.std_err(),
-        complete.std_err(),
+        mis.sigma(),
+        complete.sigma(),
         (a - b).abs() / b
     );
     assert!((a - b).abs() <= 3.0 * sigma, "{a} vs {b}, 3 sigma {}", 3.0 * sigma);

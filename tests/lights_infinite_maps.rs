@@ -1,6 +1,7 @@
 //! Infinite lights on the real environment maps in ../shared/data/env (skipped when absent):
 //! chi-square tests of sampling against luminance * solid angle, pdf integrals and power.
 
+mod common;
 #[path = "support/infinite.rs"]
 mod support;
 

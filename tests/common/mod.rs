@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod area;
+pub mod files;
 
 use kelvin::light::ColorQuery;
 use kelvin::spectrum::SampledSpectrum;
@@ -10,7 +11,7 @@ use kelvin::spectrum::SampledSpectrum;
 /// Running mean and standard error.
 #[derive(Default)]
 pub struct Stats {
-    n: f64,
+    pub n: f64,
     sum: f64,
     sum2: f64,
 }
@@ -27,6 +28,13 @@ impl Stats {
     pub fn sigma(&self) -> f64 {
         let m = self.mean();
         ((self.sum2 / self.n - m * m).max(0.0) / self.n).sqrt()
+    }
+    /// Asserts |mean - expected| <= 3 sigma + abs_tol and prints the errors.
+    pub fn check(&self, name: &str, expected: f64, abs_tol: f64) {
+        let (m, s) = (self.mean(), self.sigma());
+        let rel = (m - expected).abs() / expected.abs().max(1e-300);
+        eprintln!("{name}: estimate {m:.6e} vs {expected:.6e}, rel err {rel:.2e}, sigma/expected {:.2e}", s / expected);
+        assert!((m - expected).abs() <= 3.0 * s + abs_tol, "{name}: {m} vs {expected} (3 sigma = {})", 3.0 * s);
     }
 }
 

@@ -10,34 +10,7 @@ use kelvin::light::{ImageInfiniteLight, LightSampleContext, ResolvedImageInfinit
 use kelvin::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
 use kelvin::spectrum::SampledSpectrum;
 
-/// Running mean and standard error.
-#[derive(Default)]
-pub struct Stats {
-    pub n: f64,
-    sum: f64,
-    sum2: f64,
-}
-impl Stats {
-    pub fn add(&mut self, x: f64) {
-        self.n += 1.0;
-        self.sum += x;
-        self.sum2 += x * x;
-    }
-    pub fn mean(&self) -> f64 {
-        self.sum / self.n
-    }
-    pub fn std_err(&self) -> f64 {
-        let m = self.mean();
-        ((self.sum2 / self.n - m * m).max(0.0) / self.n).sqrt()
-    }
-    /// Asserts |mean - expected| <= 3 sigma + abs_tol and prints the errors.
-    pub fn check(&self, name: &str, expected: f64, abs_tol: f64) {
-        let (m, s) = (self.mean(), self.std_err());
-        let rel = (m - expected).abs() / expected.abs().max(1e-300);
-        eprintln!("{name}: estimate {m:.6e} vs {expected:.6e}, rel err {rel:.2e}, sigma/expected {:.2e}", s / expected);
-        assert!((m - expected).abs() <= 3.0 * s + abs_tol, "{name}: {m} vs {expected} (3 sigma = {})", 3.0 * s);
-    }
-}
+pub use crate::common::Stats;
 
 /// Photometric Y of an RGB-mode radiance.
 pub fn y_of(s: SampledSpectrum) -> f64 {
