@@ -29,13 +29,16 @@ pub struct PlotError {
     pub msg: String,
 }
 
-const PALETTE: [RGBColor; 6] = [
+/// Series colours of every report plot (matplotlib's "tab10" order).
+pub(crate) const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
     RGBColor(214, 39, 40),
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
 ];
 
 /// Registers the bundled font under "sans-serif" (once).

@@ -9,18 +9,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{Against, Knob, Row, SceneReport};
-use crate::report::plot::PlotError;
-
-const PALETTE: [RGBColor; 8] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(23, 190, 207),
-];
+use crate::report::plot::{PALETTE, PlotError};
 
 /// Draws `report` into `path`, an .svg or a .png.
 pub fn error_vs_time(path: &Path, report: &SceneReport) -> Result<(), PlotError> {
