@@ -84,6 +84,17 @@ impl Default for Settings {
     }
 }
 
+/// One point to shade, the row form of [`ShadingBatch`]'s columns (see there).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingPoint {
+    pub position: Vec3,
+    pub position_error: Vec3,
+    pub normal: Vec3,
+    pub shading_normal: Vec3,
+    pub pixel: u32,
+    pub sample: u32,
+}
+
 /// Points to shade, as columns. All columns have `len()` entries; `wavelengths` is filled in
 /// spectral mode only. The caller (a renderer's camera rays or an app's G-buffer) writes it.
 #[derive(Resource, Clone, Debug, Default)]
@@ -123,6 +134,32 @@ impl ShadingBatch {
         self.sample.clear();
         self.wavelengths.clear();
     }
+    /// Replaces the points by `n` points computed in parallel, point `j` by `point(j)`.
+    /// Spectral callers fill `wavelengths` to match.
+    pub fn par_fill(&mut self, n: usize, point: impl Fn(usize) -> ShadingPoint + Sync) {
+        use rayon::prelude::*;
+        self.clear();
+        self.position.resize(n, Vec3::ZERO);
+        self.position_error.resize(n, Vec3::ZERO);
+        self.normal.resize(n, Vec3::ZERO);
+        self.shading_normal.resize(n, Vec3::ZERO);
+        self.pixel.resize(n, 0);
+        self.sample.resize(n, 0);
+        let columns = (
+            self.position.par_iter_mut(),
+            self.position_error.par_iter_mut(),
+            self.normal.par_iter_mut(),
+            self.shading_normal.par_iter_mut(),
+            self.pixel.par_iter_mut(),
+            self.sample.par_iter_mut(),
+        );
+        columns.into_par_iter().enumerate().with_min_len(256).for_each(|(j, (p, e, ng, ns, pixel, sample))| {
+            let q = point(j);
+            (*p, *e, *ng, *ns, *pixel, *sample) =
+                (q.position, q.position_error, q.normal, q.shading_normal, q.pixel, q.sample);
+        });
+    }
+
     /// Appends a point on a surface whose position error is unknown (an app's G-buffer).
     pub fn push(&mut self, position: Vec3, normal: Vec3, pixel: u32, sample: u32) {
         let error = crate::geometry::SurfacePoint::from_point(position, normal).p_error;

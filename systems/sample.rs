@@ -33,6 +33,16 @@ pub struct ShadowRays {
     pub occluded: Vec<bool>,
 }
 
+/// One shadow ray, the row form of [`ShadowRays`]' input columns (see there).
+pub struct ShadowRay {
+    pub origin: Vec3,
+    pub origin_error: Vec3,
+    pub origin_normal: Vec3,
+    pub target: Vec3,
+    pub target_normal: Vec3,
+    pub to_infinity: bool,
+}
+
 impl ShadowRays {
     /// Number of rays.
     pub fn len(&self) -> usize {
@@ -52,6 +62,35 @@ impl ShadowRays {
         self.to_infinity.clear();
         self.entry.clear();
         self.occluded.clear();
+    }
+
+    /// Replaces the rays by one ray per `DirectLighting` entry of `entry`, computed in parallel
+    /// by `ray(entry)`; answers are reset to unoccluded.
+    pub fn par_fill(&mut self, entry: Vec<u32>, ray: impl Fn(usize) -> ShadowRay + Sync) {
+        let n = entry.len();
+        self.clear();
+        self.origin.resize(n, Vec3::ZERO);
+        self.origin_error.resize(n, Vec3::ZERO);
+        self.origin_normal.resize(n, Vec3::ZERO);
+        self.target.resize(n, Vec3::ZERO);
+        self.target_normal.resize(n, Vec3::ZERO);
+        self.to_infinity.resize(n, false);
+        self.occluded.resize(n, false);
+        self.entry = entry;
+        let columns = (
+            self.origin.par_iter_mut(),
+            self.origin_error.par_iter_mut(),
+            self.origin_normal.par_iter_mut(),
+            self.target.par_iter_mut(),
+            self.target_normal.par_iter_mut(),
+            self.to_infinity.par_iter_mut(),
+            self.entry.par_iter(),
+        );
+        columns.into_par_iter().with_min_len(CHUNK).for_each(|(o, oe, on, t, tn, inf, &e)| {
+            let r = ray(e as usize);
+            (*o, *oe, *on, *t, *tn, *inf) =
+                (r.origin, r.origin_error, r.origin_normal, r.target, r.target_normal, r.to_infinity);
+        });
     }
 }
 
@@ -174,19 +213,18 @@ pub fn sample_direct_lighting(
         |e: usize| out.pdf[e] > 0.0 && out.radiance[e].0.iter().any(|&v| v > 0.0) && table.casts_shadows(out.light[e]);
     let entries: Vec<u32> =
         (0..n * k).into_par_iter().with_min_len(CHUNK).filter(|&e| needs_ray(e)).map(|e| e as u32).collect();
-    for &e in &entries {
-        let (e, i) = (e as usize, e as usize / k);
+    rays.par_fill(entries, |e| {
+        let i = e / k;
         let flags = table.flags(out.light[e]);
-        rays.origin.push(batch.position[i]);
-        rays.origin_error.push(batch.position_error[i]);
-        rays.origin_normal.push(batch.normal[i]);
-        rays.target.push(p_light[e]);
-        rays.target_normal.push(n_light[e]);
-        rays.to_infinity.push(flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION));
-    }
-    rays.entry = entries;
-    let count = rays.len();
-    rays.occluded.resize(count, false);
+        ShadowRay {
+            origin: batch.position[i],
+            origin_error: batch.position_error[i],
+            origin_normal: batch.normal[i],
+            target: p_light[e],
+            target_normal: n_light[e],
+            to_infinity: flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION),
+        }
+    });
 }
 
 /// Zeroes the radiance of entries whose shadow ray was blocked.

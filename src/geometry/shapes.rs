@@ -62,6 +62,8 @@ pub struct PlacedShape {
     abs_translation: DVec3,
     /// The inverse transpose of to_world's linear part, which maps normals.
     normal_matrix: DMat3,
+    /// Flat shapes: their world normal (the front, +Z), the same for every point.
+    flat_normal: Option<Vec3>,
 }
 
 /// A ray-shape hit in world space.
@@ -174,53 +176,16 @@ impl Shape {
         (-h, h)
     }
 
-    /// Smallest `t` in (0, t_max] where the object-space ray `o + t d` meets the surface. The
-    /// acceptance test is on `t` rounded to f32 so that every caller agrees on it exactly.
-    fn intersect_local(&self, o: DVec3, d: DVec3, t_max: f32) -> Option<f32> {
-        let accept = |t: f64| {
-            let t32 = t as f32;
-            (t > 0.0 && t32 > 0.0 && t32 <= t_max).then_some(t32)
-        };
+    /// Whether the object-space point `p` (z = 0) lies on a flat shape.
+    fn flat_contains(&self, p: DVec3) -> bool {
         match *self {
-            Shape::Sphere(s) => {
-                let r = s.radius as f64;
-                let a = d.length_squared();
-                let b = o.dot(d); // half of the usual b
-                let c = o.length_squared() - r * r;
-                // Discriminant via the closest approach to the centre (Hearn and Baker, as
-                // pbrt-v4 6.2.2): stable for rays that graze the sphere.
-                let l = (o - (b / a) * d).length();
-                let disc = (r - l) * (r + l);
-                if disc < 0.0 {
-                    return None;
-                }
-                let q = -b - b.signum() * (a * disc).sqrt();
-                if q == 0.0 {
-                    return None;
-                }
-                let (t0, t1) = (q / a, c / q);
-                let (t0, t1) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
-                accept(t0).or_else(|| accept(t1))
-            }
-            Shape::Disk(_) | Shape::Rectangle(_) if d.z == 0.0 => None, // Parallel to the plane.
             Shape::Disk(disk) => {
-                let t = -o.z / d.z;
-                let p = o + t * d;
                 let rho2 = p.x * p.x + p.y * p.y;
                 let (r, ri) = (disk.radius as f64, disk.inner_radius as f64);
-                if rho2 > r * r || rho2 < ri * ri {
-                    return None;
-                }
-                accept(t)
+                rho2 <= r * r && rho2 >= ri * ri
             }
-            Shape::Rectangle(rect) => {
-                let t = -o.z / d.z;
-                let p = o + t * d;
-                if p.x.abs() > rect.half_size.x as f64 || p.y.abs() > rect.half_size.y as f64 {
-                    return None;
-                }
-                accept(t)
-            }
+            Shape::Rectangle(rect) => p.x.abs() <= rect.half_size.x as f64 && p.y.abs() <= rect.half_size.y as f64,
+            Shape::Sphere(_) => false,
         }
     }
 
@@ -298,13 +263,15 @@ impl PlacedShape {
             return Err(GeometryError::InvalidTransform { transform: *transform });
         }
         let to_object = to_world.inverse();
+        let normal_matrix = to_object.matrix3.transpose();
         let placed = Self {
             shape,
             to_world,
             to_object,
             abs_linear: to_world.matrix3.abs(),
             abs_translation: to_world.translation.abs(),
-            normal_matrix: to_object.matrix3.transpose(),
+            normal_matrix,
+            flat_normal: shape.is_flat().then(|| (normal_matrix * DVec3::Z).normalize().as_vec3()),
         };
         let (lo, hi) = placed.world_bounds();
         if !(lo.is_finite() && hi.is_finite()) {
@@ -351,18 +318,52 @@ impl PlacedShape {
 
     /// Parameter of the nearest hit in (0, t_max], if any (the ray must be valid).
     pub fn intersect_t(&self, ray: &Ray, t_max: f32) -> Option<f32> {
-        let o = self.to_object.transform_point3(ray.origin.as_dvec3());
-        let d = self.to_object.transform_vector3(ray.dir.as_dvec3());
-        self.shape.intersect_local(o, d, t_max)
+        self.local_hit(ray, t_max).map(|(t, _)| t)
     }
 
     /// The nearest hit in (0, t_max] with its surface point, error bound, normal and uv.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<ShapeHit> {
-        let o = self.to_object.transform_point3(ray.origin.as_dvec3());
-        let d = self.to_object.transform_vector3(ray.dir.as_dvec3());
-        let t = self.shape.intersect_local(o, d, t_max)?;
-        let (p_obj, n_obj, uv) = self.shape.project(o + t as f64 * d);
-        Some(ShapeHit { t, point: self.surface_point(p_obj, n_obj), uv })
+        let (t, p) = self.local_hit(ray, t_max)?;
+        Some(self.hit_at_local(t, p))
+    }
+
+    /// The hit at parameter `t` and object-space point `p` that [`Self::local_hit`] returned.
+    pub(crate) fn hit_at_local(&self, t: f32, p: DVec3) -> ShapeHit {
+        let (p_obj, n_obj, uv) = self.shape.project(p);
+        ShapeHit { t, point: self.surface_point(p_obj, n_obj), uv }
+    }
+
+    /// The nearest hit's `t` in (0, t_max] (tested after rounding to f32, so that every caller
+    /// agrees on it exactly) and its object-space point, before re-projection onto the surface.
+    #[inline]
+    pub(crate) fn local_hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, DVec3)> {
+        let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+        if let Shape::Sphere(s) = self.shape {
+            let (o, d) = (self.to_object.transform_point3(o), self.to_object.transform_vector3(d));
+            let t = intersect_sphere_local(s.radius as f64, o, d, t_max)?;
+            return Some((t, o + t as f64 * d));
+        }
+        // Flat shapes map the ray to object space one row at a time: the plane test needs only z,
+        // and most shadow rays fail it (they leave the plane). Each row is the f64 sum that
+        // `transform_point3` forms.
+        let m = &self.to_object.matrix3;
+        let row = |i: usize| {
+            let (ox, oy, oz) = (m.x_axis[i] * o.x, m.y_axis[i] * o.y, m.z_axis[i] * o.z);
+            let (dx, dy, dz) = (m.x_axis[i] * d.x, m.y_axis[i] * d.y, m.z_axis[i] * d.z);
+            (ox + oy + oz + self.to_object.translation[i], dx + dy + dz)
+        };
+        let (oz, dz) = row(2);
+        if dz == 0.0 {
+            return None; // Parallel to the plane.
+        }
+        let t = -oz / dz;
+        let t32 = t as f32;
+        if !(t > 0.0 && t32 > 0.0 && t32 <= t_max) {
+            return None;
+        }
+        let ((ox, dx), (oy, dy)) = (row(0), row(1));
+        let p = DVec3::new(ox + t * dx, oy + t * dy, 0.0);
+        self.shape.flat_contains(p).then_some((t32, p))
     }
 
     /// A point uniformly distributed over the surface (density 1 / area per m^2), with its error
@@ -375,9 +376,35 @@ impl PlacedShape {
     fn surface_point(&self, p_obj: DVec3, n_obj: DVec3) -> SurfacePoint {
         let p64 = self.to_world.transform_point3(p_obj);
         let terms = self.abs_linear * p_obj.abs() + self.abs_translation;
-        let n = (self.normal_matrix * n_obj).normalize();
-        SurfacePoint { p: p64.as_vec3(), p_error: f64_point_error(p64, terms), n: n.as_vec3() }
+        let n = self.flat_normal.unwrap_or_else(|| (self.normal_matrix * n_obj).normalize().as_vec3());
+        SurfacePoint { p: p64.as_vec3(), p_error: f64_point_error(p64, terms), n }
     }
+}
+
+/// Smallest `t` in (0, t_max] where the object-space ray `o + t d` meets a sphere of radius `r`
+/// at the origin. The acceptance test is on `t` rounded to f32 so that every caller agrees on it.
+fn intersect_sphere_local(r: f64, o: DVec3, d: DVec3, t_max: f32) -> Option<f32> {
+    let accept = |t: f64| {
+        let t32 = t as f32;
+        (t > 0.0 && t32 > 0.0 && t32 <= t_max).then_some(t32)
+    };
+    let a = d.length_squared();
+    let b = o.dot(d); // half of the usual b
+    let c = o.length_squared() - r * r;
+    // Discriminant via the closest approach to the centre (Hearn and Baker, as pbrt-v4 6.2.2):
+    // stable for rays that graze the sphere.
+    let l = (o - (b / a) * d).length();
+    let disc = (r - l) * (r + l);
+    if disc < 0.0 {
+        return None;
+    }
+    let q = -b - b.signum() * (a * disc).sqrt();
+    if q == 0.0 {
+        return None;
+    }
+    let (t0, t1) = (q / a, c / q);
+    let (t0, t1) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+    accept(t0).or_else(|| accept(t1))
 }
 
 #[cfg(test)]

@@ -206,7 +206,7 @@ impl SceneBvh {
                 }
             }
         });
-        best.map(|b| self.make_hit(ray, b))
+        best.map(|b| self.make_hit(ray, b, None))
     }
 
     /// Reference any-hit: tests every primitive. For tests and benchmarks.
@@ -214,8 +214,15 @@ impl SceneBvh {
         if !ray.is_valid() {
             return false;
         }
-        let tri_ray = ShearedRay::new(ray);
-        (0..self.leaf.len()).any(|slot| self.slot_hit(slot, ray, &tri_ray, ray.t_max).is_some())
+        // Shapes need no sheared ray; scenes of shapes alone never build one.
+        let tri_ray = std::cell::OnceCell::new();
+        self.leaf.iter().any(|prim| {
+            if prim.shape == NO_SHAPE {
+                tri_ray.get_or_init(|| ShearedRay::new(ray)).intersect(&prim.v, ray.t_max).is_some()
+            } else {
+                self.shapes[prim.shape as usize].intersect_t(ray, ray.t_max).is_some()
+            }
+        })
     }
 
     /// Reference closest-hit: tests every primitive, ties to the lowest input index.
@@ -223,18 +230,29 @@ impl SceneBvh {
         if !ray.is_valid() {
             return None;
         }
-        let tri_ray = ShearedRay::new(ray);
+        let tri_ray = std::cell::OnceCell::new();
         let mut best: Option<Best> = None;
+        // The object-space point of the best shape hit, so that `make_hit` need not find it again.
+        let mut best_local = None;
         for prim in 0..self.leaf.len() as u32 {
             let slot = self.slot_of(prim);
-            if let Some((t, b)) = self.slot_hit(slot, ray, &tri_ray, ray.t_max) {
-                let candidate = Best { t, prim, slot, b };
-                if candidate.improves_on(&best) {
-                    best = Some(candidate);
-                }
+            let leaf = &self.leaf[slot];
+            let (t, b, local) = if leaf.shape == NO_SHAPE {
+                let Some(h) = tri_ray.get_or_init(|| ShearedRay::new(ray)).intersect(&leaf.v, ray.t_max) else {
+                    continue;
+                };
+                (h.t, h.b, None)
+            } else {
+                let Some((t, p)) = self.shapes[leaf.shape as usize].local_hit(ray, ray.t_max) else { continue };
+                (t, [0.0; 3], Some(p))
+            };
+            let candidate = Best { t, prim, slot, b };
+            if candidate.improves_on(&best) {
+                best = Some(candidate);
+                best_local = local;
             }
         }
-        best.map(|b| self.make_hit(ray, b))
+        best.map(|b| self.make_hit(ray, b, best_local))
     }
 
     /// The primitive in leaf slot `slot` against `ray` over (0, t_max]: t and barycentrics.
@@ -248,14 +266,20 @@ impl SceneBvh {
         }
     }
 
-    fn make_hit(&self, ray: &Ray, best: Best) -> Hit {
+    /// The full hit record of `best`; `local` is the object-space point of a shape hit when the
+    /// caller kept it.
+    fn make_hit(&self, ray: &Ray, best: Best, local: Option<glam::DVec3>) -> Hit {
         let (instance, id, material) = self.id_of(best.prim);
         let leaf = &self.leaf[best.slot];
         if leaf.shape != NO_SHAPE {
             let shape = &self.shapes[leaf.shape as usize];
             // Same inputs, same arithmetic: this reproduces the hit found during traversal (the
             // nearest accepted root does not depend on t_max beyond it).
-            let (sp, uv) = match shape.intersect(ray, ray.t_max) {
+            let hit = match local {
+                Some(p) => Some(shape.hit_at_local(best.t, p)),
+                None => shape.intersect(ray, ray.t_max),
+            };
+            let (sp, uv) = match hit {
                 Some(h) => (h.point, h.uv),
                 // Unreachable in practice; stay finite and conservative rather than panic.
                 None => (SurfacePoint::from_point(ray.at(best.t), -ray.dir.normalize()), Vec2::ZERO),

@@ -87,6 +87,12 @@ impl Bsdf {
 
     /// BSDF value for world directions `wo` (toward the viewer) and `wi` (toward the light).
     pub fn f(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
+        if !self.has_specular() {
+            // Lambertian: only the two cosines matter (each the z of `to_local`).
+            let n = self.frame.z;
+            let upper = wo.dot(n) > 0.0 && wi.dot(n) > 0.0;
+            return if upper { self.base.scale(FRAC_1_PI) } else { SampledSpectrum::default() };
+        }
         let (o, i) = (self.frame.to_local(wo), self.frame.to_local(wi));
         self.f_local(o, i)
     }
@@ -114,6 +120,10 @@ impl Bsdf {
 
     /// Solid-angle pdf of `sample` returning `wi`.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if !self.has_specular() {
+            let (cos_o, cos_i) = (wo.dot(self.frame.z), wi.dot(self.frame.z));
+            return if cos_o > 0.0 && cos_i > 0.0 { cosine_hemisphere_pdf(cos_i) } else { 0.0 };
+        }
         let (o, i) = (self.frame.to_local(wo), self.frame.to_local(wi));
         self.pdf_local(o, i)
     }

@@ -13,7 +13,7 @@ use crate::geometry::{Hit, RAY_CHUNK, Ray, SceneBvh};
 use crate::light::{ColorQuery, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
-use crate::shading::{ColorMode, DirectLighting, SceneBounds, Settings, ShadingBatch};
+use crate::shading::{ColorMode, DirectLighting, SceneBounds, Settings, ShadingBatch, ShadingPoint};
 use crate::spectrum::{SampledSpectrum, SampledWavelengths, color};
 use crate::systems::GeometryIndex;
 
@@ -117,6 +117,32 @@ struct CameraSample {
 /// `CameraSample::point` of a sample that hit nothing.
 const NOT_SHADED: u32 = u32::MAX;
 
+/// Numbers the samples that hit a surface (`CameraSample::point`) in sample order, in parallel,
+/// and returns the index of each numbered sample.
+fn number_hits(samples: &mut [CameraSample]) -> Vec<u32> {
+    let counts: Vec<u32> =
+        samples.par_chunks(RAY_CHUNK).map(|c| c.iter().filter(|s| s.hit.is_some()).count() as u32).collect();
+    let starts: Vec<u32> = counts
+        .iter()
+        .scan(0, |next, &c| {
+            let start = *next;
+            *next += c;
+            Some(start)
+        })
+        .collect();
+    samples.par_chunks_mut(RAY_CHUNK).zip(starts).for_each(|(chunk, mut next)| {
+        for s in chunk.iter_mut().filter(|s| s.hit.is_some()) {
+            s.point = next;
+            next += 1;
+        }
+    });
+    (0..samples.len() as u32)
+        .into_par_iter()
+        .with_min_len(RAY_CHUNK)
+        .filter(|&k| samples[k as usize].hit.is_some())
+        .collect()
+}
+
 /// The camera of the world (the first `Camera` with a `Transform`), or one framing the scene.
 fn find_camera(world: &mut World, width: u32, height: u32) -> PinholeCamera {
     let mut q = world.query::<(&Camera, &crate::geometry::Transform)>();
@@ -200,19 +226,28 @@ pub fn render_with(
                 CameraSample { pixel, sample, ray, hit: bvh.closest_hit(&ray), wavelengths, point: NOT_SHADED }
             })
             .collect_into_vec(&mut samples);
-        // Points on surfaces go to the light system; normals face the viewer.
+        // Points on surfaces go to the light system, numbered in sample order; normals face the
+        // viewer.
+        let shaded = number_hits(&mut samples);
         {
             let mut batch = world.resource_mut::<ShadingBatch>();
-            batch.clear();
-            for s in samples.iter_mut() {
-                let Some(h) = s.hit else { continue };
-                s.point = batch.len() as u32;
+            batch.par_fill(shaded.len(), |j| {
+                let s = &samples[shaded[j] as usize];
+                let h = s.hit.as_ref().expect("numbered samples have hits");
                 let flip = if h.ng.dot(s.ray.dir) > 0.0 { -1.0 } else { 1.0 };
                 let ns = if h.ns.dot(h.ng) * flip < 0.0 { h.ng * flip } else { h.ns * flip };
-                batch.push_with_error(h.p, h.p_error, h.ng * flip, ns, s.pixel, s.sample);
-                if let Some(w) = s.wavelengths {
-                    batch.wavelengths.push(w);
+                ShadingPoint {
+                    position: h.p,
+                    position_error: h.p_error,
+                    normal: h.ng * flip,
+                    shading_normal: ns,
+                    pixel: s.pixel,
+                    sample: s.sample,
                 }
+            });
+            if spectral {
+                let wavelengths = shaded.par_iter().filter_map(|&k| samples[k as usize].wavelengths);
+                batch.wavelengths.par_extend(wavelengths);
             }
         }
         schedule.run(world);
@@ -283,6 +318,9 @@ impl ShadeContext<'_> {
     /// MIS, plus one BSDF sample toward non-delta lights. Returns RGB and whether a ray was traced.
     /// The area light `hit` landed on and its radiance toward `w` (unit, away from the surface).
     fn emitted(&self, hit: &Hit, w: Vec3, query: ColorQuery) -> Option<(crate::light::LightId, SampledSpectrum)> {
+        if self.table.area.items.is_empty() {
+            return None;
+        }
         let entity = *self.geometry.entities.get(hit.instance as usize)?;
         let id = self.table.area_light_at(entity, hit.id.primitive)?;
         let light = &self.table.area.items[id.row as usize].light;
