@@ -165,40 +165,43 @@ pub fn sample_direct_lighting(
         .enumerate()
         .for_each(|(c, (radiance, wi, pdf, light, delta, pl, nl))| {
             let first_point = c * CHUNK;
-            for e in 0..radiance.len() {
-                let i = first_point + e / k;
-                let slot = e % k;
+            // Entry e = point * k + slot of this chunk; nested loops spare a division per entry.
+            for point in 0..radiance.len() / k {
+                let i = first_point + point;
                 let ctx = LightSampleContext { p: batch.position[i], n: batch.normal[i], ns: batch.shading_normal[i] };
                 let query = match settings.color_mode {
                     ColorMode::Rgb => ColorQuery::Rgb,
                     ColorMode::Spectral => ColorQuery::Spectral(&batch.wavelengths[i]),
                 };
-                let (s, light_index) = match settings.selection {
-                    LightSelection::OneSampled => (slot as u32, None),
-                    LightSelection::All => ((slot / all_ids.len()) as u32, Some(slot % all_ids.len())),
-                };
-                let mut rng = SampleStream::new(settings.seed, batch.pixel[i], batch.sample[i] * spp + s);
-                let chosen = match light_index {
-                    Some(j) => Some((all_ids[j], 1.0)),
-                    None => sampler.sample(&ctx, rng.next_f32()),
-                };
-                let Some((id, pmf)) = chosen else { continue };
-                light[e] = id;
-                let u = rng.at_dimension(1 + 2 * light_index.unwrap_or(0) as u32).next_2d();
-                let sampled = match settings.light_precision {
-                    LightPrecision::F32 => table.sample_li(id, &ctx, u, query),
-                    LightPrecision::F64 => table.sample_li_f64(id, &ctx, u, query),
-                };
-                if let Some(ls) = sampled
-                    && ls.pdf > 0.0
-                    && ls.radiance.is_finite()
-                {
-                    radiance[e] = ls.radiance;
-                    wi[e] = ls.wi;
-                    pdf[e] = ls.pdf * pmf;
-                    delta[e] = table.flags(id).is_delta();
-                    pl[e] = ls.p_light;
-                    nl[e] = ls.n_light;
+                for slot in 0..k {
+                    let e = point * k + slot;
+                    let (s, light_index) = match settings.selection {
+                        LightSelection::OneSampled => (slot as u32, None),
+                        LightSelection::All => ((slot / all_ids.len()) as u32, Some(slot % all_ids.len())),
+                    };
+                    let mut rng = SampleStream::new(settings.seed, batch.pixel[i], batch.sample[i] * spp + s);
+                    let chosen = match light_index {
+                        Some(j) => Some((all_ids[j], 1.0)),
+                        None => sampler.sample(&ctx, rng.next_f32()),
+                    };
+                    let Some((id, pmf)) = chosen else { continue };
+                    light[e] = id;
+                    let u = rng.at_dimension(1 + 2 * light_index.unwrap_or(0) as u32).next_2d();
+                    let sampled = match settings.light_precision {
+                        LightPrecision::F32 => table.sample_li(id, &ctx, u, query),
+                        LightPrecision::F64 => table.sample_li_f64(id, &ctx, u, query),
+                    };
+                    if let Some(ls) = sampled
+                        && ls.pdf > 0.0
+                        && ls.radiance.is_finite()
+                    {
+                        radiance[e] = ls.radiance;
+                        wi[e] = ls.wi;
+                        pdf[e] = ls.pdf * pmf;
+                        delta[e] = table.flags(id).is_delta();
+                        pl[e] = ls.p_light;
+                        nl[e] = ls.n_light;
+                    }
                 }
             }
         });
