@@ -115,6 +115,14 @@ pub fn update_light_sampler(
     table.bypass_change_detection().clear_change_flags();
 }
 
+/// Each entry's sampled light point and the light's normal there, for its shadow ray: scratch
+/// columns kept between updates so that each batch reuses their memory.
+#[derive(Default)]
+pub struct LightPoints {
+    position: Vec<Vec3>,
+    normal: Vec<Vec3>,
+}
+
 /// Entries per point under `settings` for a table of `n_lights` lights.
 fn entries_per_point(settings: &Settings, n_lights: usize) -> usize {
     let spp = settings.samples_per_point.max(1) as usize;
@@ -133,6 +141,7 @@ pub fn sample_direct_lighting(
     settings: Res<Settings>,
     mut out: ResMut<DirectLighting>,
     mut rays: ResMut<ShadowRays>,
+    mut light_points: Local<LightPoints>,
 ) {
     let n = batch.len();
     let k = entries_per_point(&settings, table.len());
@@ -147,8 +156,11 @@ pub fn sample_direct_lighting(
     out.light.resize(n * k, LightId { kind: LightKind::Point, row: 0 });
     out.delta.resize(n * k, false);
     out.occluded.resize(n * k, false);
-    let mut p_light = vec![Vec3::ZERO; n * k];
-    let mut n_light = vec![Vec3::ZERO; n * k];
+    let LightPoints { position: p_light, normal: n_light } = &mut *light_points;
+    for column in [&mut *p_light, &mut *n_light] {
+        column.clear();
+        column.resize(n * k, Vec3::ZERO);
+    }
 
     let spp = settings.samples_per_point.max(1);
     let chunk = CHUNK * k.max(1);

@@ -159,19 +159,18 @@ impl ShadowOffset {
 /// `w` side of the surface. `n` should be unit length; `w` only chooses the side.
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     let d = n.abs().dot(p_error);
-    let mut offset = d * n;
-    if w.dot(n) < 0.0 {
-        offset = -offset;
-    }
-    let mut po = p + offset;
-    for i in 0..3 {
-        if offset[i] > 0.0 {
-            po[i] = po[i].next_up();
-        } else if offset[i] < 0.0 {
-            po[i] = po[i].next_down();
+    let offset = if w.dot(n) < 0.0 { -d * n } else { d * n };
+    let po = p + offset;
+    let away = |v: f32, towards: f32| {
+        if towards > 0.0 {
+            v.next_up()
+        } else if towards < 0.0 {
+            v.next_down()
+        } else {
+            v
         }
-    }
-    po
+    };
+    Vec3::new(away(po.x, offset.x), away(po.y, offset.y), away(po.z, offset.z))
 }
 
 /// Error bound of a point that was computed in f64 (`p64`, from `abs_terms` = the sum of the
@@ -180,12 +179,9 @@ pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
 /// 2^-40 * abs_terms, which dwarfs the f64 roundings (a few 2^-53 each).
 pub fn f64_point_error(p64: DVec3, abs_terms: DVec3) -> Vec3 {
     let e = p64.abs() * 2f64.powi(-23) + abs_terms * 2f64.powi(-40);
-    // Round the bound itself up so the f32 copy is still an upper bound.
-    let up = |x: f64| {
-        let f = x as f32;
-        if (f as f64) < x { f.next_up() } else { f }
-    };
-    Vec3::new(up(e.x), up(e.y), up(e.z))
+    // The f32 copy must still bound: raise by 2^-20 relative, more than rounding to nearest can
+    // take off (2^-24), plus the smallest normal f32 for bounds in the subnormal range.
+    (e * (1.0 + 2f64.powi(-20)) + DVec3::splat(f32::MIN_POSITIVE as f64)).as_vec3()
 }
 
 /// The bound pbrt-v4 uses for a point interpolated from triangle vertices with barycentrics

@@ -374,9 +374,20 @@ impl PlacedShape {
     }
 
     fn surface_point(&self, p_obj: DVec3, n_obj: DVec3) -> SurfacePoint {
-        let p64 = self.to_world.transform_point3(p_obj);
-        let terms = self.abs_linear * p_obj.abs() + self.abs_translation;
-        let n = self.flat_normal.unwrap_or_else(|| (self.normal_matrix * n_obj).normalize().as_vec3());
+        let (m, abs_m) = (&self.to_world.matrix3, &self.abs_linear);
+        let (p64, terms, n) = match self.flat_normal {
+            // Flat shapes' points have z = 0: the z column drops out.
+            Some(n) => (
+                m.x_axis * p_obj.x + m.y_axis * p_obj.y + self.to_world.translation,
+                abs_m.x_axis * p_obj.x.abs() + abs_m.y_axis * p_obj.y.abs() + self.abs_translation,
+                n,
+            ),
+            None => (
+                self.to_world.transform_point3(p_obj),
+                *abs_m * p_obj.abs() + self.abs_translation,
+                (self.normal_matrix * n_obj).normalize().as_vec3(),
+            ),
+        };
         SurfacePoint { p: p64.as_vec3(), p_error: f64_point_error(p64, terms), n }
     }
 }

@@ -164,7 +164,7 @@ impl SceneBvh {
             return false;
         }
         if self.leaf.len() <= FEW_PRIMITIVES {
-            return self.occluded_brute_force(ray);
+            return self.occluded_each(ray);
         }
         let tri_ray = ShearedRay::new(ray);
         let node_ray = NodeRay::new(ray);
@@ -188,7 +188,7 @@ impl SceneBvh {
             return None;
         }
         if self.leaf.len() <= FEW_PRIMITIVES {
-            return self.closest_hit_brute_force(ray);
+            return self.closest_hit_each(ray);
         }
         let tri_ray = ShearedRay::new(ray);
         let node_ray = NodeRay::new(ray);
@@ -211,9 +211,19 @@ impl SceneBvh {
 
     /// Reference any-hit: tests every primitive. For tests and benchmarks.
     pub fn occluded_brute_force(&self, ray: &Ray) -> bool {
+        ray.is_valid() && self.occluded_each(ray)
+    }
+
+    /// Reference closest-hit: tests every primitive, ties to the lowest input index.
+    pub fn closest_hit_brute_force(&self, ray: &Ray) -> Option<Hit> {
         if !ray.is_valid() {
-            return false;
+            return None;
         }
+        self.closest_hit_each(ray)
+    }
+
+    /// [`Self::occluded_brute_force`] for a valid ray.
+    fn occluded_each(&self, ray: &Ray) -> bool {
         // Shapes need no sheared ray; scenes of shapes alone never build one.
         let tri_ray = std::cell::OnceCell::new();
         self.leaf.iter().any(|prim| {
@@ -225,11 +235,8 @@ impl SceneBvh {
         })
     }
 
-    /// Reference closest-hit: tests every primitive, ties to the lowest input index.
-    pub fn closest_hit_brute_force(&self, ray: &Ray) -> Option<Hit> {
-        if !ray.is_valid() {
-            return None;
-        }
+    /// [`Self::closest_hit_brute_force`] for a valid ray.
+    fn closest_hit_each(&self, ray: &Ray) -> Option<Hit> {
         let tri_ray = std::cell::OnceCell::new();
         let mut best: Option<Best> = None;
         // The object-space point of the best shape hit, so that `make_hit` need not find it again.

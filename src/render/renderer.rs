@@ -161,7 +161,7 @@ pub fn render(
     world: &mut World,
     schedule: &mut Schedule,
     opts: &RenderOptions,
-    progress: impl FnMut(f32),
+    progress: impl FnMut(f32) + Send,
 ) -> (Film, RenderStats) {
     render_with(world, schedule, opts, None, progress)
 }
@@ -183,6 +183,18 @@ pub fn render_environment(
 
 /// Renders through `camera`, or the world's camera when None.
 pub fn render_with(
+    world: &mut World,
+    schedule: &mut Schedule,
+    opts: &RenderOptions,
+    camera: Option<CameraModel>,
+    progress: impl FnMut(f32) + Send,
+) -> (Film, RenderStats) {
+    // The render runs on a pool thread (rayon::scope moves it there), so each parallel pass
+    // starts without handing its work to the pool and putting the calling thread to sleep.
+    rayon::scope(|_| render_on_pool(world, schedule, opts, camera, progress))
+}
+
+fn render_on_pool(
     world: &mut World,
     schedule: &mut Schedule,
     opts: &RenderOptions,
