@@ -138,7 +138,8 @@ impl ShadingBatch {
     /// Spectral callers fill `wavelengths` to match.
     pub fn par_fill(&mut self, n: usize, point: impl Fn(usize) -> ShadingPoint + Sync) {
         use rayon::prelude::*;
-        self.clear();
+        // Every point is written below, so the columns are only resized (no fill in steady state).
+        self.wavelengths.clear();
         self.position.resize(n, Vec3::ZERO);
         self.position_error.resize(n, Vec3::ZERO);
         self.normal.resize(n, Vec3::ZERO);

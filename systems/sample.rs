@@ -68,13 +68,14 @@ impl ShadowRays {
     /// by `ray(entry)`; answers are reset to unoccluded.
     pub fn par_fill(&mut self, entry: Vec<u32>, ray: impl Fn(usize) -> ShadowRay + Sync) {
         let n = entry.len();
-        self.clear();
+        // Every ray is written below, so the columns are only resized (no fill in steady state).
         self.origin.resize(n, Vec3::ZERO);
         self.origin_error.resize(n, Vec3::ZERO);
         self.origin_normal.resize(n, Vec3::ZERO);
         self.target.resize(n, Vec3::ZERO);
         self.target_normal.resize(n, Vec3::ZERO);
         self.to_infinity.resize(n, false);
+        self.occluded.clear();
         self.occluded.resize(n, false);
         self.entry = entry;
         let columns = (
@@ -148,19 +149,20 @@ pub fn sample_direct_lighting(
     let all_ids: Vec<LightId> =
         if settings.selection == LightSelection::All { table.ids().collect() } else { Vec::new() };
     let out = &mut *out;
-    out.clear();
+    // Every entry is written below, so the columns are only resized: steady-state batches of one
+    // size never fill them first.
+    out.offsets.clear();
     out.offsets.extend((0..=n).map(|i| (i * k) as u32));
-    out.radiance.resize(n * k, SampledSpectrum::default());
-    out.wi.resize(n * k, Vec3::ZERO);
-    out.pdf.resize(n * k, 0.0);
-    out.light.resize(n * k, LightId { kind: LightKind::Point, row: 0 });
-    out.delta.resize(n * k, false);
-    out.occluded.resize(n * k, false);
+    let m = n * k;
+    out.radiance.resize(m, SampledSpectrum::default());
+    out.wi.resize(m, Vec3::ZERO);
+    out.pdf.resize(m, 0.0);
+    out.light.resize(m, LightId { kind: LightKind::Point, row: 0 });
+    out.delta.resize(m, false);
+    out.occluded.resize(m, false);
     let LightPoints { position: p_light, normal: n_light } = &mut *light_points;
-    for column in [&mut *p_light, &mut *n_light] {
-        column.clear();
-        column.resize(n * k, Vec3::ZERO);
-    }
+    p_light.resize(m, Vec3::ZERO);
+    n_light.resize(m, Vec3::ZERO);
 
     let spp = settings.samples_per_point.max(1);
     let chunk = CHUNK * k.max(1);
@@ -170,12 +172,13 @@ pub fn sample_direct_lighting(
         out.pdf.par_chunks_mut(chunk),
         out.light.par_chunks_mut(chunk),
         out.delta.par_chunks_mut(chunk),
+        out.occluded.par_chunks_mut(chunk),
         p_light.par_chunks_mut(chunk),
         n_light.par_chunks_mut(chunk),
     )
         .into_par_iter()
         .enumerate()
-        .for_each(|(c, (radiance, wi, pdf, light, delta, pl, nl))| {
+        .for_each(|(c, (radiance, wi, pdf, light, delta, occluded, pl, nl))| {
             let first_point = c * CHUNK;
             // Entry e = point * k + slot of this chunk; nested loops spare a division per entry.
             for point in 0..radiance.len() / k {
@@ -196,30 +199,39 @@ pub fn sample_direct_lighting(
                         Some(j) => Some((all_ids[j], 1.0)),
                         None => sampler.sample(&ctx, rng.next_f32()),
                     };
-                    let Some((id, pmf)) = chosen else { continue };
-                    light[e] = id;
-                    let u = rng.at_dimension(1 + 2 * light_index.unwrap_or(0) as u32).next_2d();
-                    let sampled = match settings.light_precision {
-                        LightPrecision::F32 => table.sample_li(id, &ctx, u, query),
-                        LightPrecision::F64 => table.sample_li_f64(id, &ctx, u, query),
-                    };
-                    if let Some(ls) = sampled
-                        && ls.pdf > 0.0
-                        && ls.radiance.is_finite()
-                    {
-                        radiance[e] = ls.radiance;
-                        wi[e] = ls.wi;
-                        pdf[e] = ls.pdf * pmf;
-                        delta[e] = table.flags(id).is_delta();
-                        pl[e] = ls.p_light;
-                        nl[e] = ls.n_light;
+                    let sampled = chosen.and_then(|(id, pmf)| {
+                        let u = rng.at_dimension(1 + 2 * light_index.unwrap_or(0) as u32).next_2d();
+                        let ls = match settings.light_precision {
+                            LightPrecision::F32 => table.sample_li(id, &ctx, u, query),
+                            LightPrecision::F64 => table.sample_li_f64(id, &ctx, u, query),
+                        }?;
+                        (ls.pdf > 0.0 && ls.radiance.is_finite()).then_some((ls, pmf))
+                    });
+                    // A failed sample leaves a zero entry (its light is kept when one was chosen).
+                    light[e] = chosen.map_or(LightId { kind: LightKind::Point, row: 0 }, |(id, _)| id);
+                    occluded[e] = false;
+                    match sampled {
+                        Some((ls, pmf)) => {
+                            radiance[e] = ls.radiance;
+                            wi[e] = ls.wi;
+                            pdf[e] = ls.pdf * pmf;
+                            delta[e] = table.flags(light[e]).is_delta();
+                            pl[e] = ls.p_light;
+                            nl[e] = ls.n_light;
+                        }
+                        None => {
+                            radiance[e] = SampledSpectrum::default();
+                            wi[e] = Vec3::ZERO;
+                            pdf[e] = 0.0;
+                            delta[e] = false;
+                        }
                     }
                 }
             }
         });
 
-    rays.clear();
     if !settings.shadows {
+        rays.clear();
         return;
     }
     // Entries that need a shadow ray, found in parallel and listed in entry order.
