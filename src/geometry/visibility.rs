@@ -8,7 +8,9 @@
 //! ray meets. With primitive tests shared between the two paths, BVH queries then return exactly
 //! what testing every primitive returns (closest-hit ties go to the lowest input primitive index).
 
-use glam::{UVec2, Vec2, Vec3, Vec3A, Vec4};
+use std::cell::OnceCell;
+
+use glam::{DVec3, UVec2, Vec2, Vec3, Vec3A, Vec4};
 use obvhs::cwbvh::node::{CwBvhNode, extract_byte64};
 use rayon::prelude::*;
 
@@ -166,7 +168,7 @@ impl SceneBvh {
         if self.leaf.len() <= FEW_PRIMITIVES {
             return self.occluded_each(ray);
         }
-        let tri_ray = ShearedRay::new(ray);
+        let tri_ray = OnceCell::new();
         let node_ray = NodeRay::new(ray);
         let mut state = self.cwbvh.new_traversal(Vec3A::from(ray.dir));
         let mut node;
@@ -190,23 +192,26 @@ impl SceneBvh {
         if self.leaf.len() <= FEW_PRIMITIVES {
             return self.closest_hit_each(ray);
         }
-        let tri_ray = ShearedRay::new(ray);
+        let tri_ray = OnceCell::new();
         let node_ray = NodeRay::new(ray);
         let mut state = self.cwbvh.new_traversal(Vec3A::from(ray.dir));
         let mut node;
         let mut best: Option<Best> = None;
+        // The object-space point of the best shape hit, so that `make_hit` need not find it again.
+        let mut best_local = None;
         let mut t_max = ray.t_max;
         obvhs::traverse!(self.cwbvh, node, state, node_ray.intersect(node, t_max, state.oct_inv4), {
             let slot = state.primitive_id as usize;
-            if let Some((t, b)) = self.slot_hit(slot, ray, &tri_ray, t_max) {
+            if let Some((t, b, local)) = self.slot_hit(slot, ray, &tri_ray, t_max) {
                 let candidate = Best { t, prim: self.prim_of_slot(slot), slot, b };
                 if candidate.improves_on(&best) {
                     best = Some(candidate);
+                    best_local = local;
                     t_max = t;
                 }
             }
         });
-        best.map(|b| self.make_hit(ray, b, None))
+        best.map(|b| self.make_hit(ray, b, best_local))
     }
 
     /// Reference any-hit: tests every primitive. For tests and benchmarks.
@@ -224,35 +229,18 @@ impl SceneBvh {
 
     /// [`Self::occluded_brute_force`] for a valid ray.
     fn occluded_each(&self, ray: &Ray) -> bool {
-        // Shapes need no sheared ray; scenes of shapes alone never build one.
-        let tri_ray = std::cell::OnceCell::new();
-        self.leaf.iter().any(|prim| {
-            if prim.shape == NO_SHAPE {
-                tri_ray.get_or_init(|| ShearedRay::new(ray)).intersect(&prim.v, ray.t_max).is_some()
-            } else {
-                self.shapes[prim.shape as usize].intersect_t(ray, ray.t_max).is_some()
-            }
-        })
+        let tri_ray = OnceCell::new();
+        (0..self.leaf.len()).any(|slot| self.slot_hit(slot, ray, &tri_ray, ray.t_max).is_some())
     }
 
     /// [`Self::closest_hit_brute_force`] for a valid ray.
     fn closest_hit_each(&self, ray: &Ray) -> Option<Hit> {
-        let tri_ray = std::cell::OnceCell::new();
+        let tri_ray = OnceCell::new();
         let mut best: Option<Best> = None;
-        // The object-space point of the best shape hit, so that `make_hit` need not find it again.
         let mut best_local = None;
         for prim in 0..self.leaf.len() as u32 {
             let slot = self.slot_of(prim);
-            let leaf = &self.leaf[slot];
-            let (t, b, local) = if leaf.shape == NO_SHAPE {
-                let Some(h) = tri_ray.get_or_init(|| ShearedRay::new(ray)).intersect(&leaf.v, ray.t_max) else {
-                    continue;
-                };
-                (h.t, h.b, None)
-            } else {
-                let Some((t, p)) = self.shapes[leaf.shape as usize].local_hit(ray, ray.t_max) else { continue };
-                (t, [0.0; 3], Some(p))
-            };
+            let Some((t, b, local)) = self.slot_hit(slot, ray, &tri_ray, ray.t_max) else { continue };
             let candidate = Best { t, prim, slot, b };
             if candidate.improves_on(&best) {
                 best = Some(candidate);
@@ -262,33 +250,34 @@ impl SceneBvh {
         best.map(|b| self.make_hit(ray, b, best_local))
     }
 
-    /// The primitive in leaf slot `slot` against `ray` over (0, t_max]: t and barycentrics.
+    /// The primitive in leaf slot `slot` against `ray` over (0, t_max]: t, barycentrics
+    /// (triangles) and the object-space point (shapes). The sheared ray of the triangle test is
+    /// built at the first triangle, so rays through shapes alone never build one.
     #[inline(always)]
-    fn slot_hit(&self, slot: usize, ray: &Ray, tri_ray: &ShearedRay, t_max: f32) -> Option<(f32, [f32; 3])> {
+    fn slot_hit(
+        &self,
+        slot: usize,
+        ray: &Ray,
+        tri_ray: &OnceCell<ShearedRay>,
+        t_max: f32,
+    ) -> Option<(f32, [f32; 3], Option<DVec3>)> {
         let prim = &self.leaf[slot];
         if prim.shape == NO_SHAPE {
-            tri_ray.intersect(&prim.v, t_max).map(|h| (h.t, h.b))
+            tri_ray.get_or_init(|| ShearedRay::new(ray)).intersect(&prim.v, t_max).map(|h| (h.t, h.b, None))
         } else {
-            self.shapes[prim.shape as usize].intersect_t(ray, t_max).map(|t| (t, [0.0; 3]))
+            self.shapes[prim.shape as usize].local_hit(ray, t_max).map(|(t, p)| (t, [0.0; 3], Some(p)))
         }
     }
 
-    /// The full hit record of `best`; `local` is the object-space point of a shape hit when the
-    /// caller kept it.
-    fn make_hit(&self, ray: &Ray, best: Best, local: Option<glam::DVec3>) -> Hit {
+    /// The full hit record of `best`; `local` is the object-space point of a shape hit.
+    fn make_hit(&self, ray: &Ray, best: Best, local: Option<DVec3>) -> Hit {
         let (instance, id, material) = self.id_of(best.prim);
         let leaf = &self.leaf[best.slot];
         if leaf.shape != NO_SHAPE {
             let shape = &self.shapes[leaf.shape as usize];
-            // Same inputs, same arithmetic: this reproduces the hit found during traversal (the
-            // nearest accepted root does not depend on t_max beyond it).
-            let hit = match local {
-                Some(p) => Some(shape.hit_at_local(best.t, p)),
-                None => shape.intersect(ray, ray.t_max),
-            };
-            let (sp, uv) = match hit {
+            let (sp, uv) = match local.map(|p| shape.hit_at_local(best.t, p)) {
                 Some(h) => (h.point, h.uv),
-                // Unreachable in practice; stay finite and conservative rather than panic.
+                // Unreachable (shape hits carry their point); stay finite rather than panic.
                 None => (SurfacePoint::from_point(ray.at(best.t), -ray.dir.normalize()), Vec2::ZERO),
             };
             return Hit { t: best.t, p: sp.p, p_error: sp.p_error, ng: sp.n, ns: sp.n, uv, id, material, instance };
