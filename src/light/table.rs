@@ -250,7 +250,12 @@ impl LightTable {
 
     /// The area light on `entity`'s `primitive` (its triangle index, 0 for shapes), if any.
     pub fn area_light_at(&self, entity: Entity, primitive: u32) -> Option<LightId> {
-        let ids = self.rows_of.get(&entity)?;
+        self.area_light_among(self.rows_of.get(&entity)?, primitive)
+    }
+
+    /// The area light on `primitive` among one entity's rows (`rows_of`), if any: for callers
+    /// that looked the rows up once per entity.
+    pub fn area_light_among(&self, ids: &[LightId], primitive: u32) -> Option<LightId> {
         let k = ids
             .binary_search_by_key(&primitive, |id| {
                 if id.kind == LightKind::Area { self.area.items[id.row as usize].primitive } else { u32::MAX }

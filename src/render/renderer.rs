@@ -272,7 +272,10 @@ fn render_on_pool(
             lighting: world_ref.resource::<DirectLighting>(),
             batch: world_ref.resource::<ShadingBatch>(),
             bvh: world_ref.resource::<SceneBvh>(),
-            geometry: world_ref.resource::<GeometryIndex>(),
+            lights_of_instance: {
+                let table = world_ref.resource::<LightTable>();
+                world_ref.resource::<GeometryIndex>().entities.iter().map(|&e| table.rows_of(e)).collect()
+            },
             materials: &materials,
             seed,
             strategy: opts.strategy,
@@ -315,7 +318,8 @@ struct ShadeContext<'a> {
     lighting: &'a DirectLighting,
     batch: &'a ShadingBatch,
     bvh: &'a SceneBvh,
-    geometry: &'a GeometryIndex,
+    /// The light rows of each BVH instance's entity (empty for geometry that emits nothing).
+    lights_of_instance: Vec<&'a [crate::light::LightId]>,
     materials: &'a [Material],
     seed: u64,
     strategy: Strategy,
@@ -326,19 +330,19 @@ struct ShadeContext<'a> {
 }
 
 impl ShadeContext<'_> {
-    /// Direct light at batch point `j` (camera sample `s`): the light system's samples weighted by
-    /// MIS, plus one BSDF sample toward non-delta lights. Returns RGB and whether a ray was traced.
     /// The area light `hit` landed on and its radiance toward `w` (unit, away from the surface).
     fn emitted(&self, hit: &Hit, w: Vec3, query: ColorQuery) -> Option<(crate::light::LightId, SampledSpectrum)> {
-        if self.table.area.items.is_empty() {
+        let rows = self.lights_of_instance.get(hit.instance as usize)?;
+        if rows.is_empty() {
             return None;
         }
-        let entity = *self.geometry.entities.get(hit.instance as usize)?;
-        let id = self.table.area_light_at(entity, hit.id.primitive)?;
+        let id = self.table.area_light_among(rows, hit.id.primitive)?;
         let light = &self.table.area.items[id.row as usize].light;
         Some((id, light.radiance(hit.p, hit.ng, hit.uv, w, query)))
     }
 
+    /// Direct light at batch point `j` (camera sample `s`): the light system's samples weighted by
+    /// MIS, plus one BSDF sample toward non-delta lights. Returns RGB and whether a ray was traced.
     fn shade(
         &self,
         j: usize,
