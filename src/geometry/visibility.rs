@@ -238,13 +238,16 @@ impl SceneBvh {
         let tri_ray = OnceCell::new();
         let mut best: Option<Best> = None;
         let mut best_local = None;
+        let mut t_max = ray.t_max;
         for prim in 0..self.leaf.len() as u32 {
             let slot = self.slot_of(prim);
-            let Some((t, b, local)) = self.slot_hit(slot, ray, &tri_ray, ray.t_max) else { continue };
+            // Farther hits cannot win; a tie at t_max still reaches the tie-break below.
+            let Some((t, b, local)) = self.slot_hit(slot, ray, &tri_ray, t_max) else { continue };
             let candidate = Best { t, prim, slot, b };
             if candidate.improves_on(&best) {
                 best = Some(candidate);
                 best_local = local;
+                t_max = t;
             }
         }
         best.map(|b| self.make_hit(ray, b, best_local))
