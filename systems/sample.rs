@@ -14,6 +14,9 @@ use crate::spectrum::SampledSpectrum;
 /// Points per parallel task.
 const CHUNK: usize = 1024;
 
+/// The `light` of entries for which no light was chosen (their pdf is 0, so it is never read).
+const NO_LIGHT: LightId = LightId { kind: LightKind::Point, row: 0 };
+
 /// Shadow-ray segments from shading points to sampled light points, and their answers.
 /// Invariant: all columns have the same length; `entry` indexes `DirectLighting`.
 #[derive(Resource, Clone, Debug, Default)]
@@ -157,7 +160,7 @@ pub fn sample_direct_lighting(
     out.radiance.resize(m, SampledSpectrum::default());
     out.wi.resize(m, Vec3::ZERO);
     out.pdf.resize(m, 0.0);
-    out.light.resize(m, LightId { kind: LightKind::Point, row: 0 });
+    out.light.resize(m, NO_LIGHT);
     out.delta.resize(m, false);
     out.occluded.resize(m, false);
     let LightPoints { position: p_light, normal: n_light } = &mut *light_points;
@@ -208,7 +211,7 @@ pub fn sample_direct_lighting(
                         (ls.pdf > 0.0 && ls.radiance.is_finite()).then_some((ls, pmf))
                     });
                     // A failed sample leaves a zero entry (its light is kept when one was chosen).
-                    light[e] = chosen.map_or(LightId { kind: LightKind::Point, row: 0 }, |(id, _)| id);
+                    light[e] = chosen.map_or(NO_LIGHT, |(id, _)| id);
                     occluded[e] = false;
                     match sampled {
                         Some((ls, pmf)) => {

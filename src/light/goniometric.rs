@@ -275,12 +275,7 @@ impl ResolvedGoniometric {
     /// The delta direction toward the light with radiance I(-wi) / r^2; None at the light or where
     /// the profile is dark.
     pub fn sample_li(&self, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let d = self.position - ctx.p;
-        let r2 = d.length_squared();
-        if !(r2 > 0.0) || !r2.is_finite() {
-            return None;
-        }
-        let wi = d / r2.sqrt();
+        let (wi, r2) = ctx.toward(self.position)?;
         let i = self.intensity_spectrum(-wi, query);
         if i.0.iter().all(|&v| v == 0.0) {
             return None;

@@ -54,6 +54,22 @@ impl LightSampleContext {
     pub fn on_surface(p: Vec3, n: Vec3) -> Self {
         Self { p, n, ns: n }
     }
+
+    /// The unit direction from here to a point light at `light` and the squared distance; None
+    /// at the light itself or when the distance is not finite.
+    #[inline]
+    pub fn toward(&self, light: Vec3) -> Option<(Vec3, f32)> {
+        let d = light - self.p;
+        let r2 = d.length_squared();
+        (r2 > 0.0 && r2.is_finite()).then(|| (d / r2.sqrt(), r2))
+    }
+
+    /// [`Self::toward`] computed in f64 (the light-precision knob of the accuracy report).
+    pub fn toward_f64(&self, light: Vec3) -> Option<(glam::DVec3, f64)> {
+        let d = light.as_dvec3() - self.p.as_dvec3();
+        let r2 = d.length_squared();
+        (r2 > 0.0 && r2.is_finite()).then(|| (d / r2.sqrt(), r2))
+    }
 }
 
 /// Which wavelengths a query is answered in: RGB mode (linear sRGB, photometric: channels 0-2)
@@ -62,6 +78,18 @@ impl LightSampleContext {
 pub enum ColorQuery<'a> {
     Rgb,
     Spectral(&'a SampledWavelengths),
+}
+
+impl ColorQuery<'_> {
+    /// A light-table row's intensity in this mode: its photometric RGB, or its spectrum times
+    /// its scale at the sampled wavelengths.
+    #[inline]
+    pub fn intensity_column(&self, rgb: Vec3, spectrum: &crate::spectrum::Spectrum, scale: f32) -> SampledSpectrum {
+        match self {
+            ColorQuery::Rgb => SampledSpectrum([rgb.x, rgb.y, rgb.z, 0.0]),
+            ColorQuery::Spectral(w) => w.eval(spectrum).scale(scale),
+        }
+    }
 }
 
 /// A sampled direction toward a light, as data.

@@ -78,14 +78,10 @@ pub struct ResolvedPoint {
 impl ResolvedPoint {
     /// The delta direction toward the light with radiance I / r^2; None at the light's position.
     pub fn sample_li(&self, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let d = self.position - ctx.p;
-        let r2 = d.length_squared();
-        if !(r2 > 0.0) || !r2.is_finite() {
-            return None;
-        }
+        let (wi, r2) = ctx.toward(self.position)?;
         Some(LiSample {
             radiance: self.intensity.eval(query).scale(1.0 / r2),
-            wi: d / r2.sqrt(),
+            wi,
             pdf: 1.0,
             p_light: self.position,
             n_light: Vec3::ZERO,
@@ -155,39 +151,18 @@ impl PointColumns {
     /// Sample_Li of the light at `row` without building a `ResolvedPoint`.
     #[inline]
     pub fn sample_li(&self, row: usize, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let d = self.position[row] - ctx.p;
-        let r2 = d.length_squared();
-        if !(r2 > 0.0) || !r2.is_finite() {
-            return None;
-        }
-        let radiance = match query {
-            ColorQuery::Rgb => {
-                let c = self.rgb[row];
-                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0]).scale(1.0 / r2)
-            }
-            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row]).scale(1.0 / r2),
-        };
-        Some(LiSample { radiance, wi: d / r2.sqrt(), pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
+        let (wi, r2) = ctx.toward(self.position[row])?;
+        let radiance = query.intensity_column(self.rgb[row], &self.spectrum[row], self.scale[row]).scale(1.0 / r2);
+        Some(LiSample { radiance, wi, pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
     }
 
     /// [`Self::sample_li`] with the vector to the light, r^2 and 1/r^2 in f64 (the precision knob
     /// of the accuracy report); positions and results stay f32.
     pub fn sample_li_f64(&self, row: usize, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let d = self.position[row].as_dvec3() - ctx.p.as_dvec3();
-        let r2 = d.length_squared();
-        if !(r2 > 0.0) || !r2.is_finite() {
-            return None;
-        }
+        let (wi, r2) = ctx.toward_f64(self.position[row])?;
         let inv_r2 = (1.0 / r2) as f32;
-        let radiance = match query {
-            ColorQuery::Rgb => {
-                let c = self.rgb[row];
-                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0]).scale(inv_r2)
-            }
-            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row]).scale(inv_r2),
-        };
-        let wi = (d / r2.sqrt()).as_vec3();
-        Some(LiSample { radiance, wi, pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
+        let radiance = query.intensity_column(self.rgb[row], &self.spectrum[row], self.scale[row]).scale(inv_r2);
+        Some(LiSample { radiance, wi: wi.as_vec3(), pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
     }
 
     /// Radiant power of the light at `row`, W.

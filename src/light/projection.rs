@@ -221,12 +221,7 @@ impl ResolvedProjection {
     /// The delta direction toward the light with radiance I / r^2; None at the light, outside the
     /// frustum or through a black texel.
     pub fn sample_li(&self, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let d = self.position - ctx.p;
-        let r2 = d.length_squared();
-        if !(r2 > 0.0) || !r2.is_finite() {
-            return None;
-        }
-        let wi = d / r2.sqrt();
+        let (wi, r2) = ctx.toward(self.position)?;
         let tint = self.texel(-wi);
         if tint == Vec3::ZERO {
             return None;

@@ -113,12 +113,7 @@ impl ResolvedSpot {
     /// The delta direction toward the light; None when the point is outside the cone or at the
     /// light.
     pub fn sample_li(&self, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let d = self.position - ctx.p;
-        let r2 = d.length_squared();
-        if !(r2 > 0.0) || !r2.is_finite() {
-            return None;
-        }
-        let wi = d / r2.sqrt();
+        let (wi, r2) = ctx.toward(self.position)?;
         let f = self.falloff(-wi);
         if f <= 0.0 {
             return None;
@@ -204,48 +199,26 @@ impl SpotColumns {
     /// Sample_Li of the light at `row` straight from the columns.
     #[inline]
     pub fn sample_li(&self, row: usize, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let d = self.position[row] - ctx.p;
-        let r2 = d.length_squared();
-        if !(r2 > 0.0) || !r2.is_finite() {
-            return None;
-        }
-        let wi = d / r2.sqrt();
+        let (wi, r2) = ctx.toward(self.position[row])?;
         let f = smooth_step(-wi.dot(self.direction[row]), self.cos_outer[row], self.cos_inner[row]);
         if f <= 0.0 {
             return None;
         }
-        let radiance = match query {
-            ColorQuery::Rgb => {
-                let c = self.rgb[row];
-                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0]).scale(f / r2)
-            }
-            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row]).scale(f / r2),
-        };
+        let radiance = query.intensity_column(self.rgb[row], &self.spectrum[row], self.scale[row]).scale(f / r2);
         Some(LiSample { radiance, wi, pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
     }
 
     /// [`Self::sample_li`] with the vector to the light, r^2, the cone cosine and 1/r^2 in f64
     /// (the precision knob of the accuracy report); positions and results stay f32.
     pub fn sample_li_f64(&self, row: usize, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let d = self.position[row].as_dvec3() - ctx.p.as_dvec3();
-        let r2 = d.length_squared();
-        if !(r2 > 0.0) || !r2.is_finite() {
-            return None;
-        }
-        let wi = d / r2.sqrt();
+        let (wi, r2) = ctx.toward_f64(self.position[row])?;
         let cos = -wi.dot(self.direction[row].as_dvec3());
         let f = smooth_step(cos as f32, self.cos_outer[row], self.cos_inner[row]);
         if f <= 0.0 {
             return None;
         }
         let s = (f as f64 / r2) as f32;
-        let radiance = match query {
-            ColorQuery::Rgb => {
-                let c = self.rgb[row];
-                crate::spectrum::SampledSpectrum([c.x, c.y, c.z, 0.0]).scale(s)
-            }
-            ColorQuery::Spectral(w) => w.eval(&self.spectrum[row]).scale(self.scale[row]).scale(s),
-        };
+        let radiance = query.intensity_column(self.rgb[row], &self.spectrum[row], self.scale[row]).scale(s);
         Some(LiSample { radiance, wi: wi.as_vec3(), pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
     }
 
