@@ -161,16 +161,23 @@ pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     let d = n.abs().dot(p_error);
     let offset = if w.dot(n) < 0.0 { -d * n } else { d * n };
     let po = p + offset;
-    let away = |v: f32, towards: f32| {
-        if towards > 0.0 {
-            v.next_up()
-        } else if towards < 0.0 {
-            v.next_down()
-        } else {
-            v
-        }
-    };
-    Vec3::new(away(po.x, offset.x), away(po.y, offset.y), away(po.z, offset.z))
+    if !po.is_finite() {
+        return po;
+    }
+    Vec3::new(step_toward(po.x, offset.x), step_toward(po.y, offset.y), step_toward(po.z, offset.z))
+}
+
+/// Finite `v` moved one float in the direction of `towards` (`next_up` for positive `towards`,
+/// `next_down` for negative), unchanged for zero `towards`. Integer steps on the bit pattern
+/// instead of std's checks for NaN and infinities, which the caller has ruled out.
+#[inline]
+fn step_toward(v: f32, towards: f32) -> f32 {
+    // A zero takes the side it moves to, so that one step up in magnitude is the right tiny value.
+    let from = if v == 0.0 { 0.0f32.copysign(towards) } else { v };
+    // Moving toward the value's own sign grows the magnitude (bits + 1); the other way shrinks it.
+    let grows = (from.to_bits() ^ towards.to_bits()) >> 31 == 0;
+    let bits = if grows { from.to_bits().wrapping_add(1) } else { from.to_bits().wrapping_sub(1) };
+    if towards == 0.0 { v } else { f32::from_bits(bits) }
 }
 
 /// Error bound of a point that was computed in f64 (`p64`, from `abs_terms` = the sum of the
@@ -219,6 +226,15 @@ mod tests {
         let reach = n.abs().dot(err) as f64;
         let dist = |q: Vec3| (q.as_dvec3() - p.as_dvec3()).dot(n.as_dvec3());
         assert!(dist(out) > reach && dist(inn) < -reach);
+    }
+
+    #[test]
+    fn step_toward_matches_next_up_and_next_down() {
+        for v in [0.0f32, -0.0, 1.0, -1.0, 3.5e-42, -3.5e-42, f32::MIN_POSITIVE, -f32::MAX, 123.456] {
+            assert_eq!(step_toward(v, 1.0).to_bits(), v.next_up().to_bits(), "{v} up");
+            assert_eq!(step_toward(v, -2.0).to_bits(), v.next_down().to_bits(), "{v} down");
+            assert_eq!(step_toward(v, 0.0).to_bits(), v.to_bits(), "{v} still");
+        }
     }
 
     #[test]

@@ -24,10 +24,11 @@ impl Default for Camera {
 #[derive(Clone, Copy, Debug)]
 pub struct PinholeCamera {
     origin: Vec3,
-    right: Vec3,
-    up: Vec3,
-    forward: Vec3,
-    tan_half_y: f32,
+    /// Direction (unnormalised) through the image's top-left corner, and its change per pixel
+    /// to the right and per pixel down, so that a ray costs no division.
+    corner: Vec3,
+    per_x: Vec3,
+    per_y: Vec3,
     width: u32,
     height: u32,
 }
@@ -36,14 +37,17 @@ impl PinholeCamera {
     /// The camera at `transform` rendering a `width` x `height` image.
     pub fn new(camera: &Camera, transform: &Transform, width: u32, height: u32) -> Self {
         let r = transform.rotation;
+        let (width, height) = (width.max(1), height.max(1));
+        let (right, up, forward) = ((r * Vec3::X).normalize(), (r * Vec3::Y).normalize(), (r * Vec3::NEG_Z).normalize());
+        let tan_half_y = (0.5 * camera.yfov.clamp(1e-4, 3.1)).tan();
+        let tan_half_x = tan_half_y * width as f32 / height as f32;
         Self {
             origin: transform.translation,
-            right: (r * Vec3::X).normalize(),
-            up: (r * Vec3::Y).normalize(),
-            forward: (r * Vec3::NEG_Z).normalize(),
-            tan_half_y: (0.5 * camera.yfov.clamp(1e-4, 3.1)).tan(),
-            width: width.max(1),
-            height: height.max(1),
+            corner: forward - right * tan_half_x + up * tan_half_y,
+            per_x: right * (2.0 * tan_half_x / width as f32),
+            per_y: up * (-2.0 * tan_half_y / height as f32),
+            width,
+            height,
         }
     }
 
@@ -60,11 +64,8 @@ impl PinholeCamera {
     /// The ray through image position `pixel + offset` (pixel (0, 0) at the top left; `offset`
     /// in [0, 1)^2 within the pixel).
     pub fn ray(&self, x: u32, y: u32, offset: Vec2) -> Ray {
-        let aspect = self.width as f32 / self.height as f32;
-        let sx = ((x as f32 + offset.x) / self.width as f32 * 2.0 - 1.0) * self.tan_half_y * aspect;
-        let sy = (1.0 - (y as f32 + offset.y) / self.height as f32 * 2.0) * self.tan_half_y;
-        let dir = (self.forward + self.right * sx + self.up * sy).normalize();
-        Ray::new(self.origin, dir)
+        let dir = self.corner + self.per_x * (x as f32 + offset.x) + self.per_y * (y as f32 + offset.y);
+        Ray::new(self.origin, dir.normalize())
     }
 
     /// Image size.

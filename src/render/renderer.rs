@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::film::Film;
 use super::material::Material;
-use crate::geometry::{Hit, RAY_CHUNK, Ray, SceneBvh};
+use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
 use crate::light::{ColorQuery, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
@@ -107,7 +107,8 @@ static DEFAULT_MATERIAL: std::sync::LazyLock<Material> = std::sync::LazyLock::ne
 struct CameraSample {
     pixel: u32,
     sample: u32,
-    ray: Ray,
+    /// Unit direction of the camera ray.
+    dir: Vec3,
     hit: Option<Hit>,
     wavelengths: Option<SampledWavelengths>,
     /// Index of the point in the `ShadingBatch`, or `NOT_SHADED` for rays that escaped.
@@ -235,7 +236,7 @@ fn render_on_pool(
                 let mut rng = SampleStream::new(seed, pixel, sample);
                 let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
                 let wavelengths = spectral.then(|| SampledWavelengths::sample_visible(rng.next_f32()));
-                CameraSample { pixel, sample, ray, hit: bvh.closest_hit(&ray), wavelengths, point: NOT_SHADED }
+                CameraSample { pixel, sample, dir: ray.dir, hit: bvh.closest_hit(&ray), wavelengths, point: NOT_SHADED }
             })
             .collect_into_vec(&mut samples);
         // Points on surfaces go to the light system, numbered in sample order; normals face the
@@ -246,7 +247,7 @@ fn render_on_pool(
             batch.par_fill(shaded.len(), |j| {
                 let s = &samples[shaded[j] as usize];
                 let h = s.hit.as_ref().expect("numbered samples have hits");
-                let flip = if h.ng.dot(s.ray.dir) > 0.0 { -1.0 } else { 1.0 };
+                let flip = if h.ng.dot(s.dir) > 0.0 { -1.0 } else { 1.0 };
                 let ns = if h.ns.dot(h.ng) * flip < 0.0 { h.ng * flip } else { h.ns * flip };
                 ShadingPoint {
                     position: h.p,
@@ -295,7 +296,7 @@ fn render_on_pool(
                 let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
                 let le = escape_ids
                     .iter()
-                    .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.ray.dir, query)));
+                    .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.dir, query)));
                 (to_rgb(le, s.wavelengths.as_ref()), false)
             })
             .collect_into_vec(&mut contributions);
@@ -352,7 +353,7 @@ impl ShadeContext<'_> {
     ) -> (Vec3, bool) {
         let hit = s.hit.expect("shaded samples have hits");
         let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
-        let wo = -s.ray.dir.normalize();
+        let wo = -s.dir;
         let ns = self.batch.shading_normal[j];
         let bsdf = match self.materials.get(hit.material as usize) {
             Some(m) => m.bsdf(hit.uv, ns, query),
