@@ -72,3 +72,20 @@ fn specular_zero_or_ior_one_is_pure_lambertian() {
     }
     assert!(Material::default().bsdf(Vec2::ZERO, Vec3::Z, ColorQuery::Rgb).has_specular());
 }
+
+#[test]
+fn uniform_bsdf_is_the_bsdf_of_every_point_and_textured_materials_have_none() {
+    use kelvin::sampling::Frame;
+    let n = Vec3::new(-0.2, 0.4, 0.9).normalize();
+    let (wo, wi) = (Vec3::new(0.1, 0.3, 0.95).normalize(), Vec3::new(-0.5, 0.2, 0.8).normalize());
+    for (name, m) in materials() {
+        let per_point = m.bsdf(Vec2::new(0.3, 0.7), n, ColorQuery::Rgb);
+        let uniform = m.uniform_rgb_bsdf().expect("untextured");
+        let placed = kelvin::render::bsdf::Bsdf { frame: Frame::from_z(n), ..uniform };
+        assert_eq!(placed.f(wo, wi).0, per_point.f(wo, wi).0, "{name}");
+        assert_eq!(placed.pdf(wo, wi), per_point.pdf(wo, wi), "{name}");
+    }
+    let image = kelvin::scene::image::RgbImage { width: 1, height: 1, pixels: vec![Vec3::ONE] };
+    let textured = Material { base_color_texture: Some(std::sync::Arc::new(image)), ..Default::default() };
+    assert!(textured.uniform_rgb_bsdf().is_none());
+}

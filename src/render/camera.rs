@@ -38,7 +38,8 @@ impl PinholeCamera {
     pub fn new(camera: &Camera, transform: &Transform, width: u32, height: u32) -> Self {
         let r = transform.rotation;
         let (width, height) = (width.max(1), height.max(1));
-        let (right, up, forward) = ((r * Vec3::X).normalize(), (r * Vec3::Y).normalize(), (r * Vec3::NEG_Z).normalize());
+        let (right, up, forward) =
+            ((r * Vec3::X).normalize(), (r * Vec3::Y).normalize(), (r * Vec3::NEG_Z).normalize());
         let tan_half_y = (0.5 * camera.yfov.clamp(1e-4, 3.1)).tan();
         let tan_half_x = tan_half_y * width as f32 / height as f32;
         Self {

@@ -62,6 +62,16 @@ impl Material {
         (r * r * self.specular).clamp(0.0, 1.0)
     }
 
+    /// The BSDF this material has at every point in RGB mode, apart from its frame (left as the
+    /// identity), when nothing varies over the surface (no textures); None otherwise. Renderers
+    /// work it out once per material and set the frame per hit.
+    pub fn uniform_rgb_bsdf(&self) -> Option<Bsdf> {
+        let untextured = self.base_color_texture.is_none() && self.metallic_roughness_texture.is_none();
+        untextured
+            .then(|| self.bsdf(Vec2::ZERO, Vec3::Z, ColorQuery::Rgb))
+            .map(|b| Bsdf { frame: Frame::IDENTITY, ..b })
+    }
+
     /// The BSDF at a surface point with texture coordinates `uv`, shading normal `ns`, in the
     /// query's colour mode (base colour as RGB, or its reflectance spectrum at the wavelengths).
     pub fn bsdf(&self, uv: Vec2, ns: Vec3, query: ColorQuery) -> Bsdf {

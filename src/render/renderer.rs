@@ -6,6 +6,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::bsdf::Bsdf;
 use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::film::Film;
 use super::material::Material;
@@ -13,6 +14,7 @@ use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
 use crate::light::{ColorQuery, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
+use crate::sampling::Frame;
 use crate::shading::{ColorMode, DirectLighting, SceneBounds, Settings, ShadingBatch, ShadingPoint};
 use crate::spectrum::{SampledSpectrum, SampledWavelengths, color};
 use crate::systems::GeometryIndex;
@@ -213,6 +215,7 @@ fn render_on_pool(
         let entities = world.resource::<GeometryIndex>().entities.clone();
         entities.iter().map(|&e| world.get::<Material>(e).cloned().unwrap_or_default()).collect()
     };
+    let uniform_bsdfs: Vec<Option<Bsdf>> = materials.iter().map(Material::uniform_rgb_bsdf).collect();
     let settings = world.resource::<Settings>().clone();
     let spectral = settings.color_mode == ColorMode::Spectral;
     let seed = settings.seed ^ RENDER_SALT;
@@ -278,6 +281,7 @@ fn render_on_pool(
                 world_ref.resource::<GeometryIndex>().entities.iter().map(|&e| table.rows_of(e)).collect()
             },
             materials: &materials,
+            uniform_bsdfs: &uniform_bsdfs,
             seed,
             strategy: opts.strategy,
             offset: settings.shadow_offset,
@@ -322,6 +326,8 @@ struct ShadeContext<'a> {
     /// The light rows of each BVH instance's entity (empty for geometry that emits nothing).
     lights_of_instance: Vec<&'a [crate::light::LightId]>,
     materials: &'a [Material],
+    /// Each material's [`Material::uniform_rgb_bsdf`].
+    uniform_bsdfs: &'a [Option<Bsdf>],
     seed: u64,
     strategy: Strategy,
     /// How BSDF rays leave the surface (as shadow rays do).
@@ -355,9 +361,10 @@ impl ShadeContext<'_> {
         let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
         let wo = -s.dir;
         let ns = self.batch.shading_normal[j];
-        let bsdf = match self.materials.get(hit.material as usize) {
-            Some(m) => m.bsdf(hit.uv, ns, query),
-            None => DEFAULT_MATERIAL.bsdf(hit.uv, ns, query),
+        let material = self.materials.get(hit.material as usize).unwrap_or(&DEFAULT_MATERIAL);
+        let bsdf = match (query, self.uniform_bsdfs.get(hit.material as usize)) {
+            (ColorQuery::Rgb, Some(Some(b))) => Bsdf { frame: Frame::from_z(ns), ..*b },
+            _ => material.bsdf(hit.uv, ns, query),
         };
         // Light the camera sees on emitters directly.
         let mut l = self.emitted(&hit, wo, query).map_or(SampledSpectrum::default(), |(_, le)| le);
