@@ -112,13 +112,15 @@ struct CameraSample {
     /// Unit direction of the camera ray.
     dir: Vec3,
     hit: Option<Hit>,
-    wavelengths: Option<SampledWavelengths>,
     /// Index of the point in the `ShadingBatch`, or `NOT_SHADED` for rays that escaped.
     point: u32,
 }
 
 /// `CameraSample::point` of a sample that hit nothing.
 const NOT_SHADED: u32 = u32::MAX;
+
+/// Filler for sample slots about to be written.
+const UNUSED_SAMPLE: CameraSample = CameraSample { pixel: 0, sample: 0, dir: Vec3::ZERO, hit: None, point: NOT_SHADED };
 
 /// Numbers the samples that hit a surface (`CameraSample::point`) in sample order, in parallel,
 /// and returns the index of each numbered sample.
@@ -225,23 +227,34 @@ fn render_on_pool(
     let total = opts.width as usize * opts.height as usize * opts.spp as usize;
     let mut samples: Vec<CameraSample> = Vec::with_capacity(BATCH_SAMPLES.min(total));
     let mut contributions: Vec<(Vec3, bool)> = Vec::new();
+    let mut wavelengths: Vec<SampledWavelengths> = Vec::new();
     let mut first = 0usize;
     while first < total {
         let last = (first + BATCH_SAMPLES).min(total);
         // Sample index s of pixel p is camera sample p * spp + s: a pixel's samples are adjacent.
         // Camera rays and their closest hits in one parallel pass.
         let bvh = world.resource::<SceneBvh>();
-        (first..last)
-            .into_par_iter()
-            .with_min_len(RAY_CHUNK)
-            .map(|k| {
+        // Samples are written in place: a returned `CameraSample` would be copied twice.
+        samples.resize(last - first, UNUSED_SAMPLE);
+        samples.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
+            for (i, s) in chunk.iter_mut().enumerate() {
+                let k = first + c * RAY_CHUNK + i;
                 let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
                 let mut rng = SampleStream::new(seed, pixel, sample);
                 let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
-                let wavelengths = spectral.then(|| SampledWavelengths::sample_visible(rng.next_f32()));
-                CameraSample { pixel, sample, dir: ray.dir, hit: bvh.closest_hit(&ray), wavelengths, point: NOT_SHADED }
-            })
-            .collect_into_vec(&mut samples);
+                (s.pixel, s.sample, s.dir, s.point) = (pixel, sample, ray.dir, NOT_SHADED);
+                s.hit = bvh.closest_hit(&ray);
+            }
+        });
+        // Spectral mode: the wavelengths of each sample (dimension 2 of its stream), kept apart
+        // so that RGB renders do not carry them.
+        wavelengths.clear();
+        if spectral {
+            wavelengths.par_extend((first..last).into_par_iter().with_min_len(RAY_CHUNK).map(|k| {
+                let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
+                SampledWavelengths::sample_visible(SampleStream::new(seed, pixel, sample).at_dimension(2).next_f32())
+            }));
+        }
         // Points on surfaces go to the light system, numbered in sample order; normals face the
         // viewer.
         let shaded = number_hits(&mut samples);
@@ -262,8 +275,7 @@ fn render_on_pool(
                 }
             });
             if spectral {
-                let wavelengths = shaded.par_iter().filter_map(|&k| samples[k as usize].wavelengths);
-                batch.wavelengths.par_extend(wavelengths);
+                batch.wavelengths.par_extend(shaded.par_iter().map(|&k| wavelengths[k as usize]));
             }
         }
         schedule.run(world);
@@ -291,17 +303,19 @@ fn render_on_pool(
         let bsdf_sampling = opts.strategy != Strategy::LightOnly && shade.table.has_non_delta_lights();
         samples
             .par_iter()
+            .enumerate()
             .with_min_len(RAY_CHUNK)
-            .map(|s| {
+            .map(|(k, s)| {
+                let lambda = wavelengths.get(k);
                 if s.point != NOT_SHADED {
-                    return shade.shade(s.point as usize, s, &escape_ids, bsdf_sampling);
+                    return shade.shade(s.point as usize, s, lambda, &escape_ids, bsdf_sampling);
                 }
                 // Escaped camera rays see the infinite lights directly.
-                let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
+                let query = lambda.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
                 let le = escape_ids
                     .iter()
                     .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.dir, query)));
-                (to_rgb(le, s.wavelengths.as_ref()), false)
+                (to_rgb(le, lambda), false)
             })
             .collect_into_vec(&mut contributions);
         for (s, &(rgb, traced)) in samples.iter().zip(&contributions) {
@@ -348,17 +362,19 @@ impl ShadeContext<'_> {
         Some((id, light.radiance(hit.p, hit.ng, hit.uv, w, query)))
     }
 
-    /// Direct light at batch point `j` (camera sample `s`): the light system's samples weighted by
-    /// MIS, plus one BSDF sample toward non-delta lights. Returns RGB and whether a ray was traced.
+    /// Direct light at batch point `j` (camera sample `s`, at `wavelengths` in spectral mode): the
+    /// light system's samples weighted by MIS, plus one BSDF sample toward non-delta lights.
+    /// Returns RGB and whether a ray was traced.
     fn shade(
         &self,
         j: usize,
         s: &CameraSample,
+        wavelengths: Option<&SampledWavelengths>,
         escape_ids: &[crate::light::LightId],
         bsdf_sampling: bool,
     ) -> (Vec3, bool) {
         let hit = s.hit.expect("shaded samples have hits");
-        let query = s.wavelengths.as_ref().map_or(ColorQuery::Rgb, ColorQuery::Spectral);
+        let query = wavelengths.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
         let wo = -s.dir;
         let ns = self.batch.shading_normal[j];
         let material = self.materials.get(hit.material as usize).unwrap_or(&DEFAULT_MATERIAL);
@@ -407,6 +423,6 @@ impl ShadeContext<'_> {
                 }
             }
         }
-        (to_rgb(l, s.wavelengths.as_ref()), traced)
+        (to_rgb(l, wavelengths), traced)
     }
 }
