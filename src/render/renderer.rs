@@ -123,29 +123,28 @@ const NOT_SHADED: u32 = u32::MAX;
 const UNUSED_SAMPLE: CameraSample = CameraSample { pixel: 0, sample: 0, dir: Vec3::ZERO, hit: None, point: NOT_SHADED };
 
 /// Numbers the samples that hit a surface (`CameraSample::point`) in sample order, in parallel,
-/// and returns the index of each numbered sample.
-fn number_hits(samples: &mut [CameraSample]) -> Vec<u32> {
-    let counts: Vec<u32> =
-        samples.par_chunks(RAY_CHUNK).map(|c| c.iter().filter(|s| s.hit.is_some()).count() as u32).collect();
-    let starts: Vec<u32> = counts
-        .iter()
-        .scan(0, |next, &c| {
-            let start = *next;
-            *next += c;
-            Some(start)
-        })
-        .collect();
-    samples.par_chunks_mut(RAY_CHUNK).zip(starts).for_each(|(chunk, mut next)| {
-        for s in chunk.iter_mut().filter(|s| s.hit.is_some()) {
-            s.point = next;
-            next += 1;
+/// and fills `shaded` with the index of each numbered sample.
+fn number_hits(samples: &mut [CameraSample], shaded: &mut Vec<u32>) {
+    let counts: Vec<usize> =
+        samples.par_chunks(RAY_CHUNK).map(|c| c.iter().filter(|s| s.hit.is_some()).count()).collect();
+    shaded.resize(counts.iter().sum(), 0);
+    // Each chunk of samples gets the run of `shaded` its hits fill, and the number of its first hit.
+    let mut rest = shaded.as_mut_slice();
+    let mut runs = Vec::with_capacity(counts.len());
+    let mut first = 0;
+    for &c in &counts {
+        let (run, tail) = std::mem::take(&mut rest).split_at_mut(c);
+        runs.push((run, first));
+        rest = tail;
+        first += c as u32;
+    }
+    samples.par_chunks_mut(RAY_CHUNK).zip(runs).enumerate().for_each(|(c, (chunk, (run, start)))| {
+        let hits = chunk.iter_mut().enumerate().filter(|(_, s)| s.hit.is_some());
+        for (n, (i, s)) in hits.enumerate() {
+            s.point = start + n as u32;
+            run[n] = (c * RAY_CHUNK + i) as u32;
         }
     });
-    (0..samples.len() as u32)
-        .into_par_iter()
-        .with_min_len(RAY_CHUNK)
-        .filter(|&k| samples[k as usize].hit.is_some())
-        .collect()
 }
 
 /// The camera of the world (the first `Camera` with a `Transform`), or one framing the scene.
@@ -228,6 +227,7 @@ fn render_on_pool(
     let mut samples: Vec<CameraSample> = Vec::with_capacity(BATCH_SAMPLES.min(total));
     let mut contributions: Vec<(Vec3, bool)> = Vec::new();
     let mut wavelengths: Vec<SampledWavelengths> = Vec::new();
+    let mut shaded: Vec<u32> = Vec::new();
     let mut first = 0usize;
     while first < total {
         let last = (first + BATCH_SAMPLES).min(total);
@@ -257,7 +257,7 @@ fn render_on_pool(
         }
         // Points on surfaces go to the light system, numbered in sample order; normals face the
         // viewer.
-        let shaded = number_hits(&mut samples);
+        number_hits(&mut samples, &mut shaded);
         {
             let mut batch = world.resource_mut::<ShadingBatch>();
             batch.par_fill(shaded.len(), |j| {
