@@ -228,10 +228,11 @@ fn render_on_pool(
     let mut contributions: Vec<(Vec3, bool)> = Vec::new();
     let mut wavelengths: Vec<SampledWavelengths> = Vec::new();
     let mut shaded: Vec<u32> = Vec::new();
+    // Sample index k is sample k % spp of pixel k / spp: a pixel's samples are adjacent.
+    let pixel_and_sample = |k: usize| ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
     let mut first = 0usize;
     while first < total {
         let last = (first + BATCH_SAMPLES).min(total);
-        // Sample index s of pixel p is camera sample p * spp + s: a pixel's samples are adjacent.
         // Camera rays and their closest hits in one parallel pass.
         let bvh = world.resource::<SceneBvh>();
         // Samples are written in place: a returned `CameraSample` would be copied twice.
@@ -239,7 +240,7 @@ fn render_on_pool(
         samples.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
             for (i, s) in chunk.iter_mut().enumerate() {
                 let k = first + c * RAY_CHUNK + i;
-                let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
+                let (pixel, sample) = pixel_and_sample(k);
                 let mut rng = SampleStream::new(seed, pixel, sample);
                 let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
                 (s.pixel, s.sample, s.dir, s.point) = (pixel, sample, ray.dir, NOT_SHADED);
@@ -251,7 +252,7 @@ fn render_on_pool(
         wavelengths.clear();
         if spectral {
             wavelengths.par_extend((first..last).into_par_iter().with_min_len(RAY_CHUNK).map(|k| {
-                let (pixel, sample) = ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
+                let (pixel, sample) = pixel_and_sample(k);
                 SampledWavelengths::sample_visible(SampleStream::new(seed, pixel, sample).at_dimension(2).next_f32())
             }));
         }
