@@ -17,84 +17,64 @@ const CHUNK: usize = 1024;
 /// The `light` of entries for which no light was chosen (their pdf is 0, so it is never read).
 const NO_LIGHT: LightId = LightId { kind: LightKind::Point, row: 0 };
 
-/// Shadow-ray segments from shading points to sampled light points, and their answers.
-/// Invariant: all columns have the same length; `entry` indexes `DirectLighting`.
-#[derive(Resource, Clone, Debug, Default)]
-pub struct ShadowRays {
-    /// Segment start (the shading point), its error bound and geometric normal, for the offset.
-    pub origin: Vec<Vec3>,
-    pub origin_error: Vec<Vec3>,
-    pub origin_normal: Vec<Vec3>,
-    /// Segment end (the light point) and the light's surface normal there (zero if none).
-    pub target: Vec<Vec3>,
-    pub target_normal: Vec<Vec3>,
-    /// True for lights at infinity (distant, infinite): the ray leaves along `target - origin`.
-    pub to_infinity: Vec<bool>,
-    /// The `DirectLighting` entry each ray belongs to.
-    pub entry: Vec<u32>,
-    /// Answers, filled by the trace step.
-    pub occluded: Vec<bool>,
+/// Where an entry's shadow ray ends, if it has one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShadowTarget {
+    /// No ray: the sample failed or carries no light, its light casts no shadows, or shadows are
+    /// off.
+    #[default]
+    None,
+    /// A point with no surface (point-like lights): the ray stops just short of it.
+    Point,
+    /// A point on a light's surface (normal `ShadowRays::target_normal`), offset off it too.
+    Surface,
+    /// A light at infinity: the ray leaves along `target - origin`.
+    Infinity,
 }
 
-/// One shadow ray, the row form of [`ShadowRays`]' input columns (see there).
-pub struct ShadowRay {
-    pub origin: Vec3,
-    pub origin_error: Vec3,
-    pub origin_normal: Vec3,
-    pub target: Vec3,
-    pub target_normal: Vec3,
-    pub to_infinity: bool,
+/// The shadow ray of each `DirectLighting` entry, written by the sampling step in the same pass
+/// as the entry. Entry `e` starts at point `e / entries_per_point` of the `ShadingBatch` (its
+/// position, error bound and normal give the offset origin), so no column repeats the batch.
+/// Invariant: all columns have one slot per entry.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct ShadowRays {
+    pub entries_per_point: usize,
+    pub kind: Vec<ShadowTarget>,
+    /// Segment end (the light point) and the light's surface normal there (`Surface` only).
+    pub target: Vec<Vec3>,
+    pub target_normal: Vec<Vec3>,
+    /// Answers, filled by the trace step (false for entries without a ray).
+    pub occluded: Vec<bool>,
+    /// Number of entries with a ray.
+    rays: usize,
 }
 
 impl ShadowRays {
-    /// Number of rays.
+    /// Number of rays to trace (entries whose kind is not `None`).
     pub fn len(&self) -> usize {
-        self.origin.len()
+        self.rays
     }
-    /// True with no rays.
+    /// True with no rays to trace.
     pub fn is_empty(&self) -> bool {
-        self.origin.is_empty()
+        self.rays == 0
     }
     /// Empties every column, keeping capacity.
     pub fn clear(&mut self) {
-        self.origin.clear();
-        self.origin_error.clear();
-        self.origin_normal.clear();
+        self.kind.clear();
         self.target.clear();
         self.target_normal.clear();
-        self.to_infinity.clear();
-        self.entry.clear();
         self.occluded.clear();
+        self.rays = 0;
     }
-
-    /// Replaces the rays by one ray per `DirectLighting` entry of `entry`, computed in parallel
-    /// by `ray(entry)`; answers are reset to unoccluded.
-    pub fn par_fill(&mut self, entry: Vec<u32>, ray: impl Fn(usize) -> ShadowRay + Sync) {
-        let n = entry.len();
-        // Every ray is written below, so the columns are only resized (no fill in steady state).
-        self.origin.resize(n, Vec3::ZERO);
-        self.origin_error.resize(n, Vec3::ZERO);
-        self.origin_normal.resize(n, Vec3::ZERO);
-        self.target.resize(n, Vec3::ZERO);
-        self.target_normal.resize(n, Vec3::ZERO);
-        self.to_infinity.resize(n, false);
+    /// Sizes the columns for `entries` entries of `entries_per_point` each; the kinds, targets
+    /// and count are then written by the sampling step, and the answers reset to unoccluded.
+    fn resize(&mut self, entries: usize, entries_per_point: usize) {
+        self.entries_per_point = entries_per_point;
+        self.kind.resize(entries, ShadowTarget::None);
+        self.target.resize(entries, Vec3::ZERO);
+        self.target_normal.resize(entries, Vec3::ZERO);
         self.occluded.clear();
-        self.occluded.resize(n, false);
-        self.entry = entry;
-        let columns = (
-            self.origin.par_iter_mut(),
-            self.origin_error.par_iter_mut(),
-            self.origin_normal.par_iter_mut(),
-            self.target.par_iter_mut(),
-            self.target_normal.par_iter_mut(),
-            self.to_infinity.par_iter_mut(),
-            self.entry.par_iter(),
-        );
-        columns.into_par_iter().with_min_len(CHUNK).for_each(|(o, oe, on, t, tn, inf, &e)| {
-            let r = ray(e as usize);
-            (*o, *oe, *on, *t, *tn, *inf) =
-                (r.origin, r.origin_error, r.origin_normal, r.target, r.target_normal, r.to_infinity);
-        });
+        self.occluded.resize(entries, false);
     }
 }
 
@@ -119,14 +99,6 @@ pub fn update_light_sampler(
     table.bypass_change_detection().clear_change_flags();
 }
 
-/// Each entry's sampled light point and the light's normal there, for its shadow ray: scratch
-/// columns kept between updates so that each batch reuses their memory.
-#[derive(Default)]
-pub struct LightPoints {
-    position: Vec<Vec3>,
-    normal: Vec<Vec3>,
-}
-
 /// Entries per point under `settings` for a table of `n_lights` lights.
 fn entries_per_point(settings: &Settings, n_lights: usize) -> usize {
     let spp = settings.samples_per_point.max(1) as usize;
@@ -137,7 +109,7 @@ fn entries_per_point(settings: &Settings, n_lights: usize) -> usize {
 }
 
 /// For every point of the batch, chooses lights and evaluates Sample_Li, writing one
-/// `DirectLighting` entry per sample (unoccluded), then lists the shadow rays to trace.
+/// `DirectLighting` entry per sample (unoccluded) and, in the same pass, the entry's shadow ray.
 pub fn sample_direct_lighting(
     batch: Res<ShadingBatch>,
     table: Res<LightTable>,
@@ -145,7 +117,6 @@ pub fn sample_direct_lighting(
     settings: Res<Settings>,
     mut out: ResMut<DirectLighting>,
     mut rays: ResMut<ShadowRays>,
-    mut light_points: Local<LightPoints>,
 ) {
     let n = batch.len();
     let k = entries_per_point(&settings, table.len());
@@ -163,26 +134,27 @@ pub fn sample_direct_lighting(
     out.light.resize(m, NO_LIGHT);
     out.delta.resize(m, false);
     out.occluded.resize(m, false);
-    let LightPoints { position: p_light, normal: n_light } = &mut *light_points;
-    p_light.resize(m, Vec3::ZERO);
-    n_light.resize(m, Vec3::ZERO);
+    rays.resize(m, k);
 
     let spp = settings.samples_per_point.max(1);
     let chunk = CHUNK * k.max(1);
-    (
+    let rays = &mut *rays;
+    rays.rays = (
         out.radiance.par_chunks_mut(chunk),
         out.wi.par_chunks_mut(chunk),
         out.pdf.par_chunks_mut(chunk),
         out.light.par_chunks_mut(chunk),
         out.delta.par_chunks_mut(chunk),
         out.occluded.par_chunks_mut(chunk),
-        p_light.par_chunks_mut(chunk),
-        n_light.par_chunks_mut(chunk),
+        rays.kind.par_chunks_mut(chunk),
+        rays.target.par_chunks_mut(chunk),
+        rays.target_normal.par_chunks_mut(chunk),
     )
         .into_par_iter()
         .enumerate()
-        .for_each(|(c, (radiance, wi, pdf, light, delta, occluded, pl, nl))| {
+        .map(|(c, (radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal))| {
             let first_point = c * CHUNK;
+            let mut traced = 0;
             // Entry e = point * k + slot of this chunk; nested loops spare a division per entry.
             for point in 0..radiance.len() / k {
                 let i = first_point + point;
@@ -213,56 +185,49 @@ pub fn sample_direct_lighting(
                     // A failed sample leaves a zero entry (its light is kept when one was chosen).
                     light[e] = chosen.map_or(NO_LIGHT, |(id, _)| id);
                     occluded[e] = false;
-                    match sampled {
-                        Some((ls, pmf)) => {
-                            radiance[e] = ls.radiance;
-                            wi[e] = ls.wi;
-                            pdf[e] = ls.pdf * pmf;
-                            delta[e] = table.flags(light[e]).is_delta();
-                            pl[e] = ls.p_light;
-                            nl[e] = ls.n_light;
-                        }
-                        None => {
-                            radiance[e] = SampledSpectrum::default();
-                            wi[e] = Vec3::ZERO;
-                            pdf[e] = 0.0;
-                            delta[e] = false;
-                        }
+                    ray_kind[e] = ShadowTarget::None;
+                    let Some((ls, pmf)) = sampled else {
+                        radiance[e] = SampledSpectrum::default();
+                        wi[e] = Vec3::ZERO;
+                        pdf[e] = 0.0;
+                        delta[e] = false;
+                        continue;
+                    };
+                    let flags = table.flags(light[e]);
+                    radiance[e] = ls.radiance;
+                    wi[e] = ls.wi;
+                    pdf[e] = ls.pdf * pmf;
+                    delta[e] = flags.is_delta();
+                    if settings.shadows
+                        && pdf[e] > 0.0
+                        && ls.radiance.0.iter().any(|&v| v > 0.0)
+                        && table.casts_shadows(light[e])
+                    {
+                        ray_kind[e] =
+                            if flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION) {
+                                ShadowTarget::Infinity
+                            } else if ls.n_light == Vec3::ZERO {
+                                ShadowTarget::Point
+                            } else {
+                                ShadowTarget::Surface
+                            };
+                        (target[e], target_normal[e]) = (ls.p_light, ls.n_light);
+                        traced += 1;
                     }
                 }
             }
-        });
-
-    if !settings.shadows {
-        rays.clear();
-        return;
-    }
-    // Entries that need a shadow ray, found in parallel and listed in entry order.
-    let out = &*out;
-    let needs_ray =
-        |e: usize| out.pdf[e] > 0.0 && out.radiance[e].0.iter().any(|&v| v > 0.0) && table.casts_shadows(out.light[e]);
-    let entries: Vec<u32> =
-        (0..n * k).into_par_iter().with_min_len(CHUNK).filter(|&e| needs_ray(e)).map(|e| e as u32).collect();
-    rays.par_fill(entries, |e| {
-        let i = e / k;
-        let flags = table.flags(out.light[e]);
-        ShadowRay {
-            origin: batch.position[i],
-            origin_error: batch.position_error[i],
-            origin_normal: batch.normal[i],
-            target: p_light[e],
-            target_normal: n_light[e],
-            to_infinity: flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION),
-        }
-    });
+            traced
+        })
+        .sum();
 }
 
 /// Zeroes the radiance of entries whose shadow ray was blocked.
 pub fn apply_visibility(rays: Res<ShadowRays>, mut out: ResMut<DirectLighting>) {
-    for (&e, &blocked) in rays.entry.iter().zip(&rays.occluded) {
+    let out = &mut *out;
+    let columns = (out.radiance.par_iter_mut(), out.occluded.par_iter_mut(), rays.occluded.par_iter());
+    columns.into_par_iter().with_min_len(CHUNK).for_each(|(radiance, occluded, &blocked)| {
         if blocked {
-            out.radiance[e as usize] = SampledSpectrum::default();
-            out.occluded[e as usize] = true;
+            (*radiance, *occluded) = (SampledSpectrum::default(), true);
         }
-    }
+    });
 }

@@ -3,9 +3,9 @@
 use bevy_ecs::prelude::*;
 
 use crate::geometry::{SceneBvh, SurfacePoint};
-use crate::shading::{RunReport, Settings};
+use crate::shading::{RunReport, Settings, ShadingBatch};
 
-use super::{ShadowRays, Work};
+use super::{ShadowRays, ShadowTarget, Work};
 
 /// Shadow rays are traced only when asked for, when there are rays and when some geometry can
 /// occlude them.
@@ -29,27 +29,29 @@ pub fn plan_shadows(
     report.record("trace_shadow_rays", run, why);
 }
 
-/// Builds offset segments (off the shading surface and off the light's surface, by
-/// `Settings::shadow_offset`) and traces them, in one parallel pass; fills `ShadowRays::occluded`.
-pub fn trace_shadow_rays(mut rays: ResMut<ShadowRays>, bvh: Res<SceneBvh>, settings: Res<Settings>) {
+/// Builds offset segments from each entry's batch point (off the shading surface, and off the
+/// light's surface, by `Settings::shadow_offset`) and traces them, in one parallel pass; fills
+/// `ShadowRays::occluded`.
+pub fn trace_shadow_rays(
+    mut rays: ResMut<ShadowRays>,
+    batch: Res<ShadingBatch>,
+    bvh: Res<SceneBvh>,
+    settings: Res<Settings>,
+) {
     use rayon::prelude::*;
-    let r = &mut *rays;
     let offset = settings.shadow_offset;
-    let mut occluded = std::mem::take(&mut r.occluded);
-    (0..r.origin.len())
-        .into_par_iter()
-        .with_min_len(crate::geometry::RAY_CHUNK)
-        .map(|i| {
-            let from = SurfacePoint { p: r.origin[i], p_error: r.origin_error[i], n: r.origin_normal[i] };
-            let segment = if r.to_infinity[i] {
-                offset.spawn_ray(&from, (r.target[i] - r.origin[i]).normalize())
-            } else if r.target_normal[i] == glam::Vec3::ZERO {
-                offset.spawn_ray_to_point(&from, r.target[i])
-            } else {
-                offset.spawn_ray_to(&from, &SurfacePoint::from_point(r.target[i], r.target_normal[i]))
-            };
-            bvh.occluded(&segment)
-        })
-        .collect_into_vec(&mut occluded);
-    r.occluded = occluded;
+    let r = &mut *rays;
+    let k = r.entries_per_point.max(1);
+    let (kind, target, target_normal) = (&r.kind, &r.target, &r.target_normal);
+    r.occluded.par_iter_mut().enumerate().with_min_len(crate::geometry::RAY_CHUNK).for_each(|(e, occluded)| {
+        let i = e / k;
+        let from = SurfacePoint { p: batch.position[i], p_error: batch.position_error[i], n: batch.normal[i] };
+        let segment = match kind[e] {
+            ShadowTarget::None => return,
+            ShadowTarget::Infinity => offset.spawn_ray(&from, (target[e] - from.p).normalize()),
+            ShadowTarget::Point => offset.spawn_ray_to_point(&from, target[e]),
+            ShadowTarget::Surface => offset.spawn_ray_to(&from, &SurfacePoint::from_point(target[e], target_normal[e])),
+        };
+        *occluded = bvh.occluded(&segment);
+    });
 }
