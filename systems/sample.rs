@@ -2,7 +2,7 @@
 //! shadow rays that follow, and applying their answers.
 
 use bevy_ecs::prelude::*;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::light::{ColorQuery, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
@@ -175,7 +175,13 @@ pub fn sample_direct_lighting(
                         None => sampler.sample(&ctx, rng.next_f32()),
                     };
                     let sampled = chosen.and_then(|(id, pmf)| {
-                        let u = rng.at_dimension(1 + 2 * light_index.unwrap_or(0) as u32).next_2d();
+                        // Lights at a point ignore u: skip drawing it (the streams are counter
+                        // based, so no other number changes).
+                        let u = if table.flags(id).contains(LightFlags::DELTA_POSITION) {
+                            Vec2::ZERO
+                        } else {
+                            rng.at_dimension(1 + 2 * light_index.unwrap_or(0) as u32).next_2d()
+                        };
                         let ls = match settings.light_precision {
                             LightPrecision::F32 => table.sample_li(id, &ctx, u, query),
                             LightPrecision::F64 => table.sample_li_f64(id, &ctx, u, query),

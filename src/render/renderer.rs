@@ -225,7 +225,8 @@ fn render_on_pool(
     let mut stats = RenderStats::default();
     let total = opts.width as usize * opts.height as usize * opts.spp as usize;
     let mut samples: Vec<CameraSample> = Vec::with_capacity(BATCH_SAMPLES.min(total));
-    let mut contributions: Vec<(Vec3, bool)> = Vec::new();
+    let mut contributions: Vec<Vec3> = Vec::new();
+    let mut traced: Vec<bool> = Vec::new();
     let mut wavelengths: Vec<SampledWavelengths> = Vec::new();
     let mut shaded: Vec<u32> = Vec::new();
     // Sample index k is sample k % spp of pixel k / spp: a pixel's samples are adjacent.
@@ -318,11 +319,10 @@ fn render_on_pool(
                     .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.dir, query)));
                 (to_rgb(le, lambda), false)
             })
-            .collect_into_vec(&mut contributions);
-        for (s, &(rgb, traced)) in samples.iter().zip(&contributions) {
-            film.add(s.pixel, rgb);
-            stats.bsdf_rays += traced as u64;
-        }
+            .unzip_into_vecs(&mut contributions, &mut traced);
+        // Sample k is sample k % spp of pixel k / spp (see `pixel_and_sample`).
+        film.par_add_samples(first, opts.spp as usize, &contributions);
+        stats.bsdf_rays += traced.par_iter().filter(|&&t| t).count() as u64;
         stats.camera_samples += samples.len() as u64;
         first = last;
         progress(first as f32 / total as f32);
