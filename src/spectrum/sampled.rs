@@ -75,15 +75,19 @@ impl SampledSpectrum {
     }
     /// Component-wise product.
     pub fn mul(self, o: Self) -> Self {
-        Self(std::array::from_fn(|i| self.0[i] * o.0[i]))
+        let (a, b) = (self.0, o.0);
+        // Lanes spelled out: `array::from_fn` was left as a loop in hot paths.
+        Self([a[0] * b[0], a[1] * b[1], a[2] * b[2], a[3] * b[3]])
     }
     /// Multiplied by a scalar.
     pub fn scale(self, s: f32) -> Self {
-        Self(self.0.map(|v| v * s))
+        let a = self.0;
+        Self([a[0] * s, a[1] * s, a[2] * s, a[3] * s])
     }
     /// Component-wise sum.
     pub fn add(self, o: Self) -> Self {
-        Self(std::array::from_fn(|i| self.0[i] + o.0[i]))
+        let (a, b) = (self.0, o.0);
+        Self([a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3]])
     }
     /// True when every value is finite.
     pub fn is_finite(&self) -> bool {
