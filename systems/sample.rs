@@ -38,6 +38,7 @@ pub enum ShadowTarget {
 /// Invariant: all columns have one slot per entry.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct ShadowRays {
+    /// Entries per batch point (entry `e` starts at point `e / entries_per_point`).
     pub entries_per_point: usize,
     pub kind: Vec<ShadowTarget>,
     /// Segment end (the light point) and the light's surface normal there (`Surface` only).
