@@ -40,6 +40,7 @@ pub enum ShadowTarget {
 pub struct ShadowRays {
     /// Entries per batch point (entry `e` starts at point `e / entries_per_point`).
     pub entries_per_point: usize,
+    /// Where each entry's ray ends (`None`: the entry has no ray).
     pub kind: Vec<ShadowTarget>,
     /// Segment end (the light point) and the light's surface normal there (`Surface` only).
     pub target: Vec<Vec3>,
