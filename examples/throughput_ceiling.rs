@@ -1,8 +1,8 @@
 //! The ceiling for the throughput target: the point-light-over-plane scene of `render_throughput`
 //! (128x128, 64 spp) rendered by a kernel hard-coded for it. It has one plane, one point light, a
 //! Lambertian floor and a shadow ray against the plane. There is no BVH, no material, no light
-//! selection and no batching. A general renderer does all the same work and more, so no general
-//! design beats these rates on the same machine.
+//! selection and no batching. A general renderer does this work per sample and more, so in the
+//! same form (scalar, or the same vector width) it does not beat these rates on the same machine.
 //!
 //! Two forms of the same arithmetic run: one sample at a time (scalar), and 16 samples at a time in
 //! branch-free lanes that the compiler can vectorise. Compare the default build with
