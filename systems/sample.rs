@@ -177,9 +177,10 @@ pub fn sample_direct_lighting(
                         None => sampler.sample(&ctx, rng.next_f32()),
                     };
                     let sampled = chosen.and_then(|(id, pmf)| {
+                        let flags = table.flags(id);
                         // Lights at a point ignore u: skip drawing it (the streams are counter
                         // based, so no other number changes).
-                        let u = if table.flags(id).contains(LightFlags::DELTA_POSITION) {
+                        let u = if flags.contains(LightFlags::DELTA_POSITION) {
                             Vec2::ZERO
                         } else {
                             rng.at_dimension(1 + 2 * light_index.unwrap_or(0) as u32).next_2d()
@@ -188,20 +189,19 @@ pub fn sample_direct_lighting(
                             LightPrecision::F32 => table.sample_li(id, &ctx, u, query),
                             LightPrecision::F64 => table.sample_li_f64(id, &ctx, u, query),
                         }?;
-                        (ls.pdf > 0.0 && ls.radiance.is_finite()).then_some((ls, pmf))
+                        (ls.pdf > 0.0 && ls.radiance.is_finite()).then_some((ls, pmf, flags))
                     });
                     // A failed sample leaves a zero entry (its light is kept when one was chosen).
                     light[e] = chosen.map_or(NO_LIGHT, |(id, _)| id);
                     occluded[e] = false;
                     ray_kind[e] = ShadowTarget::None;
-                    let Some((ls, pmf)) = sampled else {
+                    let Some((ls, pmf, flags)) = sampled else {
                         radiance[e] = SampledSpectrum::default();
                         wi[e] = Vec3::ZERO;
                         pdf[e] = 0.0;
                         delta[e] = false;
                         continue;
                     };
-                    let flags = table.flags(light[e]);
                     radiance[e] = ls.radiance;
                     wi[e] = ls.wi;
                     pdf[e] = ls.pdf * pmf;
