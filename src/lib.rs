@@ -3,6 +3,7 @@
 //!
 //! `src/` holds what things are (data and pure math); `systems/` holds what happens each update.
 pub mod geometry;
+pub mod lanes;
 pub mod light;
 pub mod light_sampler;
 mod prefetch;

@@ -2,6 +2,8 @@
 //! sample, dimension), so images are bit-identical for any thread count and any batch order. Scene
 //! generators, tests and benchmarks use the sequential [`SplitMix64`].
 
+use crate::lanes::LANES;
+
 /// A stream of uniform numbers for one (seed, pixel, sample); `dim` advances per draw.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SampleStream {
@@ -43,6 +45,20 @@ impl SampleStream {
     pub fn at_dimension(mut self, dim: u32) -> Self {
         self.dim = dim;
         self
+    }
+
+    /// The first number (dimension 0) of [`LANES`] streams at once, for lane kernels: lane `l`
+    /// is `SampleStream::new(seed, pixel[l], sample[l]).next_f32()`, bit for bit.
+    #[inline]
+    pub fn first_f32_lanes(seed: u64, pixel: &[u32; LANES], sample: &[u32; LANES]) -> [f32; LANES] {
+        let mut bits = [0u64; LANES];
+        for l in 0..LANES {
+            bits[l] = mix64(seed ^ mix64(((pixel[l] as u64) << 32) | sample[l] as u64));
+        }
+        for b in &mut bits {
+            *b = mix64(*b) >> 40;
+        }
+        bits.map(|b| b as f32 * (1.0 / (1u32 << 24) as f32))
     }
 }
 
@@ -101,6 +117,20 @@ impl SplitMix64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lane_streams_match_the_scalar_streams() {
+        let mut rng = SplitMix64::new(7);
+        for seed in [0, 42, u64::MAX] {
+            let pixel: [u32; LANES] = std::array::from_fn(|_| rng.next_u64() as u32);
+            let sample: [u32; LANES] = std::array::from_fn(|l| if l == 0 { u32::MAX } else { rng.next_u64() as u32 });
+            let lanes = SampleStream::first_f32_lanes(seed, &pixel, &sample);
+            for l in 0..LANES {
+                let scalar = SampleStream::new(seed, pixel[l], sample[l]).next_f32();
+                assert_eq!(lanes[l].to_bits(), scalar.to_bits(), "seed {seed} lane {l}");
+            }
+        }
+    }
 
     /// The first outputs for seed 1234567 of the reference splitmix64.c (Vigna, prng.di.unimi.it).
     #[test]

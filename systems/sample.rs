@@ -5,7 +5,8 @@ use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::light::{ColorQuery, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
+use crate::lanes::LANES;
+use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
 use crate::shading::{ColorMode, DirectLighting, LightPrecision, LightSelection, RunReport, Settings, ShadingBatch};
@@ -138,7 +139,20 @@ pub fn sample_direct_lighting(
     out.occluded.resize(m, false);
     rays.resize(m, k);
 
-    let spp = settings.samples_per_point.max(1);
+    let sampling = Sampling {
+        batch: &batch,
+        table: &table,
+        sampler: &sampler,
+        settings: &settings,
+        all_ids: &all_ids,
+        k,
+        spp: settings.samples_per_point.max(1),
+    };
+    // Point lights sampled one per entry in RGB f32 go through the lane kernel.
+    let lanes = settings.selection == LightSelection::OneSampled
+        && settings.color_mode == ColorMode::Rgb
+        && settings.light_precision == LightPrecision::F32
+        && !table.points.is_empty();
     let chunk = CHUNK * k.max(1);
     let rays = &mut *rays;
     rays.rays = (
@@ -155,78 +169,201 @@ pub fn sample_direct_lighting(
         .into_par_iter()
         .enumerate()
         .map(|(c, (radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal))| {
-            let first_point = c * CHUNK;
-            let mut traced = 0;
-            // Entry e = point * k + slot of this chunk; nested loops spare a division per entry.
-            for point in 0..radiance.len() / k {
-                let i = first_point + point;
-                let ctx = LightSampleContext { p: batch.position[i], n: batch.normal[i], ns: batch.shading_normal[i] };
-                let query = match settings.color_mode {
-                    ColorMode::Rgb => ColorQuery::Rgb,
-                    ColorMode::Spectral => ColorQuery::Spectral(&batch.wavelengths[i]),
-                };
-                for slot in 0..k {
-                    let e = point * k + slot;
-                    let (s, light_index) = match settings.selection {
-                        LightSelection::OneSampled => (slot as u32, None),
-                        LightSelection::All => ((slot / all_ids.len()) as u32, Some(slot % all_ids.len())),
-                    };
-                    let mut rng = SampleStream::new(settings.seed, batch.pixel[i], batch.sample[i] * spp + s);
-                    let chosen = match light_index {
-                        Some(j) => Some((all_ids[j], 1.0)),
-                        None => sampler.sample(&ctx, rng.next_f32()),
-                    };
-                    let sampled = chosen.and_then(|(id, pmf)| {
-                        let flags = table.flags(id);
-                        // Lights at a point ignore u: skip drawing it (the streams are counter
-                        // based, so no other number changes).
-                        let u = if flags.contains(LightFlags::DELTA_POSITION) {
-                            Vec2::ZERO
-                        } else {
-                            rng.at_dimension(1 + 2 * light_index.unwrap_or(0) as u32).next_2d()
-                        };
-                        let ls = match settings.light_precision {
-                            LightPrecision::F32 => table.sample_li(id, &ctx, u, query),
-                            LightPrecision::F64 => table.sample_li_f64(id, &ctx, u, query),
-                        }?;
-                        (ls.pdf > 0.0 && ls.radiance.is_finite()).then_some((ls, pmf, flags))
-                    });
-                    // A failed sample leaves a zero entry (its light is kept when one was chosen).
-                    light[e] = chosen.map_or(NO_LIGHT, |(id, _)| id);
-                    occluded[e] = false;
-                    ray_kind[e] = ShadowTarget::None;
-                    let Some((ls, pmf, flags)) = sampled else {
-                        radiance[e] = SampledSpectrum::default();
-                        wi[e] = Vec3::ZERO;
-                        pdf[e] = 0.0;
-                        delta[e] = false;
-                        continue;
-                    };
-                    radiance[e] = ls.radiance;
-                    wi[e] = ls.wi;
-                    pdf[e] = ls.pdf * pmf;
-                    delta[e] = flags.is_delta();
-                    if settings.shadows
-                        && pdf[e] > 0.0
-                        && ls.radiance.0.iter().any(|&v| v > 0.0)
-                        && table.casts_shadows(light[e])
-                    {
-                        ray_kind[e] =
-                            if flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION) {
-                                ShadowTarget::Infinity
-                            } else if ls.n_light == Vec3::ZERO {
-                                ShadowTarget::Point
-                            } else {
-                                ShadowTarget::Surface
-                            };
-                        (target[e], target_normal[e]) = (ls.p_light, ls.n_light);
-                        traced += 1;
-                    }
-                }
+            let mut cols = EntryColumns { radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal };
+            let first_entry = c * chunk;
+            if lanes {
+                crate::lanes::widest(|| {
+                    (0..cols.len())
+                        .step_by(LANES)
+                        .map(|e| sampling.lane_block(first_entry, e, &mut cols))
+                        .sum::<usize>()
+                })
+            } else {
+                (0..cols.len()).map(|e| sampling.entry(first_entry, e, &mut cols) as usize).sum()
             }
-            traced
         })
         .sum();
+}
+
+/// A light chosen for an entry, its Sample_Li, pmf and flags.
+type Sampled = (LiSample, f32, LightFlags);
+
+/// What the sampling pass reads.
+struct Sampling<'a> {
+    batch: &'a ShadingBatch,
+    table: &'a LightTable,
+    sampler: &'a LightSampler,
+    settings: &'a Settings,
+    /// Every light, for `LightSelection::All`.
+    all_ids: &'a [LightId],
+    /// Entries per point.
+    k: usize,
+    /// Light samples per point.
+    spp: u32,
+}
+
+impl Sampling<'_> {
+    /// The batch point of global entry `e` and the sample index of its random stream.
+    #[inline]
+    fn point_and_stream(&self, e: usize) -> (usize, u32) {
+        let (i, slot) = (e / self.k, e % self.k);
+        let s = match self.settings.selection {
+            LightSelection::OneSampled => slot,
+            LightSelection::All => slot / self.all_ids.len(),
+        };
+        (i, self.batch.sample[i] * self.spp + s as u32)
+    }
+
+    #[inline]
+    fn context(&self, i: usize) -> LightSampleContext {
+        LightSampleContext { p: self.batch.position[i], n: self.batch.normal[i], ns: self.batch.shading_normal[i] }
+    }
+
+    /// Samples entry `e` of the chunk starting at global entry `first` one at a time; returns
+    /// whether it has a shadow ray.
+    fn entry(&self, first: usize, e: usize, cols: &mut EntryColumns) -> bool {
+        let (i, stream) = self.point_and_stream(first + e);
+        let ctx = self.context(i);
+        let mut rng = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream);
+        // Under `All`, light j of a sample draws its u from dimensions 1 + 2j.
+        let (chosen, dim) = match self.settings.selection {
+            LightSelection::All => {
+                let j = (first + e) % self.k % self.all_ids.len();
+                (Some((self.all_ids[j], 1.0)), 1 + 2 * j as u32)
+            }
+            LightSelection::OneSampled => (self.sampler.sample(&ctx, rng.next_f32()), 1),
+        };
+        let sampled = chosen.and_then(|c| self.evaluate(i, stream, dim, &ctx, c));
+        self.write(cols, e, chosen.map_or(NO_LIGHT, |(id, _)| id), sampled)
+    }
+
+    /// Sample_Li of the chosen light (`id`, `pmf`) from batch point `i`, with u from dimension
+    /// `dim` of sample `stream`'s random stream; None for a failed sample.
+    fn evaluate(
+        &self,
+        i: usize,
+        stream: u32,
+        dim: u32,
+        ctx: &LightSampleContext,
+        (id, pmf): (LightId, f32),
+    ) -> Option<Sampled> {
+        let query = match self.settings.color_mode {
+            ColorMode::Rgb => ColorQuery::Rgb,
+            ColorMode::Spectral => ColorQuery::Spectral(&self.batch.wavelengths[i]),
+        };
+        let flags = self.table.flags(id);
+        // Lights at a point ignore u: skip drawing it (the streams are counter based, so no
+        // other number changes).
+        let u = if flags.contains(LightFlags::DELTA_POSITION) {
+            Vec2::ZERO
+        } else {
+            SampleStream::new(self.settings.seed, self.batch.pixel[i], stream).at_dimension(dim).next_2d()
+        };
+        let ls = match self.settings.light_precision {
+            LightPrecision::F32 => self.table.sample_li(id, ctx, u, query),
+            LightPrecision::F64 => self.table.sample_li_f64(id, ctx, u, query),
+        }?;
+        (ls.pdf > 0.0 && ls.radiance.is_finite()).then_some((ls, pmf, flags))
+    }
+
+    /// Writes entry `e` (chosen light `light`; a failed sample leaves a zero entry that keeps
+    /// its light) and its shadow ray; returns whether it has one.
+    #[inline]
+    fn write(&self, cols: &mut EntryColumns, e: usize, light: LightId, sampled: Option<Sampled>) -> bool {
+        cols.light[e] = light;
+        cols.occluded[e] = false;
+        cols.ray_kind[e] = ShadowTarget::None;
+        let Some((ls, pmf, flags)) = sampled else {
+            (cols.radiance[e], cols.wi[e], cols.pdf[e], cols.delta[e]) =
+                (SampledSpectrum::default(), Vec3::ZERO, 0.0, false);
+            return false;
+        };
+        let pdf = ls.pdf * pmf;
+        (cols.radiance[e], cols.wi[e], cols.pdf[e], cols.delta[e]) = (ls.radiance, ls.wi, pdf, flags.is_delta());
+        if !(self.settings.shadows
+            && pdf > 0.0
+            && ls.radiance.0.iter().any(|&v| v > 0.0)
+            && self.table.casts_shadows(light))
+        {
+            return false;
+        }
+        cols.ray_kind[e] = if flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION) {
+            ShadowTarget::Infinity
+        } else if ls.n_light == Vec3::ZERO {
+            ShadowTarget::Point
+        } else {
+            ShadowTarget::Surface
+        };
+        (cols.target[e], cols.target_normal[e]) = (ls.p_light, ls.n_light);
+        true
+    }
+
+    /// Samples entries `e..e + LANES` (or to the chunk's end) of the chunk starting at global
+    /// entry `first` under `LightSelection::OneSampled`, RGB and f32: random numbers and point
+    /// lights in lanes, lights of other kinds one at a time. Same entries as [`Self::entry`],
+    /// bit for bit. Returns the number of shadow rays.
+    #[inline]
+    fn lane_block(&self, first: usize, e: usize, cols: &mut EntryColumns) -> usize {
+        let n = LANES.min(cols.len() - e);
+        let (mut point, mut pixel, mut stream) = ([0usize; LANES], [0u32; LANES], [0u32; LANES]);
+        let mut p = [[0.0f32; LANES]; 3];
+        for l in 0..n {
+            let (i, s) = self.point_and_stream(first + e + l);
+            (point[l], pixel[l], stream[l]) = (i, self.batch.pixel[i], s);
+            let x = self.batch.position[i];
+            (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
+        }
+        let u = SampleStream::first_f32_lanes(self.settings.seed, &pixel, &stream);
+        let mut chosen = [None; LANES];
+        let mut rows = [0u32; LANES];
+        for l in 0..n {
+            chosen[l] = self.sampler.sample(&self.context(point[l]), u[l]);
+            if let Some((LightId { kind: LightKind::Point, row }, _)) = chosen[l] {
+                rows[l] = row;
+            }
+        }
+        let lit = self.table.points.sample_li_rgb_lanes(&rows, &p);
+        let mut traced = 0;
+        for l in 0..n {
+            let sampled = match chosen[l] {
+                Some((LightId { kind: LightKind::Point, .. }, pmf)) => lit.valid[l].then(|| {
+                    let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
+                    let radiance = v(&lit.radiance);
+                    let ls = LiSample {
+                        radiance: SampledSpectrum([radiance.x, radiance.y, radiance.z, 0.0]),
+                        wi: v(&lit.wi),
+                        pdf: 1.0,
+                        p_light: v(&lit.target),
+                        n_light: Vec3::ZERO,
+                    };
+                    (ls, pmf, LightFlags::DELTA_POSITION)
+                }),
+                Some(c) => self.evaluate(point[l], stream[l], 1, &self.context(point[l]), c),
+                None => None,
+            };
+            traced += self.write(cols, e + l, chosen[l].map_or(NO_LIGHT, |(id, _)| id), sampled) as usize;
+        }
+        traced
+    }
+}
+
+/// One chunk of the columns the sampling pass writes, indexed by entry within the chunk.
+struct EntryColumns<'a> {
+    radiance: &'a mut [SampledSpectrum],
+    wi: &'a mut [Vec3],
+    pdf: &'a mut [f32],
+    light: &'a mut [LightId],
+    delta: &'a mut [bool],
+    occluded: &'a mut [bool],
+    ray_kind: &'a mut [ShadowTarget],
+    target: &'a mut [Vec3],
+    target_normal: &'a mut [Vec3],
+}
+
+impl EntryColumns<'_> {
+    fn len(&self) -> usize {
+        self.pdf.len()
+    }
 }
 
 /// Zeroes the radiance of entries whose shadow ray was blocked.

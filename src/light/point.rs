@@ -8,6 +8,7 @@ use glam::Vec3;
 use super::emitter::check_amount;
 use super::{Amount, ColorQuery, Emitter, LiSample, LightBounds, LightError, LightSampleContext, Quantity};
 use crate::geometry::Transform;
+use crate::lanes::LANES;
 use crate::spectrum::Spectrum;
 
 /// Default luminous power of a point light: 800 lm, about a 60 W incandescent bulb.
@@ -207,7 +208,48 @@ impl crate::light::table::Block for PointColumns {
     }
 }
 
+/// Sample_Li of [`LANES`] points toward point lights in RGB mode, as lane columns (x, y, z).
+#[derive(Clone, Copy, Debug)]
+pub struct PointLanes {
+    /// Light position.
+    pub target: [[f32; LANES]; 3],
+    /// Unit direction toward the light.
+    pub wi: [[f32; LANES]; 3],
+    /// Photometric RGB I / r^2.
+    pub radiance: [[f32; LANES]; 3],
+    /// False where `sample_li` has no sample (the point is at the light, or r^2 overflows) or
+    /// its radiance is not finite.
+    pub valid: [bool; LANES],
+}
+
 impl PointColumns {
+    /// [`Self::sample_li`] in RGB mode for `LANES` points at once, bit for bit: lane `l` samples
+    /// light `rows[l]` from `p[l]`. Every row must be a valid row.
+    #[inline]
+    pub fn sample_li_rgb_lanes(&self, rows: &[u32; LANES], p: &[[f32; LANES]; 3]) -> PointLanes {
+        let (mut target, mut rgb) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+        for l in 0..LANES {
+            let (x, c) = (self.position[rows[l] as usize], self.rgb[rows[l] as usize]);
+            (target[0][l], target[1][l], target[2][l]) = (x.x, x.y, x.z);
+            (rgb[0][l], rgb[1][l], rgb[2][l]) = (c.x, c.y, c.z);
+        }
+        let (mut wi, mut radiance, mut valid) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3], [false; LANES]);
+        for l in 0..LANES {
+            // The operations of `LightSampleContext::toward` and `Self::sample_li`, in order.
+            let d = [target[0][l] - p[0][l], target[1][l] - p[1][l], target[2][l] - p[2][l]];
+            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            let (r, inv_r2) = (r2.sqrt(), 1.0 / r2);
+            let mut finite = r2 > 0.0 && r2.is_finite() && inv_r2.is_finite();
+            for a in 0..3 {
+                wi[a][l] = d[a] / r;
+                radiance[a][l] = rgb[a][l] * inv_r2;
+                finite &= radiance[a][l].is_finite();
+            }
+            valid[l] = finite;
+        }
+        PointLanes { target, wi, radiance, valid }
+    }
+
     /// Sample_Li of light `row` for a batch of points in RGB mode (the SoA batch form): writes the
     /// direction toward the light and the radiance I / r^2 per point (zero at the light itself).
     pub fn sample_li_batch_rgb(&self, row: usize, positions: &[Vec3], wi: &mut [Vec3], radiance: &mut [Vec3]) {

@@ -1,0 +1,62 @@
+//! Lane kernels: code written as loops over fixed-size arrays of [`LANES`] values, which LLVM
+//! turns into vector instructions, and a run-time choice of the widest instruction set the CPU
+//! has to compile them for. Without `-C target-cpu`, Rust targets baseline x86-64 (SSE2, 4 f32
+//! lanes); [`widest`] runs its closure as AVX-512 or AVX2 code where the CPU has them.
+//!
+//! Results do not depend on the choice: Rust never contracts a * b + c into an FMA, and the
+//! vector forms of +, -, *, / and sqrt round exactly as the scalar ones do.
+
+/// Values per lane array: one AVX-512 register of f32.
+pub const LANES: usize = 16;
+
+/// Runs `f` compiled for AVX-512 or AVX2 when the CPU has them (else as it is). Only the code
+/// LLVM inlines into `f` is compiled for the wider set, so lane loops belong in `#[inline]`
+/// functions called from `f`.
+#[inline]
+pub fn widest<R>(f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+            && std::arch::is_x86_feature_detected!("avx512bw")
+        {
+            // SAFETY: the CPU has every feature the function is compiled for (checked above).
+            return unsafe { x86::avx512(f) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: as above, for AVX2.
+            return unsafe { x86::avx2(f) };
+        }
+    }
+    f()
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx512bw,avx2,avx,sse4.2,popcnt,bmi1,bmi2,lzcnt")]
+    pub unsafe fn avx512<R>(f: impl FnOnce() -> R) -> R {
+        f()
+    }
+
+    #[target_feature(enable = "avx2,avx,sse4.2,popcnt,bmi1,bmi2,lzcnt")]
+    pub unsafe fn avx2<R>(f: impl FnOnce() -> R) -> R {
+        f()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn widest_runs_the_closure_once_and_returns_its_value() {
+        let mut calls = 0;
+        let v = widest(|| {
+            calls += 1;
+            (0..LANES).map(|i| (i as f32).sqrt()).sum::<f32>()
+        });
+        assert_eq!(calls, 1);
+        assert_eq!(v, (0..LANES).map(|i| (i as f32).sqrt()).sum::<f32>());
+    }
+}
