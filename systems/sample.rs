@@ -206,7 +206,8 @@ impl Sampling<'_> {
     /// The batch point of global entry `e` and the sample index of its random stream.
     #[inline]
     fn point_and_stream(&self, e: usize) -> (usize, u32) {
-        let (i, slot) = (e / self.k, e % self.k);
+        // One entry per point is the common case; it spares a 64-bit division per entry.
+        let (i, slot) = if self.k == 1 { (e, 0) } else { (e / self.k, e % self.k) };
         let s = match self.settings.selection {
             LightSelection::OneSampled => slot,
             LightSelection::All => slot / self.all_ids.len(),
@@ -375,4 +376,94 @@ pub fn apply_visibility(rays: Res<ShadowRays>, mut out: ResMut<DirectLighting>) 
             (*radiance, *occluded) = (SampledSpectrum::default(), true);
         }
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Transform;
+    use crate::light::{Amount, DistantLight, PointLight, SpotLight, UniformInfiniteLight};
+    use crate::rng::SplitMix64;
+
+    /// Entries the schedule wrote (through the lane path: one sampled light, RGB, f32) must equal
+    /// those of the one-at-a-time path, bit for bit, for a mix of light kinds. Hard cases: a
+    /// point exactly at a light, one 1e-30 m from it (r^2 underflows to 0), and one 1e30 m away
+    /// (r^2 overflows), plus a batch length that is no multiple of the lane count.
+    #[test]
+    fn lane_path_matches_entry_by_entry() {
+        for samples_per_point in [1, 3] {
+            let mut world = World::new();
+            let mut schedule = Schedule::default();
+            crate::systems::LightingPlugin::build(&mut world, &mut schedule);
+            let at = |x, y, z| Transform::from_translation(Vec3::new(x, y, z));
+            world.spawn((PointLight::candela(1e4), at(0.0, 2.0, 0.0)));
+            world.spawn((PointLight { casts_shadows: false, ..PointLight::candela(5e3) }, at(1.0, 1.0, 1.0)));
+            world.spawn((PointLight::candela(3e3), at(-3.0, 0.5, 2.0)));
+            let spot = SpotLight { amount: Amount::Candela(1e4), ..Default::default() };
+            world.spawn((spot, at(0.0, 3.0, 0.0).looking_to(Vec3::NEG_Y, Vec3::Z)));
+            world.spawn((DistantLight { amount: Amount::Lux(1.0), ..Default::default() }, Transform::default()));
+            world.spawn((UniformInfiniteLight::default(), Transform::default()));
+            world.resource_mut::<Settings>().samples_per_point = samples_per_point;
+            {
+                let mut batch = world.resource_mut::<ShadingBatch>();
+                batch.clear();
+                batch.push(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, 0, 0);
+                batch.push(Vec3::new(0.0, 2.0 + 1e-30, 0.0), Vec3::Y, 1, 0);
+                batch.push(Vec3::new(1e30, 0.0, 0.0), Vec3::Y, 2, 0);
+                let mut rng = SplitMix64::new(3);
+                for i in 3..101 {
+                    let p = Vec3::new(rng.f32() * 8.0 - 4.0, rng.f32() * 2.0, rng.f32() * 8.0 - 4.0);
+                    batch.push(p, Vec3::Y, i, i % 5);
+                }
+            }
+            schedule.run(&mut world);
+            let lit = world.resource::<DirectLighting>().clone();
+            let rays = world.resource::<ShadowRays>().clone();
+
+            let (batch, table, sampler, settings) = (
+                world.resource::<ShadingBatch>(),
+                world.resource::<LightTable>(),
+                world.resource::<LightSampler>(),
+                world.resource::<Settings>(),
+            );
+            let k = samples_per_point as usize;
+            let sampling = Sampling { batch, table, sampler, settings, all_ids: &[], k, spp: samples_per_point };
+            let m = batch.len() * k;
+            let (mut radiance, mut wi, mut pdf) =
+                (vec![SampledSpectrum::default(); m], vec![Vec3::ZERO; m], vec![0.0; m]);
+            let (mut light, mut delta, mut occluded) = (vec![NO_LIGHT; m], vec![false; m], vec![true; m]);
+            let (mut ray_kind, mut target, mut target_normal) =
+                (vec![ShadowTarget::None; m], vec![Vec3::ZERO; m], vec![Vec3::ZERO; m]);
+            let mut cols = EntryColumns {
+                radiance: &mut radiance,
+                wi: &mut wi,
+                pdf: &mut pdf,
+                light: &mut light,
+                delta: &mut delta,
+                occluded: &mut occluded,
+                ray_kind: &mut ray_kind,
+                target: &mut target,
+                target_normal: &mut target_normal,
+            };
+            let traced: usize = (0..m).map(|e| sampling.entry(0, e, &mut cols) as usize).sum();
+            assert_eq!(traced, rays.len());
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            let vec_bits = |v: &[Vec3]| v.iter().flat_map(|x| x.to_array()).map(f32::to_bits).collect::<Vec<_>>();
+            let spectrum_bits =
+                |v: &[SampledSpectrum]| v.iter().flat_map(|x| x.0).map(f32::to_bits).collect::<Vec<_>>();
+            assert_eq!(spectrum_bits(&lit.radiance), spectrum_bits(&radiance));
+            assert_eq!(vec_bits(&lit.wi), vec_bits(&wi));
+            assert_eq!(bits(&lit.pdf), bits(&pdf));
+            assert_eq!((&lit.light, &lit.delta, &lit.occluded), (&light, &delta, &vec![false; m]));
+            assert_eq!(rays.kind, ray_kind);
+            assert_eq!(vec_bits(&rays.target), vec_bits(&target));
+            assert_eq!(vec_bits(&rays.target_normal), vec_bits(&target_normal));
+            // The mix reached every path: point lights in lanes, other kinds, failed samples.
+            assert!(
+                light.iter().any(|l| l.kind == LightKind::Point) && light.iter().any(|l| l.kind != LightKind::Point)
+            );
+            assert!(ray_kind.contains(&ShadowTarget::Point) && ray_kind.contains(&ShadowTarget::Infinity));
+            assert!(pdf[..k].iter().zip(&light).any(|(&p, l)| p == 0.0 && l.kind == LightKind::Point), "at the light");
+        }
+    }
 }
