@@ -47,18 +47,18 @@ impl SampleStream {
         self
     }
 
-    /// The first number (dimension 0) of [`LANES`] streams at once, for lane kernels: lane `l`
-    /// is `SampleStream::new(seed, pixel[l], sample[l]).next_f32()`, bit for bit.
+    /// The first `D` numbers (dimensions 0..D) of [`LANES`] streams at once, for lane kernels:
+    /// `[d][l]` is number `d` of `SampleStream::new(seed, pixel[l], sample[l])`, bit for bit.
     #[inline]
-    pub fn first_f32_lanes(seed: u64, pixel: &[u32; LANES], sample: &[u32; LANES]) -> [f32; LANES] {
-        let mut bits = [0u64; LANES];
+    pub fn lanes<const D: usize>(seed: u64, pixel: &[u32; LANES], sample: &[u32; LANES]) -> [[f32; LANES]; D] {
+        let mut key = [0u64; LANES];
         for l in 0..LANES {
-            bits[l] = mix64(seed ^ mix64(((pixel[l] as u64) << 32) | sample[l] as u64));
+            key[l] = mix64(seed ^ mix64(((pixel[l] as u64) << 32) | sample[l] as u64));
         }
-        for b in &mut bits {
-            *b = mix64(*b) >> 40;
-        }
-        bits.map(|b| b as f32 * (1.0 / (1u32 << 24) as f32))
+        std::array::from_fn(|d| {
+            let step = (d as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+            key.map(|k| (mix64(k.wrapping_add(step)) >> 40) as f32 * (1.0 / (1u32 << 24) as f32))
+        })
     }
 }
 
@@ -124,10 +124,12 @@ mod tests {
         for seed in [0, 42, u64::MAX] {
             let pixel: [u32; LANES] = std::array::from_fn(|_| rng.next_u64() as u32);
             let sample: [u32; LANES] = std::array::from_fn(|l| if l == 0 { u32::MAX } else { rng.next_u64() as u32 });
-            let lanes = SampleStream::first_f32_lanes(seed, &pixel, &sample);
+            let lanes = SampleStream::lanes::<3>(seed, &pixel, &sample);
             for l in 0..LANES {
-                let scalar = SampleStream::new(seed, pixel[l], sample[l]).next_f32();
-                assert_eq!(lanes[l].to_bits(), scalar.to_bits(), "seed {seed} lane {l}");
+                let mut scalar = SampleStream::new(seed, pixel[l], sample[l]);
+                for (d, dim) in lanes.iter().enumerate() {
+                    assert_eq!(dim[l].to_bits(), scalar.next_f32().to_bits(), "seed {seed} lane {l} dim {d}");
+                }
             }
         }
     }

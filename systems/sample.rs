@@ -314,7 +314,7 @@ impl Sampling<'_> {
             let x = self.batch.position[i];
             (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
         }
-        let u = SampleStream::first_f32_lanes(self.settings.seed, &pixel, &stream);
+        let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
         let mut chosen = [None; LANES];
         let mut rows = [0u32; LANES];
         for l in 0..n {

@@ -6,6 +6,7 @@ use glam::{Vec2, Vec3};
 
 use crate::geometry::Transform;
 use crate::geometry::ray::Ray;
+use crate::lanes::LANES;
 
 /// A perspective camera at its entity's `Transform`, looking along local -Z.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
@@ -69,6 +70,25 @@ impl PinholeCamera {
         Ray::new(self.origin, dir.normalize())
     }
 
+    /// [`Self::ray`] for `LANES` samples at once, bit for bit: lane `l` is pixel `pixel[l]`
+    /// (row-major) at offset (`u[l]`, `v[l]`).
+    #[inline]
+    pub fn rays_lanes(&self, pixel: &[u32; LANES], u: &[f32; LANES], v: &[f32; LANES]) -> [Ray; LANES] {
+        let mut d = [[0.0f32; LANES]; 3];
+        for l in 0..LANES {
+            let (fx, fy) = ((pixel[l] % self.width) as f32 + u[l], (pixel[l] / self.width) as f32 + v[l]);
+            // Vec3 arithmetic and `normalize` (times 1 / sqrt(dot)), in the same order.
+            let c = [self.corner.x, self.corner.y, self.corner.z];
+            let (px, py) = ([self.per_x.x, self.per_x.y, self.per_x.z], [self.per_y.x, self.per_y.y, self.per_y.z]);
+            let w: [f32; 3] = std::array::from_fn(|a| c[a] + px[a] * fx + py[a] * fy);
+            let inv = 1.0 / (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+            for a in 0..3 {
+                d[a][l] = w[a] * inv;
+            }
+        }
+        std::array::from_fn(|l| Ray::new(self.origin, Vec3::new(d[0][l], d[1][l], d[2][l])))
+    }
+
     /// Image size.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
@@ -94,6 +114,18 @@ pub enum CameraModel {
 }
 
 impl CameraModel {
+    /// [`Self::ray`] for `LANES` samples of row-major pixels `pixel` at offsets (`u`, `v`).
+    #[inline]
+    pub fn rays_lanes(&self, pixel: &[u32; LANES], u: &[f32; LANES], v: &[f32; LANES]) -> [Ray; LANES] {
+        match self {
+            Self::Pinhole(c) => c.rays_lanes(pixel, u, v),
+            Self::LatLong { width, .. } => {
+                let w = (*width).max(1);
+                std::array::from_fn(|l| self.ray(pixel[l] % w, pixel[l] / w, Vec2::new(u[l], v[l])))
+            }
+        }
+    }
+
     /// The ray through pixel (x, y) at `offset` within it.
     pub fn ray(&self, x: u32, y: u32, offset: Vec2) -> Ray {
         match *self {
@@ -101,6 +133,38 @@ impl CameraModel {
             Self::LatLong { origin, width, height } => {
                 let uv = Vec2::new((x as f32 + offset.x) / width as f32, (y as f32 + offset.y) / height as f32);
                 Ray::new(origin, crate::scene::image::lat_long_direction(uv))
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    #[test]
+    fn lane_rays_match_single_rays() {
+        let t = Transform::from_translation(Vec3::new(0.3, 3.0, 4.0)).looking_to(Vec3::new(0.1, -3.0, -4.0), Vec3::Y);
+        let (w, h) = (37, 23);
+        let pinhole = CameraModel::Pinhole(PinholeCamera::new(&Camera { yfov: 1.1 }, &t, w, h));
+        let lat_long = CameraModel::LatLong { origin: Vec3::ONE, width: w, height: h };
+        let mut rng = SplitMix64::new(5);
+        for camera in [pinhole, lat_long] {
+            for _ in 0..20 {
+                let pixel: [u32; LANES] = std::array::from_fn(|_| (rng.next_u64() % (w * h) as u64) as u32);
+                let (u, v): ([f32; LANES], [f32; LANES]) =
+                    (std::array::from_fn(|_| rng.f32()), std::array::from_fn(|_| rng.f32()));
+                let rays = camera.rays_lanes(&pixel, &u, &v);
+                for l in 0..LANES {
+                    let one = camera.ray(pixel[l] % w, pixel[l] / w, Vec2::new(u[l], v[l]));
+                    assert_eq!(rays[l].origin, one.origin);
+                    assert_eq!(
+                        rays[l].dir.to_array().map(f32::to_bits),
+                        one.dir.to_array().map(f32::to_bits),
+                        "{camera:?}"
+                    );
+                }
             }
         }
     }

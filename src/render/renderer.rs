@@ -11,6 +11,7 @@ use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::film::Film;
 use super::material::Material;
 use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
+use crate::lanes::LANES;
 use crate::light::{ColorQuery, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
@@ -238,15 +239,23 @@ fn render_on_pool(
         let bvh = world.resource::<SceneBvh>();
         // Samples are written in place: a returned `CameraSample` would be copied twice.
         samples.resize(last - first, UNUSED_SAMPLE);
+        // Random numbers and rays in lanes (dimensions 0 and 1 of each sample's stream), hits one
+        // at a time.
         samples.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
-            for (i, s) in chunk.iter_mut().enumerate() {
-                let k = first + c * RAY_CHUNK + i;
-                let (pixel, sample) = pixel_and_sample(k);
-                let mut rng = SampleStream::new(seed, pixel, sample);
-                let ray = camera.ray(pixel % opts.width, pixel / opts.width, rng.next_2d());
-                (s.pixel, s.sample, s.dir, s.point) = (pixel, sample, ray.dir, NOT_SHADED);
-                s.hit = bvh.closest_hit(&ray);
-            }
+            crate::lanes::widest(|| {
+                for (b, block) in chunk.chunks_mut(LANES).enumerate() {
+                    let (mut pixel, mut sample) = ([0u32; LANES], [0u32; LANES]);
+                    for l in 0..block.len() {
+                        (pixel[l], sample[l]) = pixel_and_sample(first + c * RAY_CHUNK + b * LANES + l);
+                    }
+                    let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
+                    let rays = camera.rays_lanes(&pixel, &u, &v);
+                    for (l, s) in block.iter_mut().enumerate() {
+                        (s.pixel, s.sample, s.dir, s.point) = (pixel[l], sample[l], rays[l].dir, NOT_SHADED);
+                        s.hit = bvh.closest_hit(&rays[l]);
+                    }
+                }
+            })
         });
         // Spectral mode: the wavelengths of each sample (dimension 2 of its stream), kept apart
         // so that RGB renders do not carry them.
