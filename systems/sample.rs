@@ -316,18 +316,19 @@ impl Sampling<'_> {
         }
         let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
         let mut chosen = [None; LANES];
-        let mut rows = [0u32; LANES];
+        let (mut rows, mut any_point) = ([0u32; LANES], false);
         for l in 0..n {
             chosen[l] = self.sampler.sample(&self.context(point[l]), u[l]);
             if let Some((LightId { kind: LightKind::Point, row }, _)) = chosen[l] {
-                rows[l] = row;
+                (rows[l], any_point) = (row, true);
             }
         }
-        let lit = self.table.points.sample_li_rgb_lanes(&rows, &p);
+        // Blocks where no entry chose a point light (scenes lit by other kinds) skip the kernel.
+        let lit = any_point.then(|| self.table.points.sample_li_rgb_lanes(&rows, &p));
         let mut traced = 0;
         for l in 0..n {
-            let sampled = match chosen[l] {
-                Some((LightId { kind: LightKind::Point, .. }, pmf)) => lit.valid[l].then(|| {
+            let sampled = match (chosen[l], &lit) {
+                (Some((LightId { kind: LightKind::Point, .. }, pmf)), Some(lit)) => lit.valid[l].then(|| {
                     let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
                     let radiance = v(&lit.radiance);
                     let ls = LiSample {
@@ -339,8 +340,8 @@ impl Sampling<'_> {
                     };
                     (ls, pmf, LightFlags::DELTA_POSITION)
                 }),
-                Some(c) => self.evaluate(point[l], stream[l], 1, &self.context(point[l]), c),
-                None => None,
+                (Some(c), _) => self.evaluate(point[l], stream[l], 1, &self.context(point[l]), c),
+                (None, _) => None,
             };
             traced += self.write(cols, e + l, chosen[l].map_or(NO_LIGHT, |(id, _)| id), sampled) as usize;
         }
