@@ -203,16 +203,17 @@ struct Sampling<'a> {
 }
 
 impl Sampling<'_> {
-    /// The batch point of global entry `e` and the sample index of its random stream.
+    /// The batch point of global entry `e`, its slot among the point's entries, and the sample
+    /// index of its random stream.
     #[inline]
-    fn point_and_stream(&self, e: usize) -> (usize, u32) {
+    fn point_and_stream(&self, e: usize) -> (usize, usize, u32) {
         // One entry per point is the common case; it spares a 64-bit division per entry.
         let (i, slot) = if self.k == 1 { (e, 0) } else { (e / self.k, e % self.k) };
         let s = match self.settings.selection {
             LightSelection::OneSampled => slot,
             LightSelection::All => slot / self.all_ids.len(),
         };
-        (i, self.batch.sample[i] * self.spp + s as u32)
+        (i, slot, self.batch.sample[i] * self.spp + s as u32)
     }
 
     #[inline]
@@ -223,16 +224,18 @@ impl Sampling<'_> {
     /// Samples entry `e` of the chunk starting at global entry `first` one at a time; returns
     /// whether it has a shadow ray.
     fn entry(&self, first: usize, e: usize, cols: &mut EntryColumns) -> bool {
-        let (i, stream) = self.point_and_stream(first + e);
+        let (i, slot, stream) = self.point_and_stream(first + e);
         let ctx = self.context(i);
-        let mut rng = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream);
         // Under `All`, light j of a sample draws its u from dimensions 1 + 2j.
         let (chosen, dim) = match self.settings.selection {
             LightSelection::All => {
-                let j = (first + e) % self.k % self.all_ids.len();
+                let j = slot % self.all_ids.len();
                 (Some((self.all_ids[j], 1.0)), 1 + 2 * j as u32)
             }
-            LightSelection::OneSampled => (self.sampler.sample(&ctx, rng.next_f32()), 1),
+            LightSelection::OneSampled => {
+                let u = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream).next_f32();
+                (self.sampler.sample(&ctx, u), 1)
+            }
         };
         let sampled = chosen.and_then(|c| self.evaluate(i, stream, dim, &ctx, c));
         self.write(cols, e, chosen.map_or(NO_LIGHT, |(id, _)| id), sampled)
@@ -309,7 +312,7 @@ impl Sampling<'_> {
         let (mut point, mut pixel, mut stream) = ([0usize; LANES], [0u32; LANES], [0u32; LANES]);
         let mut p = [[0.0f32; LANES]; 3];
         for l in 0..n {
-            let (i, s) = self.point_and_stream(first + e + l);
+            let (i, _, s) = self.point_and_stream(first + e + l);
             (point[l], pixel[l], stream[l]) = (i, self.batch.pixel[i], s);
             let x = self.batch.position[i];
             (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
@@ -338,7 +341,7 @@ impl Sampling<'_> {
                         p_light: v(&lit.target),
                         n_light: Vec3::ZERO,
                     };
-                    (ls, pmf, LightFlags::DELTA_POSITION)
+                    (ls, pmf, LightKind::Point.flags())
                 }),
                 (Some(c), _) => self.evaluate(point[l], stream[l], 1, &self.context(point[l]), c),
                 (None, _) => None,
