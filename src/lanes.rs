@@ -10,8 +10,10 @@
 pub const LANES: usize = 16;
 
 /// Runs `f` compiled for AVX-512 or AVX2 when the CPU has them (else as it is). Only the code
-/// LLVM inlines into `f` is compiled for the wider set, so lane loops belong in `#[inline]`
-/// functions called from `f`.
+/// inlined into the wrapper is compiled for the wider set, and LLVM does not inline a large
+/// closure on its own: mark `f` `#[inline(always)]` (attributes on closures are stable), and the
+/// lane kernels it calls too. Loops over iterator adapters (`step_by`, `array::from_fn`) may stay
+/// out of line; plain `for` loops over indices do not.
 #[inline]
 pub fn widest<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]

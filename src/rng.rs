@@ -12,7 +12,7 @@ pub struct SampleStream {
 }
 
 /// A 64-bit mix (splitmix64 finaliser, Steele et al. 2014).
-#[inline]
+#[inline(always)]
 pub fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
@@ -49,16 +49,20 @@ impl SampleStream {
 
     /// The first `D` numbers (dimensions 0..D) of [`LANES`] streams at once, for lane kernels:
     /// `[d][l]` is number `d` of `SampleStream::new(seed, pixel[l], sample[l])`, bit for bit.
-    #[inline]
+    #[inline(always)]
     pub fn lanes<const D: usize>(seed: u64, pixel: &[u32; LANES], sample: &[u32; LANES]) -> [[f32; LANES]; D] {
         let mut key = [0u64; LANES];
         for l in 0..LANES {
             key[l] = mix64(seed ^ mix64(((pixel[l] as u64) << 32) | sample[l] as u64));
         }
-        std::array::from_fn(|d| {
+        let mut out = [[0.0; LANES]; D];
+        for (d, row) in out.iter_mut().enumerate() {
             let step = (d as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-            key.map(|k| (mix64(k.wrapping_add(step)) >> 40) as f32 * (1.0 / (1u32 << 24) as f32))
-        })
+            for l in 0..LANES {
+                row[l] = (mix64(key[l].wrapping_add(step)) >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
+            }
+        }
+        out
     }
 }
 

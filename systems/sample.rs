@@ -6,6 +6,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::lanes::LANES;
+use crate::light::point::PointLanes;
 use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
@@ -172,12 +173,18 @@ pub fn sample_direct_lighting(
             let mut cols = EntryColumns { radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal };
             let first_entry = c * chunk;
             if lanes {
-                crate::lanes::widest(|| {
-                    (0..cols.len())
-                        .step_by(LANES)
-                        .map(|e| sampling.lane_block(first_entry, e, &mut cols))
-                        .sum::<usize>()
-                })
+                crate::lanes::widest(
+                    #[inline(always)]
+                    || {
+                        // A plain loop: iterator adapters may not inline into the wide code.
+                        let (mut traced, mut e) = (0, 0);
+                        while e < cols.len() {
+                            traced += sampling.lane_block(first_entry, e, &mut cols);
+                            e += LANES;
+                        }
+                        traced
+                    },
+                )
             } else {
                 (0..cols.len()).map(|e| sampling.entry(first_entry, e, &mut cols) as usize).sum()
             }
@@ -284,11 +291,7 @@ impl Sampling<'_> {
         };
         let pdf = ls.pdf * pmf;
         (cols.radiance[e], cols.wi[e], cols.pdf[e], cols.delta[e]) = (ls.radiance, ls.wi, pdf, flags.is_delta());
-        if !(self.settings.shadows
-            && pdf > 0.0
-            && ls.radiance.0.iter().any(|&v| v > 0.0)
-            && self.table.casts_shadows(light))
-        {
+        if !self.wants_shadow_ray(pdf, &ls.radiance, light) {
             return false;
         }
         cols.ray_kind[e] = if flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION) {
@@ -302,11 +305,44 @@ impl Sampling<'_> {
         true
     }
 
+    /// Whether a sample of `light` with this pdf and radiance gets a shadow ray.
+    #[inline(always)]
+    fn wants_shadow_ray(&self, pdf: f32, radiance: &SampledSpectrum, light: LightId) -> bool {
+        self.settings.shadows && pdf > 0.0 && radiance.0.iter().any(|&v| v > 0.0) && self.table.casts_shadows(light)
+    }
+
+    /// [`Self::write`] of lane `l` of `lit`, point light `light` chosen with `pmf`, without
+    /// building a `LiSample` (whose pdf would be 1).
+    #[inline(always)]
+    fn write_point(
+        &self,
+        cols: &mut EntryColumns,
+        e: usize,
+        (light, pmf): (LightId, f32),
+        lit: &PointLanes,
+        l: usize,
+    ) -> bool {
+        if !lit.valid[l] {
+            return self.write(cols, e, light, None);
+        }
+        let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
+        let radiance = SampledSpectrum([lit.radiance[0][l], lit.radiance[1][l], lit.radiance[2][l], 0.0]);
+        (cols.light[e], cols.occluded[e]) = (light, false);
+        (cols.radiance[e], cols.wi[e], cols.pdf[e]) = (radiance, v(&lit.wi), pmf);
+        cols.delta[e] = LightKind::Point.flags().is_delta();
+        let ray = self.wants_shadow_ray(pmf, &radiance, light);
+        cols.ray_kind[e] = if ray { ShadowTarget::Point } else { ShadowTarget::None };
+        if ray {
+            (cols.target[e], cols.target_normal[e]) = (v(&lit.target), Vec3::ZERO);
+        }
+        ray
+    }
+
     /// Samples entries `e..e + LANES` (or to the chunk's end) of the chunk starting at global
     /// entry `first` under `LightSelection::OneSampled`, RGB and f32: random numbers and point
     /// lights in lanes, lights of other kinds one at a time. Same entries as [`Self::entry`],
     /// bit for bit. Returns the number of shadow rays.
-    #[inline]
+    #[inline(always)]
     fn lane_block(&self, first: usize, e: usize, cols: &mut EntryColumns) -> usize {
         let n = LANES.min(cols.len() - e);
         let (mut point, mut pixel, mut stream) = ([0usize; LANES], [0u32; LANES], [0u32; LANES]);
@@ -318,35 +354,31 @@ impl Sampling<'_> {
             (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
         }
         let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
-        let mut chosen = [None; LANES];
+        // The choices as plain lane arrays: arrays of `Option<(LightId, f32)>` cost store-to-load
+        // forwarding stalls on every read.
+        let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
         let (mut rows, mut any_point) = ([0u32; LANES], false);
         for l in 0..n {
-            chosen[l] = self.sampler.sample(&self.context(point[l]), u[l]);
-            if let Some((LightId { kind: LightKind::Point, row }, _)) = chosen[l] {
-                (rows[l], any_point) = (row, true);
+            if let Some((id, q)) = self.sampler.sample(&self.context(point[l]), u[l]) {
+                (light[l], pmf[l], chosen[l]) = (id, q, true);
+                if id.kind == LightKind::Point {
+                    (rows[l], any_point) = (id.row, true);
+                }
             }
         }
         // Blocks where no entry chose a point light (scenes lit by other kinds) skip the kernel.
         let lit = any_point.then(|| self.table.points.sample_li_rgb_lanes(&rows, &p));
         let mut traced = 0;
         for l in 0..n {
-            let sampled = match (chosen[l], &lit) {
-                (Some((LightId { kind: LightKind::Point, .. }, pmf)), Some(lit)) => lit.valid[l].then(|| {
-                    let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
-                    let radiance = v(&lit.radiance);
-                    let ls = LiSample {
-                        radiance: SampledSpectrum([radiance.x, radiance.y, radiance.z, 0.0]),
-                        wi: v(&lit.wi),
-                        pdf: 1.0,
-                        p_light: v(&lit.target),
-                        n_light: Vec3::ZERO,
-                    };
-                    (ls, pmf, LightKind::Point.flags())
-                }),
-                (Some(c), _) => self.evaluate(point[l], stream[l], 1, &self.context(point[l]), c),
-                (None, _) => None,
-            };
-            traced += self.write(cols, e + l, chosen[l].map_or(NO_LIGHT, |(id, _)| id), sampled) as usize;
+            let chosen = chosen[l].then_some((light[l], pmf[l]));
+            traced += match (&lit, chosen) {
+                (Some(lit), Some(c)) if c.0.kind == LightKind::Point => self.write_point(cols, e + l, c, lit, l),
+                _ => {
+                    let sampled =
+                        chosen.and_then(|c| self.evaluate(point[l], stream[l], 1, &self.context(point[l]), c));
+                    self.write(cols, e + l, light[l], sampled)
+                }
+            } as usize;
         }
         traced
     }

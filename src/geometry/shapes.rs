@@ -17,7 +17,7 @@ use glam::{DAffine3, DMat3, DVec3, Vec2, Vec3};
 use std::f64::consts::{PI, TAU};
 
 use super::GeometryError;
-use super::ray::{Ray, SurfacePoint, f64_point_error};
+use super::ray::{Ray, SurfacePoint, f64_coordinate_error, f64_point_error};
 use super::transform::Transform;
 
 /// A sphere centred on the entity's origin. Poles on local +-Y.
@@ -55,15 +55,15 @@ pub enum Shape {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlacedShape {
     pub shape: Shape,
-    to_world: DAffine3,
-    to_object: DAffine3,
+    pub(super) to_world: DAffine3,
+    pub(super) to_object: DAffine3,
     /// |to_world's linear part| and |its translation|, for point error bounds.
-    abs_linear: DMat3,
-    abs_translation: DVec3,
+    pub(super) abs_linear: DMat3,
+    pub(super) abs_translation: DVec3,
     /// The inverse transpose of to_world's linear part, which maps normals.
     normal_matrix: DMat3,
     /// Flat shapes: their world normal (the front, +Z), the same for every point.
-    flat_normal: Option<Vec3>,
+    pub(super) flat_normal: Option<Vec3>,
 }
 
 /// A ray-shape hit in world space.
@@ -176,16 +176,35 @@ impl Shape {
         (-h, h)
     }
 
-    /// Whether the object-space point `p` (z = 0) lies on a flat shape.
-    fn flat_contains(&self, p: DVec3) -> bool {
+    /// Whether the object-space point (x, y, 0) lies on a flat shape.
+    #[inline(always)]
+    pub(crate) fn flat_contains(&self, x: f64, y: f64) -> bool {
         match *self {
             Shape::Disk(disk) => {
-                let rho2 = p.x * p.x + p.y * p.y;
+                let rho2 = x * x + y * y;
                 let (r, ri) = (disk.radius as f64, disk.inner_radius as f64);
                 rho2 <= r * r && rho2 >= ri * ri
             }
-            Shape::Rectangle(rect) => p.x.abs() <= rect.half_size.x as f64 && p.y.abs() <= rect.half_size.y as f64,
+            Shape::Rectangle(rect) => x.abs() <= rect.half_size.x as f64 && y.abs() <= rect.half_size.y as f64,
             Shape::Sphere(_) => false,
+        }
+    }
+
+    /// The uv of object-space point (x, y, 0) on a flat shape (see [`ShapeHit::uv`]).
+    #[inline(always)]
+    pub(crate) fn flat_uv(&self, x: f64, y: f64) -> Vec2 {
+        match *self {
+            Shape::Disk(d) => {
+                let (r, ri) = (d.radius as f64, d.inner_radius as f64);
+                let rho = (x * x + y * y).sqrt();
+                let phi = y.atan2(x).rem_euclid(TAU);
+                Vec2::new((phi / TAU) as f32, ((r - rho) / (r - ri)) as f32)
+            }
+            Shape::Rectangle(rect) => {
+                let h = rect.half_size.as_dvec2();
+                Vec2::new((0.5 * (x / h.x + 1.0)) as f32, (0.5 * (y / h.y + 1.0)) as f32)
+            }
+            Shape::Sphere(_) => Vec2::ZERO,
         }
     }
 
@@ -199,18 +218,7 @@ impl Shape {
                 let theta = n.y.clamp(-1.0, 1.0).acos();
                 (n * r, n, Vec2::new((phi / TAU) as f32, (theta / PI) as f32))
             }
-            Shape::Disk(d) => {
-                let (r, ri) = (d.radius as f64, d.inner_radius as f64);
-                let rho = (p.x * p.x + p.y * p.y).sqrt();
-                let phi = p.y.atan2(p.x).rem_euclid(TAU);
-                let uv = Vec2::new((phi / TAU) as f32, ((r - rho) / (r - ri)) as f32);
-                (DVec3::new(p.x, p.y, 0.0), DVec3::Z, uv)
-            }
-            Shape::Rectangle(rect) => {
-                let h = rect.half_size.as_dvec2();
-                let uv = Vec2::new((0.5 * (p.x / h.x + 1.0)) as f32, (0.5 * (p.y / h.y + 1.0)) as f32);
-                (DVec3::new(p.x, p.y, 0.0), DVec3::Z, uv)
-            }
+            Shape::Disk(_) | Shape::Rectangle(_) => (DVec3::new(p.x, p.y, 0.0), DVec3::Z, self.flat_uv(p.x, p.y)),
         }
     }
 
@@ -343,27 +351,30 @@ impl PlacedShape {
             let t = intersect_sphere_local(s.radius as f64, o, d, t_max)?;
             return Some((t, o + t as f64 * d));
         }
-        // Flat shapes map the ray to object space one row at a time: the plane test needs only z,
-        // and most shadow rays fail it (they leave the plane). Each row is the f64 sum that
+        let (hit, t, x, y) = self.flat_hit(o.to_array(), d.to_array(), t_max);
+        hit.then_some((t, DVec3::new(x, y, 0.0)))
+    }
+
+    /// [`Self::local_hit`] of a flat shape, without branches so that lane loops vectorise:
+    /// whether the ray o + t d meets it in (0, t_max], at t (rounded to f32) and object-space
+    /// (x, y, 0).
+    #[inline(always)]
+    pub(super) fn flat_hit(&self, o: [f64; 3], d: [f64; 3], t_max: f32) -> (bool, f32, f64, f64) {
+        // The ray in object space, one row at a time: each row is the f64 sum that
         // `transform_point3` forms.
         let m = &self.to_object.matrix3;
         let row = |i: usize| {
-            let (ox, oy, oz) = (m.x_axis[i] * o.x, m.y_axis[i] * o.y, m.z_axis[i] * o.z);
-            let (dx, dy, dz) = (m.x_axis[i] * d.x, m.y_axis[i] * d.y, m.z_axis[i] * d.z);
+            let (ox, oy, oz) = (m.x_axis[i] * o[0], m.y_axis[i] * o[1], m.z_axis[i] * o[2]);
+            let (dx, dy, dz) = (m.x_axis[i] * d[0], m.y_axis[i] * d[1], m.z_axis[i] * d[2]);
             (ox + oy + oz + self.to_object.translation[i], dx + dy + dz)
         };
-        let (oz, dz) = row(2);
-        if dz == 0.0 {
-            return None; // Parallel to the plane.
-        }
+        let ((ox, dx), (oy, dy), (oz, dz)) = (row(0), row(1), row(2));
+        // dz = 0 (parallel to the plane) makes t infinite or NaN, which the tests reject.
         let t = -oz / dz;
         let t32 = t as f32;
-        if !(t > 0.0 && t32 > 0.0 && t32 <= t_max) {
-            return None;
-        }
-        let ((ox, dx), (oy, dy)) = (row(0), row(1));
-        let p = DVec3::new(ox + t * dx, oy + t * dy, 0.0);
-        self.shape.flat_contains(p).then_some((t32, p))
+        let (x, y) = (ox + t * dx, oy + t * dy);
+        let hit = (dz != 0.0) & (t > 0.0) & (t32 > 0.0) & (t32 <= t_max) & self.shape.flat_contains(x, y);
+        (hit, t32, x, y)
     }
 
     /// A point uniformly distributed over the surface (density 1 / area per m^2), with its error
@@ -374,21 +385,24 @@ impl PlacedShape {
     }
 
     fn surface_point(&self, p_obj: DVec3, n_obj: DVec3) -> SurfacePoint {
-        let (m, abs_m) = (&self.to_world.matrix3, &self.abs_linear);
-        let (p64, terms, n) = match self.flat_normal {
-            // Flat shapes' points have z = 0: the z column drops out.
-            Some(n) => (
-                m.x_axis * p_obj.x + m.y_axis * p_obj.y + self.to_world.translation,
-                abs_m.x_axis * p_obj.x.abs() + abs_m.y_axis * p_obj.y.abs() + self.abs_translation,
-                n,
-            ),
-            None => (
-                self.to_world.transform_point3(p_obj),
-                *abs_m * p_obj.abs() + self.abs_translation,
-                (self.normal_matrix * n_obj).normalize().as_vec3(),
-            ),
-        };
+        if let Some(n) = self.flat_normal {
+            let [x, y, z] = [0, 1, 2].map(|a| self.flat_world_coordinate(a, p_obj.x, p_obj.y));
+            return SurfacePoint { p: Vec3::new(x.0, y.0, z.0), p_error: Vec3::new(x.1, y.1, z.1), n };
+        }
+        let p64 = self.to_world.transform_point3(p_obj);
+        let terms = self.abs_linear * p_obj.abs() + self.abs_translation;
+        let n = (self.normal_matrix * n_obj).normalize().as_vec3();
         SurfacePoint { p: p64.as_vec3(), p_error: f64_point_error(p64, terms), n }
+    }
+
+    /// World coordinate `a` of object-space point (x, y, 0) of a flat shape (the z column drops
+    /// out) and its error bound: the f64 sums rounded once.
+    #[inline(always)]
+    pub(super) fn flat_world_coordinate(&self, a: usize, x: f64, y: f64) -> (f32, f32) {
+        let (m, abs_m) = (&self.to_world.matrix3, &self.abs_linear);
+        let p = m.x_axis[a] * x + m.y_axis[a] * y + self.to_world.translation[a];
+        let terms = abs_m.x_axis[a] * x.abs() + abs_m.y_axis[a] * y.abs() + self.abs_translation[a];
+        (p as f32, f64_coordinate_error(p, terms))
     }
 }
 

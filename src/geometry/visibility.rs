@@ -33,7 +33,7 @@ const MAX_INV_DIR: f32 = 1.267_650_6e30;
 
 /// Up to this many primitives, queries test each one rather than walk the tree: the same answers
 /// (see the module docs), without the traversal's setup.
-const FEW_PRIMITIVES: usize = 4;
+pub(super) const FEW_PRIMITIVES: usize = 4;
 
 /// A closest hit, in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -225,7 +225,7 @@ pub struct PointLanes {
 impl PointColumns {
     /// [`Self::sample_li`] in RGB mode for `LANES` points at once, bit for bit: lane `l` samples
     /// light `rows[l]` from `p[l]`. Every row must be a valid row.
-    #[inline]
+    #[inline(always)]
     pub fn sample_li_rgb_lanes(&self, rows: &[u32; LANES], p: &[[f32; LANES]; 3]) -> PointLanes {
         let (mut target, mut rgb) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
         for l in 0..LANES {

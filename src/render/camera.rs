@@ -70,13 +70,13 @@ impl PinholeCamera {
         Ray::new(self.origin, dir.normalize())
     }
 
-    /// [`Self::ray`] for `LANES` samples at once, bit for bit: lane `l` is pixel `pixel[l]`
-    /// (row-major) at offset (`u[l]`, `v[l]`).
-    #[inline]
-    pub fn rays_lanes(&self, pixel: &[u32; LANES], u: &[f32; LANES], v: &[f32; LANES]) -> [Ray; LANES] {
+    /// [`Self::ray`] for `LANES` samples at once, bit for bit: lane `l` is pixel (`x[l]`, `y[l]`)
+    /// at offset (`u[l]`, `v[l]`).
+    #[inline(always)]
+    pub fn rays_lanes(&self, [x, y]: [&[u32; LANES]; 2], u: &[f32; LANES], v: &[f32; LANES]) -> [Ray; LANES] {
         let mut d = [[0.0f32; LANES]; 3];
         for l in 0..LANES {
-            let (fx, fy) = ((pixel[l] % self.width) as f32 + u[l], (pixel[l] / self.width) as f32 + v[l]);
+            let (fx, fy) = (x[l] as f32 + u[l], y[l] as f32 + v[l]);
             // Vec3 arithmetic and `normalize` (times 1 / sqrt(dot)), in the same order.
             let c = [self.corner.x, self.corner.y, self.corner.z];
             let (px, py) = ([self.per_x.x, self.per_x.y, self.per_x.z], [self.per_y.x, self.per_y.y, self.per_y.z]);
@@ -114,15 +114,12 @@ pub enum CameraModel {
 }
 
 impl CameraModel {
-    /// [`Self::ray`] for `LANES` samples of row-major pixels `pixel` at offsets (`u`, `v`).
-    #[inline]
-    pub fn rays_lanes(&self, pixel: &[u32; LANES], u: &[f32; LANES], v: &[f32; LANES]) -> [Ray; LANES] {
+    /// [`Self::ray`] for `LANES` samples of pixels (`x`, `y`) at offsets (`u`, `v`).
+    #[inline(always)]
+    pub fn rays_lanes(&self, xy: [&[u32; LANES]; 2], u: &[f32; LANES], v: &[f32; LANES]) -> [Ray; LANES] {
         match self {
-            Self::Pinhole(c) => c.rays_lanes(pixel, u, v),
-            Self::LatLong { width, .. } => {
-                let w = (*width).max(1);
-                std::array::from_fn(|l| self.ray(pixel[l] % w, pixel[l] / w, Vec2::new(u[l], v[l])))
-            }
+            Self::Pinhole(c) => c.rays_lanes(xy, u, v),
+            Self::LatLong { .. } => std::array::from_fn(|l| self.ray(xy[0][l], xy[1][l], Vec2::new(u[l], v[l]))),
         }
     }
 
@@ -152,12 +149,13 @@ mod tests {
         let mut rng = SplitMix64::new(5);
         for camera in [pinhole, lat_long] {
             for _ in 0..20 {
-                let pixel: [u32; LANES] = std::array::from_fn(|_| (rng.next_u64() % (w * h) as u64) as u32);
+                let x: [u32; LANES] = std::array::from_fn(|_| (rng.next_u64() % w as u64) as u32);
+                let y: [u32; LANES] = std::array::from_fn(|_| (rng.next_u64() % h as u64) as u32);
                 let (u, v): ([f32; LANES], [f32; LANES]) =
                     (std::array::from_fn(|_| rng.f32()), std::array::from_fn(|_| rng.f32()));
-                let rays = camera.rays_lanes(&pixel, &u, &v);
+                let rays = camera.rays_lanes([&x, &y], &u, &v);
                 for l in 0..LANES {
-                    let one = camera.ray(pixel[l] % w, pixel[l] / w, Vec2::new(u[l], v[l]));
+                    let one = camera.ray(x[l], y[l], Vec2::new(u[l], v[l]));
                     assert_eq!(rays[l].origin, one.origin);
                     assert_eq!(
                         rays[l].dir.to_array().map(f32::to_bits),

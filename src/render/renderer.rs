@@ -239,23 +239,38 @@ fn render_on_pool(
         let bvh = world.resource::<SceneBvh>();
         // Samples are written in place: a returned `CameraSample` would be copied twice.
         samples.resize(last - first, UNUSED_SAMPLE);
-        // Random numbers and rays in lanes (dimensions 0 and 1 of each sample's stream), hits one
-        // at a time.
+        // Random numbers, rays and (in scenes of a few flat shapes) hits in lanes: dimensions 0 and
+        // 1 of each sample's stream.
         samples.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
-            crate::lanes::widest(|| {
-                for (b, block) in chunk.chunks_mut(LANES).enumerate() {
-                    let (mut pixel, mut sample) = ([0u32; LANES], [0u32; LANES]);
-                    for l in 0..block.len() {
-                        (pixel[l], sample[l]) = pixel_and_sample(first + c * RAY_CHUNK + b * LANES + l);
+            crate::lanes::widest(
+                #[inline(always)]
+                || {
+                    // Counters walk the pixels and samples: one division per chunk, not per sample.
+                    let (mut next_pixel, mut next_sample) = pixel_and_sample(first + c * RAY_CHUNK);
+                    let (mut next_x, mut next_y) = (next_pixel % opts.width, next_pixel / opts.width);
+                    for block in chunk.chunks_mut(LANES) {
+                        let (mut pixel, mut sample) = ([0u32; LANES], [0u32; LANES]);
+                        let (mut x, mut y) = ([0u32; LANES], [0u32; LANES]);
+                        for l in 0..block.len() {
+                            (pixel[l], sample[l], x[l], y[l]) = (next_pixel, next_sample, next_x, next_y);
+                            next_sample += 1;
+                            if next_sample == opts.spp {
+                                (next_pixel, next_sample, next_x) = (next_pixel + 1, 0, next_x + 1);
+                                if next_x == opts.width {
+                                    (next_x, next_y) = (0, next_y + 1);
+                                }
+                            }
+                        }
+                        let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
+                        let rays = camera.rays_lanes([&x, &y], &u, &v);
+                        let hits = bvh.closest_hits_lanes(&rays);
+                        for (l, s) in block.iter_mut().enumerate() {
+                            (s.pixel, s.sample, s.dir, s.point) = (pixel[l], sample[l], rays[l].dir, NOT_SHADED);
+                            s.hit = hits[l];
+                        }
                     }
-                    let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
-                    let rays = camera.rays_lanes(&pixel, &u, &v);
-                    for (l, s) in block.iter_mut().enumerate() {
-                        (s.pixel, s.sample, s.dir, s.point) = (pixel[l], sample[l], rays[l].dir, NOT_SHADED);
-                        s.hit = bvh.closest_hit(&rays[l]);
-                    }
-                }
-            })
+                },
+            )
         });
         // Spectral mode: the wavelengths of each sample (dimension 2 of its stream), kept apart
         // so that RGB renders do not carry them.

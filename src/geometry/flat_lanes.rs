@@ -1,0 +1,216 @@
+//! Ray queries of [`LANES`] rays at once for scenes of a few flat shapes (a ground rectangle, a
+//! disk light): the answers of [`SceneBvh::closest_hit`] and [`SceneBvh::occluded`] bit for bit,
+//! from the same f64 operations in the same order ([`PlacedShape::flat_hit`],
+//! [`PlacedShape::flat_world_coordinate`]) run as lane loops, which compile to vector code
+//! inside `lanes::widest`. Other scenes answer one ray at a time.
+
+use glam::Vec3;
+
+use super::bvh::{NO_SHAPE, SceneBvh};
+use super::ray::Ray;
+use super::shapes::Shape;
+use super::visibility::{FEW_PRIMITIVES, Hit};
+use crate::lanes::LANES;
+
+/// Rays as f64 lane columns (the precision of the flat-shape test).
+struct RayLanes {
+    o: [[f64; LANES]; 3],
+    d: [[f64; LANES]; 3],
+    t_max: [f32; LANES],
+    /// [`Ray::is_valid`] per lane.
+    valid: [bool; LANES],
+}
+
+impl RayLanes {
+    #[inline(always)]
+    fn new(rays: &[Ray; LANES]) -> Self {
+        let mut r = Self { o: [[0.0; LANES]; 3], d: [[0.0; LANES]; 3], t_max: [0.0; LANES], valid: [false; LANES] };
+        for (l, ray) in rays.iter().enumerate() {
+            for a in 0..3 {
+                (r.o[a][l], r.d[a][l]) = (ray.origin[a] as f64, ray.dir[a] as f64);
+            }
+            (r.t_max[l], r.valid[l]) = (ray.t_max, ray.is_valid());
+        }
+        r
+    }
+
+    #[inline(always)]
+    fn origin(&self, l: usize) -> [f64; 3] {
+        [self.o[0][l], self.o[1][l], self.o[2][l]]
+    }
+
+    #[inline(always)]
+    fn dir(&self, l: usize) -> [f64; 3] {
+        [self.d[0][l], self.d[1][l], self.d[2][l]]
+    }
+}
+
+/// The leaf slot of no primitive.
+const NO_SLOT: usize = usize::MAX;
+
+impl SceneBvh {
+    /// Whether the lane queries apply: one to `FEW_PRIMITIVES` primitives, all flat shapes.
+    #[inline(always)]
+    fn few_flat_shapes(&self) -> bool {
+        let flat = |s: u32| s != NO_SHAPE && !matches!(self.shapes[s as usize].shape, Shape::Sphere(_));
+        !self.leaf.is_empty() && self.leaf.len() <= FEW_PRIMITIVES && self.leaf.iter().all(|p| flat(p.shape))
+    }
+
+    /// [`Self::closest_hit`] of `LANES` rays, bit for bit.
+    #[inline(always)]
+    pub fn closest_hits_lanes(&self, rays: &[Ray; LANES]) -> [Option<Hit>; LANES] {
+        let mut out = [None; LANES];
+        if !self.few_flat_shapes() {
+            for (o, ray) in out.iter_mut().zip(rays) {
+                *o = self.closest_hit(ray);
+            }
+            return out;
+        }
+        let r = RayLanes::new(rays);
+        // As `closest_hit_each`: primitives in input order; a later one wins only when nearer.
+        let (mut best_t, mut best_slot) = (r.t_max, [NO_SLOT; LANES]);
+        let (mut best_x, mut best_y) = ([0.0f64; LANES], [0.0f64; LANES]);
+        for prim in 0..self.leaf.len() as u32 {
+            let slot = self.slot_of(prim);
+            let shape = &self.shapes[self.leaf[slot].shape as usize];
+            for l in 0..LANES {
+                let (hit, t, x, y) = shape.flat_hit(r.origin(l), r.dir(l), best_t[l]);
+                let first = best_slot[l] == NO_SLOT;
+                if r.valid[l] & hit & (first | (t < best_t[l])) {
+                    (best_t[l], best_slot[l], best_x[l], best_y[l]) = (t, slot, x, y);
+                }
+            }
+        }
+        // Hit records, one primitive's lanes at a time.
+        for slot in 0..self.leaf.len() {
+            if !best_slot.contains(&slot) {
+                continue;
+            }
+            let shape = &self.shapes[self.leaf[slot].shape as usize];
+            let (mut p, mut err) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
+            for l in 0..LANES {
+                for a in 0..3 {
+                    (p[a][l], err[a][l]) = shape.flat_world_coordinate(a, best_x[l], best_y[l]);
+                }
+            }
+            let (instance, id, material) = self.id_of(self.prim_of_slot(slot));
+            let n = shape.flat_normal.unwrap_or(Vec3::Z);
+            for l in (0..LANES).filter(|&l| best_slot[l] == slot) {
+                let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
+                let uv = shape.shape.flat_uv(best_x[l], best_y[l]);
+                let (t, p, p_error) = (best_t[l], v(&p), v(&err));
+                out[l] = Some(Hit { t, p, p_error, ng: n, ns: n, uv, id, material, instance });
+            }
+        }
+        out
+    }
+
+    /// [`Self::occluded`] of the first `n` of `LANES` rays, bit for bit (later lanes: false).
+    #[inline(always)]
+    pub fn occluded_lanes(&self, rays: &[Ray; LANES], n: usize) -> [bool; LANES] {
+        let mut out = [false; LANES];
+        if !self.few_flat_shapes() {
+            for (o, ray) in out.iter_mut().zip(&rays[..n]) {
+                *o = self.occluded(ray);
+            }
+            return out;
+        }
+        let r = RayLanes::new(rays);
+        for prim in &self.leaf {
+            let shape = &self.shapes[prim.shape as usize];
+            for l in 0..LANES {
+                out[l] |= shape.flat_hit(r.origin(l), r.dir(l), r.t_max[l]).0;
+            }
+        }
+        for l in 0..LANES {
+            out[l] &= r.valid[l] & (l < n);
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Disk, GeometryInstance, GeometryRef, Rectangle, Transform};
+    use crate::rng::SplitMix64;
+    use glam::{Quat, Vec2};
+
+    fn scene(shapes: &[(Shape, Transform)]) -> SceneBvh {
+        let instances: Vec<_> = shapes
+            .iter()
+            .enumerate()
+            .map(|(i, &(shape, transform))| GeometryInstance {
+                geometry: GeometryRef::Shape(shape),
+                transform,
+                entity_index: i as u32,
+                material: 10 + i as u32,
+            })
+            .collect();
+        SceneBvh::build(&instances)
+    }
+
+    /// Rays from around the shapes toward points near them (some short), plus hard cases: a ray
+    /// in the plane, zero, NaN and infinite directions, a zero t_max, a t_max just short of the
+    /// plane.
+    fn rays(rng: &mut SplitMix64) -> Vec<Ray> {
+        let mut v = |s: Vec3| Vec3::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5) * s;
+        let mut rays: Vec<Ray> = (0..500)
+            .map(|i| {
+                let (from, to) = (v(Vec3::splat(8.0)), v(Vec3::new(5.0, 4.0, 0.5)));
+                let t_max = if i % 5 == 0 { 2.0 } else { f32::INFINITY };
+                Ray { t_max, ..Ray::new(from, (to - from).normalize_or(Vec3::X)) }
+            })
+            .collect();
+        let down = Ray::new(Vec3::new(0.3, 0.2, 2.0), Vec3::NEG_Z);
+        rays.extend([
+            Ray::new(Vec3::new(-5.0, 0.1, 0.0), Vec3::X),
+            Ray::new(Vec3::ONE, Vec3::ZERO),
+            Ray::new(Vec3::ONE, Vec3::new(f32::NAN, 0.0, -1.0)),
+            Ray::new(Vec3::ONE, Vec3::new(0.0, f32::INFINITY, -1.0)),
+            Ray { t_max: 0.0, ..down },
+            Ray { t_max: 2.0f32.next_down(), ..down },
+            Ray { t_max: 2.0, ..down },
+            down,
+        ]);
+        rays
+    }
+
+    #[test]
+    fn flat_lanes_match_one_ray_at_a_time() {
+        let tilted = Transform {
+            rotation: Quat::from_rotation_x(0.7) * Quat::from_rotation_y(-0.3),
+            ..Transform::from_translation(Vec3::new(0.5, 0.0, 0.25))
+        };
+        let rect = Shape::Rectangle(Rectangle { half_size: Vec2::new(2.0, 1.0) });
+        let disk = Shape::Disk(Disk { radius: 1.5, inner_radius: 0.5 });
+        // The same rectangle twice makes exact ties (the first primitive must win).
+        let scenes = [
+            vec![(rect, Transform::IDENTITY)],
+            vec![(rect, Transform::IDENTITY), (disk, tilted), (rect, Transform::IDENTITY)],
+            vec![(disk, Transform::IDENTITY), (rect, tilted)],
+        ];
+        let mut rng = SplitMix64::new(7);
+        for shapes in &scenes {
+            let bvh = scene(shapes);
+            assert!(bvh.few_flat_shapes());
+            let rays = rays(&mut rng);
+            let (mut hits, mut blocked) = (0, 0);
+            for block in rays.chunks(LANES) {
+                let mut lane_rays = [Ray::new(Vec3::ZERO, Vec3::ZERO); LANES];
+                lane_rays[..block.len()].copy_from_slice(block);
+                let got = crate::lanes::widest(|| bvh.closest_hits_lanes(&lane_rays));
+                let occluded = crate::lanes::widest(|| bvh.occluded_lanes(&lane_rays, block.len()));
+                for (l, ray) in block.iter().enumerate() {
+                    assert_eq!(got[l], bvh.closest_hit(ray), "closest hit of {ray:?}");
+                    assert_eq!(occluded[l], bvh.occluded(ray), "any hit of {ray:?}");
+                    (hits, blocked) = (hits + got[l].is_some() as usize, blocked + occluded[l] as usize);
+                }
+                assert!(occluded[block.len()..].iter().all(|&o| !o));
+            }
+            // Enough of both answers for the comparison to mean something.
+            assert!(hits > 50 && hits < rays.len() - 50, "{hits} hits");
+            assert!(blocked >= hits);
+        }
+    }
+}
