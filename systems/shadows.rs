@@ -2,7 +2,10 @@
 
 use bevy_ecs::prelude::*;
 
-use crate::geometry::{SceneBvh, SurfacePoint};
+use glam::Vec3;
+
+use crate::geometry::{RAY_CHUNK, Ray, RayLanes, SceneBvh, SurfacePoint};
+use crate::lanes::LANES;
 use crate::shading::{RunReport, Settings, ShadingBatch};
 
 use super::{ShadowRays, ShadowTarget, Work};
@@ -43,15 +46,36 @@ pub fn trace_shadow_rays(
     let r = &mut *rays;
     let k = r.entries_per_point.max(1);
     let (kind, target, target_normal) = (&r.kind, &r.target, &r.target_normal);
-    r.occluded.par_iter_mut().enumerate().with_min_len(crate::geometry::RAY_CHUNK).for_each(|(e, occluded)| {
-        let i = e / k;
+    let segment = |e: usize| {
+        // One entry per point is the common case; it spares a 64-bit division per entry.
+        let i = if k == 1 { e } else { e / k };
         let from = SurfacePoint { p: batch.position[i], p_error: batch.position_error[i], n: batch.normal[i] };
-        let segment = match kind[e] {
-            ShadowTarget::None => return,
+        match kind[e] {
+            ShadowTarget::None => NO_RAY,
             ShadowTarget::Infinity => offset.spawn_ray(&from, (target[e] - from.p).normalize()),
             ShadowTarget::Point => offset.spawn_ray_to_point(&from, target[e]),
             ShadowTarget::Surface => offset.spawn_ray_to(&from, &SurfacePoint::from_point(target[e], target_normal[e])),
-        };
-        *occluded = bvh.occluded(&segment);
+        }
+    };
+    // Segments are built one at a time and traced LANES at a time (in lanes where the scene allows).
+    r.occluded.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
+        crate::lanes::widest(
+            #[inline(always)]
+            || {
+                let mut b = 0;
+                while b < chunk.len() {
+                    let n = LANES.min(chunk.len() - b);
+                    let mut rays = RayLanes::default();
+                    for l in 0..n {
+                        rays.set(l, &segment(c * RAY_CHUNK + b + l));
+                    }
+                    chunk[b..b + n].copy_from_slice(&bvh.occluded_lanes(&rays, n)[..n]);
+                    b += LANES;
+                }
+            },
+        )
     });
 }
+
+/// The ray of an entry without one: invalid (zero direction), so never occluded.
+const NO_RAY: Ray = Ray::new(Vec3::ZERO, Vec3::ZERO);

@@ -8,12 +8,14 @@ use glam::Vec3;
 
 use super::bvh::{NO_SHAPE, SceneBvh};
 use super::ray::Ray;
-use super::shapes::Shape;
+use super::shapes::{PlacedShape, Shape};
 use super::visibility::{FEW_PRIMITIVES, Hit};
 use crate::lanes::LANES;
 
-/// Rays as f64 lane columns (the precision of the flat-shape test).
-struct RayLanes {
+/// [`LANES`] rays as lane columns, widened to f64 (the precision of the flat-shape test).
+/// Lanes never set hold invalid rays (zero direction), which hit nothing.
+#[derive(Clone, Copy, Debug)]
+pub struct RayLanes {
     o: [[f64; LANES]; 3],
     d: [[f64; LANES]; 3],
     t_max: [f32; LANES],
@@ -21,17 +23,37 @@ struct RayLanes {
     valid: [bool; LANES],
 }
 
+impl Default for RayLanes {
+    fn default() -> Self {
+        Self { o: [[0.0; LANES]; 3], d: [[0.0; LANES]; 3], t_max: [0.0; LANES], valid: [false; LANES] }
+    }
+}
+
 impl RayLanes {
+    /// The rays as lanes.
     #[inline(always)]
-    fn new(rays: &[Ray; LANES]) -> Self {
-        let mut r = Self { o: [[0.0; LANES]; 3], d: [[0.0; LANES]; 3], t_max: [0.0; LANES], valid: [false; LANES] };
+    pub fn from_rays(rays: &[Ray; LANES]) -> Self {
+        let mut r = Self::default();
         for (l, ray) in rays.iter().enumerate() {
-            for a in 0..3 {
-                (r.o[a][l], r.d[a][l]) = (ray.origin[a] as f64, ray.dir[a] as f64);
-            }
-            (r.t_max[l], r.valid[l]) = (ray.t_max, ray.is_valid());
+            r.set(l, ray);
         }
         r
+    }
+
+    /// Puts `ray` in lane `l`, reading its fields one by one (copying whole `Ray`s between
+    /// arrays stalls on store-to-load forwarding).
+    #[inline(always)]
+    pub fn set(&mut self, l: usize, ray: &Ray) {
+        for a in 0..3 {
+            (self.o[a][l], self.d[a][l]) = (ray.origin[a] as f64, ray.dir[a] as f64);
+        }
+        (self.t_max[l], self.valid[l]) = (ray.t_max, ray.is_valid());
+    }
+
+    /// The ray of lane `l` (exact: the f64 values came from f32).
+    fn ray(&self, l: usize) -> Ray {
+        let v = |c: &[[f64; LANES]; 3]| Vec3::new(c[0][l] as f32, c[1][l] as f32, c[2][l] as f32);
+        Ray { origin: v(&self.o), dir: v(&self.d), t_max: self.t_max[l] }
     }
 
     #[inline(always)]
@@ -42,6 +64,35 @@ impl RayLanes {
     #[inline(always)]
     fn dir(&self, l: usize) -> [f64; 3] {
         [self.d[0][l], self.d[1][l], self.d[2][l]]
+    }
+}
+
+/// [`PlacedShape::flat_hit`] of every lane over (0, t_max[l]]: hit flags, t, object-space x
+/// and y. Each shape kind gets its own loop, so that no `match` stops it vectorising.
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn flat_hits(
+    shape: &PlacedShape,
+    r: &RayLanes,
+    t_max: &[f32; LANES],
+) -> ([bool; LANES], [f32; LANES], [f64; LANES], [f64; LANES]) {
+    #[inline(always)]
+    fn each(
+        shape: &PlacedShape,
+        r: &RayLanes,
+        t_max: &[f32; LANES],
+        contains: impl Fn(f64, f64) -> bool,
+    ) -> ([bool; LANES], [f32; LANES], [f64; LANES], [f64; LANES]) {
+        let mut out = ([false; LANES], [0.0f32; LANES], [0.0f64; LANES], [0.0f64; LANES]);
+        for l in 0..LANES {
+            (out.0[l], out.1[l], out.2[l], out.3[l]) = shape.flat_hit_in(r.origin(l), r.dir(l), t_max[l], &contains);
+        }
+        out
+    }
+    match shape.shape {
+        Shape::Rectangle(rect) => each(shape, r, t_max, |x, y| Shape::Rectangle(rect).flat_contains(x, y)),
+        Shape::Disk(disk) => each(shape, r, t_max, |x, y| Shape::Disk(disk).flat_contains(x, y)),
+        Shape::Sphere(_) => ([false; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]),
     }
 }
 
@@ -58,23 +109,22 @@ impl SceneBvh {
 
     /// [`Self::closest_hit`] of `LANES` rays, bit for bit.
     #[inline(always)]
-    pub fn closest_hits_lanes(&self, rays: &[Ray; LANES]) -> [Option<Hit>; LANES] {
+    pub fn closest_hits_lanes(&self, r: &RayLanes) -> [Option<Hit>; LANES] {
         let mut out = [None; LANES];
         if !self.few_flat_shapes() {
-            for (o, ray) in out.iter_mut().zip(rays) {
-                *o = self.closest_hit(ray);
+            for (l, o) in out.iter_mut().enumerate() {
+                *o = self.closest_hit(&r.ray(l));
             }
             return out;
         }
-        let r = RayLanes::new(rays);
         // As `closest_hit_each`: primitives in input order; a later one wins only when nearer.
         let (mut best_t, mut best_slot) = (r.t_max, [NO_SLOT; LANES]);
         let (mut best_x, mut best_y) = ([0.0f64; LANES], [0.0f64; LANES]);
         for prim in 0..self.leaf.len() as u32 {
             let slot = self.slot_of(prim);
-            let shape = &self.shapes[self.leaf[slot].shape as usize];
+            let hits = flat_hits(&self.shapes[self.leaf[slot].shape as usize], r, &best_t);
             for l in 0..LANES {
-                let (hit, t, x, y) = shape.flat_hit(r.origin(l), r.dir(l), best_t[l]);
+                let (hit, t, x, y) = (hits.0[l], hits.1[l], hits.2[l], hits.3[l]);
                 let first = best_slot[l] == NO_SLOT;
                 if r.valid[l] & hit & (first | (t < best_t[l])) {
                     (best_t[l], best_slot[l], best_x[l], best_y[l]) = (t, slot, x, y);
@@ -107,19 +157,18 @@ impl SceneBvh {
 
     /// [`Self::occluded`] of the first `n` of `LANES` rays, bit for bit (later lanes: false).
     #[inline(always)]
-    pub fn occluded_lanes(&self, rays: &[Ray; LANES], n: usize) -> [bool; LANES] {
+    pub fn occluded_lanes(&self, r: &RayLanes, n: usize) -> [bool; LANES] {
         let mut out = [false; LANES];
         if !self.few_flat_shapes() {
-            for (o, ray) in out.iter_mut().zip(&rays[..n]) {
-                *o = self.occluded(ray);
+            for (l, o) in out.iter_mut().enumerate().take(n) {
+                *o = self.occluded(&r.ray(l));
             }
             return out;
         }
-        let r = RayLanes::new(rays);
         for prim in &self.leaf {
-            let shape = &self.shapes[prim.shape as usize];
+            let hits = flat_hits(&self.shapes[prim.shape as usize], r, &r.t_max);
             for l in 0..LANES {
-                out[l] |= shape.flat_hit(r.origin(l), r.dir(l), r.t_max[l]).0;
+                out[l] |= hits.0[l];
             }
         }
         for l in 0..LANES {
@@ -199,8 +248,9 @@ mod tests {
             for block in rays.chunks(LANES) {
                 let mut lane_rays = [Ray::new(Vec3::ZERO, Vec3::ZERO); LANES];
                 lane_rays[..block.len()].copy_from_slice(block);
-                let got = crate::lanes::widest(|| bvh.closest_hits_lanes(&lane_rays));
-                let occluded = crate::lanes::widest(|| bvh.occluded_lanes(&lane_rays, block.len()));
+                let lanes = RayLanes::from_rays(&lane_rays);
+                let got = crate::lanes::widest(|| bvh.closest_hits_lanes(&lanes));
+                let occluded = crate::lanes::widest(|| bvh.occluded_lanes(&lanes, block.len()));
                 for (l, ray) in block.iter().enumerate() {
                     assert_eq!(got[l], bvh.closest_hit(ray), "closest hit of {ray:?}");
                     assert_eq!(occluded[l], bvh.occluded(ray), "any hit of {ray:?}");

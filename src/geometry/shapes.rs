@@ -360,6 +360,19 @@ impl PlacedShape {
     /// (x, y, 0).
     #[inline(always)]
     pub(super) fn flat_hit(&self, o: [f64; 3], d: [f64; 3], t_max: f32) -> (bool, f32, f64, f64) {
+        self.flat_hit_in(o, d, t_max, |x, y| self.shape.flat_contains(x, y))
+    }
+
+    /// [`Self::flat_hit`] with the shape's `flat_contains` passed in (lane loops pass one
+    /// without a `match`).
+    #[inline(always)]
+    pub(super) fn flat_hit_in(
+        &self,
+        o: [f64; 3],
+        d: [f64; 3],
+        t_max: f32,
+        contains: impl Fn(f64, f64) -> bool,
+    ) -> (bool, f32, f64, f64) {
         // The ray in object space, one row at a time: each row is the f64 sum that
         // `transform_point3` forms.
         let m = &self.to_object.matrix3;
@@ -373,7 +386,7 @@ impl PlacedShape {
         let t = -oz / dz;
         let t32 = t as f32;
         let (x, y) = (ox + t * dx, oy + t * dy);
-        let hit = (dz != 0.0) & (t > 0.0) & (t32 > 0.0) & (t32 <= t_max) & self.shape.flat_contains(x, y);
+        let hit = (dz != 0.0) & (t > 0.0) & (t32 > 0.0) & (t32 <= t_max) & contains(x, y);
         (hit, t32, x, y)
     }
 

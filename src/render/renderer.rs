@@ -10,7 +10,7 @@ use super::bsdf::Bsdf;
 use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::film::Film;
 use super::material::Material;
-use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
+use crate::geometry::{Hit, RAY_CHUNK, RayLanes, SceneBvh};
 use crate::lanes::LANES;
 use crate::light::{ColorQuery, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
@@ -263,7 +263,7 @@ fn render_on_pool(
                         }
                         let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
                         let rays = camera.rays_lanes([&x, &y], &u, &v);
-                        let hits = bvh.closest_hits_lanes(&rays);
+                        let hits = bvh.closest_hits_lanes(&RayLanes::from_rays(&rays));
                         for (l, s) in block.iter_mut().enumerate() {
                             (s.pixel, s.sample, s.dir, s.point) = (pixel[l], sample[l], rays[l].dir, NOT_SHADED);
                             s.hit = hits[l];
