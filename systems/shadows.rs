@@ -46,10 +46,10 @@ pub fn trace_shadow_rays(
     let r = &mut *rays;
     let k = r.entries_per_point.max(1);
     let (kind, target, target_normal) = (&r.kind, &r.target, &r.target_normal);
+    let from = |i: usize| SurfacePoint { p: batch.position[i], p_error: batch.position_error[i], n: batch.normal[i] };
     let segment = |e: usize| {
         // One entry per point is the common case; it spares a 64-bit division per entry.
-        let i = if k == 1 { e } else { e / k };
-        let from = SurfacePoint { p: batch.position[i], p_error: batch.position_error[i], n: batch.normal[i] };
+        let from = from(if k == 1 { e } else { e / k });
         match kind[e] {
             ShadowTarget::None => NO_RAY,
             ShadowTarget::Infinity => offset.spawn_ray(&from, (target[e] - from.p).normalize()),
@@ -57,7 +57,8 @@ pub fn trace_shadow_rays(
             ShadowTarget::Surface => offset.spawn_ray_to(&from, &SurfacePoint::from_point(target[e], target_normal[e])),
         }
     };
-    // Segments are built one at a time and traced LANES at a time (in lanes where the scene allows).
+    // Segments are traced LANES at a time (in lanes where the scene allows). Blocks of point-light
+    // segments, one entry per point, are built in a loop without branches, which vectorises.
     r.occluded.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
         crate::lanes::widest(
             #[inline(always)]
@@ -65,9 +66,16 @@ pub fn trace_shadow_rays(
                 let mut b = 0;
                 while b < chunk.len() {
                     let n = LANES.min(chunk.len() - b);
+                    let first = c * RAY_CHUNK + b;
                     let mut rays = RayLanes::default();
-                    for l in 0..n {
-                        rays.set(l, &segment(c * RAY_CHUNK + b + l));
+                    if k == 1 && n == LANES && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point) {
+                        for l in 0..LANES {
+                            rays.set(l, &offset.spawn_ray_to_point(&from(first + l), target[first + l]));
+                        }
+                    } else {
+                        for l in 0..n {
+                            rays.set(l, &segment(first + l));
+                        }
                     }
                     chunk[b..b + n].copy_from_slice(&bvh.occluded_lanes(&rays, n)[..n]);
                     b += LANES;

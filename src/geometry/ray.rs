@@ -127,6 +127,7 @@ pub enum ShadowOffset {
 
 impl ShadowOffset {
     /// `p` moved off its surface (normal `n`) to the side `w` points to.
+    #[inline(always)]
     pub fn offset(self, p: &SurfacePoint, w: Vec3) -> Vec3 {
         match self {
             Self::ErrorBound => offset_ray_origin(p.p, p.p_error, p.n, w),
@@ -140,6 +141,7 @@ impl ShadowOffset {
     }
 
     /// As [`SurfacePoint::spawn_ray_to_point`] with this offset.
+    #[inline(always)]
     pub fn spawn_ray_to_point(self, from: &SurfacePoint, p: Vec3) -> Ray {
         let o = self.offset(from, p - from.p);
         Ray { origin: o, dir: p - o, t_max: 1.0 - SHADOW_EPSILON }
@@ -157,20 +159,20 @@ impl ShadowOffset {
 /// `dot(|n|, p_error)`, each moved component then rounded one float further. If the exact surface
 /// point is within `p ± p_error` and the surface is planar there, the result lies strictly on the
 /// `w` side of the surface. `n` should be unit length; `w` only chooses the side.
+#[inline(always)]
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     let d = n.abs().dot(p_error);
     let offset = if w.dot(n) < 0.0 { -d * n } else { d * n };
     let po = p + offset;
-    if !po.is_finite() {
-        return po;
-    }
-    Vec3::new(step_toward(po.x, offset.x), step_toward(po.y, offset.y), step_toward(po.z, offset.z))
+    let stepped = Vec3::new(step_toward(po.x, offset.x), step_toward(po.y, offset.y), step_toward(po.z, offset.z));
+    // A selection rather than an early return, so that lane loops over this vectorise.
+    if po.is_finite() { stepped } else { po }
 }
 
 /// Finite `v` moved one float in the direction of `towards` (`next_up` for positive `towards`,
 /// `next_down` for negative), unchanged for zero `towards`. Integer steps on the bit pattern
 /// instead of std's checks for NaN and infinities, which the caller has ruled out.
-#[inline]
+#[inline(always)]
 fn step_toward(v: f32, towards: f32) -> f32 {
     // A zero takes the side it moves to, so that one step up in magnitude is the right tiny value.
     let from = if v == 0.0 { 0.0f32.copysign(towards) } else { v };
