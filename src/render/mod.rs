@@ -5,3 +5,4 @@ pub mod film;
 pub mod film_io;
 pub mod material;
 pub mod renderer;
+mod shade_lanes;

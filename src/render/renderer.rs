@@ -39,7 +39,7 @@ pub enum Strategy {
 
 impl Strategy {
     /// Weight of a light sample of a non-delta light (pdfs of both strategies for its direction).
-    fn light_weight(self, light_pdf: f32, bsdf_pdf: f32) -> f32 {
+    pub(super) fn light_weight(self, light_pdf: f32, bsdf_pdf: f32) -> f32 {
         match self {
             Self::Mis => power_heuristic(light_pdf, bsdf_pdf),
             Self::LightOnly => 1.0,
@@ -107,18 +107,18 @@ static DEFAULT_MATERIAL: std::sync::LazyLock<Material> = std::sync::LazyLock::ne
 
 /// Everything about a camera sample that the shading pass needs.
 #[derive(Clone, Copy)]
-struct CameraSample {
+pub(super) struct CameraSample {
     pixel: u32,
     sample: u32,
     /// Unit direction of the camera ray.
-    dir: Vec3,
-    hit: Option<Hit>,
+    pub(super) dir: Vec3,
+    pub(super) hit: Option<Hit>,
     /// Index of the point in the `ShadingBatch`, or `NOT_SHADED` for rays that escaped.
-    point: u32,
+    pub(super) point: u32,
 }
 
 /// `CameraSample::point` of a sample that hit nothing.
-const NOT_SHADED: u32 = u32::MAX;
+pub(super) const NOT_SHADED: u32 = u32::MAX;
 
 /// Filler for sample slots about to be written.
 const UNUSED_SAMPLE: CameraSample = CameraSample { pixel: 0, sample: 0, dir: Vec3::ZERO, hit: None, point: NOT_SHADED };
@@ -327,23 +327,41 @@ fn render_on_pool(
         };
         let escape_ids: Vec<_> = shade.table.escape_lights().collect();
         let bsdf_sampling = opts.strategy != Strategy::LightOnly && shade.table.has_non_delta_lights();
-        samples
-            .par_iter()
-            .enumerate()
-            .with_min_len(RAY_CHUNK)
-            .map(|(k, s)| {
-                let lambda = wavelengths.get(k);
-                if s.point != NOT_SHADED {
-                    return shade.shade(s.point as usize, s, lambda, &escape_ids, bsdf_sampling);
-                }
-                // Escaped camera rays see the infinite lights directly.
-                let query = lambda.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
-                let le = escape_ids
-                    .iter()
-                    .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.dir, query)));
-                (to_rgb(le, lambda), false)
-            })
-            .unzip_into_vecs(&mut contributions, &mut traced);
+        let shade_one = |k: usize, s: &CameraSample| {
+            let lambda = wavelengths.get(k);
+            if s.point != NOT_SHADED {
+                return shade.shade(s.point as usize, s, lambda, &escape_ids, bsdf_sampling);
+            }
+            // Escaped camera rays see the infinite lights directly.
+            let query = lambda.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
+            let le = escape_ids
+                .iter()
+                .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.dir, query)));
+            (to_rgb(le, lambda), false)
+        };
+        // Blocks of the common case go through the lane kernel (`shade_lanes.rs`).
+        let lane_shading = !spectral && !bsdf_sampling && !super::shade_lanes::turned_off();
+        (contributions.clear(), traced.clear());
+        (contributions.resize(samples.len(), Vec3::ZERO), traced.resize(samples.len(), false));
+        let chunks =
+            (samples.par_chunks(RAY_CHUNK), contributions.par_chunks_mut(RAY_CHUNK), traced.par_chunks_mut(RAY_CHUNK));
+        chunks.into_par_iter().enumerate().for_each(|(c, (samples, out, traced))| {
+            crate::lanes::widest(
+                #[inline(always)]
+                || {
+                    let mut b = 0;
+                    while b < samples.len() {
+                        let end = (b + LANES).min(samples.len());
+                        if !(lane_shading && shade.shade_lanes(&samples[b..end], &mut out[b..end])) {
+                            for i in b..end {
+                                (out[i], traced[i]) = shade_one(c * RAY_CHUNK + i, &samples[i]);
+                            }
+                        }
+                        b = end;
+                    }
+                },
+            )
+        });
         // Sample k is sample k % spp of pixel k / spp (see `pixel_and_sample`).
         film.par_add_samples(first, opts.spp as usize, &contributions);
         stats.bsdf_rays += traced.par_iter().filter(|&&t| t).count() as u64;
@@ -356,19 +374,19 @@ fn render_on_pool(
 }
 
 /// Read-only state for shading one batch in parallel.
-struct ShadeContext<'a> {
+pub(super) struct ShadeContext<'a> {
     table: &'a LightTable,
     sampler: &'a LightSampler,
-    lighting: &'a DirectLighting,
-    batch: &'a ShadingBatch,
+    pub(super) lighting: &'a DirectLighting,
+    pub(super) batch: &'a ShadingBatch,
     bvh: &'a SceneBvh,
     /// The light rows of each BVH instance's entity (empty for geometry that emits nothing).
-    lights_of_instance: Vec<&'a [crate::light::LightId]>,
+    pub(super) lights_of_instance: Vec<&'a [crate::light::LightId]>,
     materials: &'a [Material],
     /// Each material's [`Material::uniform_rgb_bsdf`].
-    uniform_bsdfs: &'a [Option<Bsdf>],
+    pub(super) uniform_bsdfs: &'a [Option<Bsdf>],
     seed: u64,
-    strategy: Strategy,
+    pub(super) strategy: Strategy,
     /// How BSDF rays leave the surface (as shadow rays do).
     offset: crate::geometry::ShadowOffset,
     /// Every light is sampled for every point (pmf 1) rather than one chosen by the sampler.

@@ -1,0 +1,135 @@
+//! The shading pass for [`LANES`] camera samples at once, in the common case: every sample hit a
+//! surface that emits nothing, of an untextured material without a specular lobe (Lambertian),
+//! and colours are RGB. The caller checks that no BSDF rays are traced. Same operations in the
+//! same order as `ShadeContext::shade`, so the pixels are the same bit for bit; other blocks are
+//! shaded one sample at a time.
+
+use std::f32::consts::FRAC_1_PI;
+
+use glam::Vec3;
+
+use super::renderer::{CameraSample, NOT_SHADED, ShadeContext};
+use crate::lanes::LANES;
+use crate::sampling::cosine_hemisphere_pdf;
+
+impl ShadeContext<'_> {
+    /// Shades `block` into `out` (RGB) if it is `LANES` samples of the common case (see the
+    /// module docs); returns whether it did.
+    #[inline(always)]
+    pub(super) fn shade_lanes(&self, block: &[CameraSample], out: &mut [Vec3]) -> bool {
+        if block.len() != LANES {
+            return false;
+        }
+        // Batch point and base colour / pi (the Lambertian f above the surface) per lane.
+        let (mut point, mut f_up) = ([0usize; LANES], [[0.0f32; LANES]; 3]);
+        for (l, s) in block.iter().enumerate() {
+            let Some(hit) = s.hit.as_ref().filter(|_| s.point != NOT_SHADED) else { return false };
+            let bsdf = match self.uniform_bsdfs.get(hit.material as usize) {
+                Some(Some(b)) if !b.has_specular() => b,
+                _ => return false,
+            };
+            if self.lights_of_instance.get(hit.instance as usize).is_some_and(|rows| !rows.is_empty()) {
+                return false;
+            }
+            point[l] = s.point as usize;
+            for c in 0..3 {
+                f_up[c][l] = bsdf.base.0[c] * FRAC_1_PI;
+            }
+        }
+        let lighting = self.lighting;
+        let k = lighting.entries(point[0]).len();
+        if point.iter().any(|&j| lighting.entries(j).len() != k) {
+            return false;
+        }
+        let mut sum = [[0.0f32; LANES]; 3];
+        for slot in 0..k {
+            for l in 0..LANES {
+                let (j, wo) = (point[l], -block[l].dir);
+                let e = lighting.offsets[j] as usize + slot;
+                let (li, wi, pdf) = (lighting.radiance[e], lighting.wi[e], lighting.pdf[e]);
+                let ns = self.batch.shading_normal[j];
+                // `Bsdf::f` and `Bsdf::pdf` without a specular lobe: the frame's z is `ns`.
+                let (cos_o, cos_i) = (wo.dot(ns), wi.dot(ns));
+                let upper = cos_o > 0.0 && cos_i > 0.0;
+                let bsdf_pdf = if upper { cosine_hemisphere_pdf(cos_i) } else { 0.0 };
+                let w = if lighting.delta[e] { 1.0 } else { self.strategy.light_weight(pdf, bsdf_pdf) };
+                let s = wi.dot(ns).abs() * w / pdf;
+                // `shade` skips entries with pdf <= 0 and weight 0 (NaN goes on, as there).
+                let counts = !(pdf <= 0.0) && w != 0.0;
+                for c in 0..3 {
+                    let f = if upper { f_up[c][l] } else { 0.0 };
+                    let term = f * li.0[c] * s;
+                    if counts {
+                        sum[c][l] += term;
+                    }
+                }
+            }
+        }
+        for (l, o) in out.iter_mut().enumerate() {
+            *o = Vec3::new(sum[0][l], sum[1][l], sum[2][l]);
+        }
+        true
+    }
+}
+
+/// Tests turn the lane kernel off to compare it with one-at-a-time shading.
+#[cfg(test)]
+static OFF_FOR_TESTS: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether a test has turned the lane kernel off (never outside tests).
+pub(super) fn turned_off() -> bool {
+    #[cfg(test)]
+    return OFF_FOR_TESTS.load(std::sync::atomic::Ordering::Relaxed);
+    #[cfg(not(test))]
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use bevy_ecs::prelude::*;
+    use glam::{Vec2, Vec3};
+
+    use crate::geometry::{Rectangle, Transform};
+    use crate::light::{DistantLight, PointLight, SpotLight};
+    use crate::render::camera::Camera;
+    use crate::render::material::Material;
+    use crate::render::renderer::{RenderOptions, Strategy, render};
+    use crate::shading::Settings;
+    use crate::systems::LightingPlugin;
+
+    /// Pixels of a scene that mixes lane blocks with one-at-a-time ones: a Lambertian floor and a
+    /// glossy wall (which has a specular lobe), sky above the horizon (escaped rays), two light
+    /// samples per point, a point light, a spot light, and a distant light from below the floor.
+    fn pixels(strategy: Strategy) -> Vec<Vec3> {
+        let mut world = World::new();
+        let mut schedule = Schedule::default();
+        world.insert_resource(Settings { samples_per_point: 2, ..Default::default() });
+        LightingPlugin::build(&mut world, &mut schedule);
+        let up = Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z);
+        world.spawn((Rectangle { half_size: Vec2::splat(5.0) }, up, Material::lambertian(Vec3::new(0.5, 0.3, 0.8))));
+        let wall = Transform::from_translation(Vec3::new(1.5, 1.0, -2.0)).looking_to(Vec3::NEG_Z, Vec3::Y);
+        world.spawn((Rectangle { half_size: Vec2::splat(1.0) }, wall, Material::default()));
+        world.spawn((PointLight::candela(50.0), Transform::from_translation(Vec3::new(0.0, 2.0, 0.0))));
+        let spot = Transform::from_translation(Vec3::new(-1.0, 3.0, 1.0)).looking_to(Vec3::NEG_Y, Vec3::Z);
+        world.spawn((SpotLight::default(), spot));
+        world.spawn((DistantLight::default(), Transform::default().looking_to(Vec3::Y, Vec3::Z)));
+        let eye = Vec3::new(0.0, 1.5, 5.0);
+        world.spawn((Camera { yfov: 1.2 }, Transform::from_translation(eye).looking_to(-eye, Vec3::Y)));
+        let opts = RenderOptions { width: 24, height: 16, spp: 4, strategy };
+        render(&mut world, &mut schedule, &opts, |_| {}).0.pixels()
+    }
+
+    #[test]
+    fn lane_shading_matches_one_at_a_time_bit_for_bit() {
+        use std::sync::atomic::Ordering::Relaxed;
+        for strategy in [Strategy::Mis, Strategy::LightOnly] {
+            let lanes = pixels(strategy);
+            super::OFF_FOR_TESTS.store(true, Relaxed);
+            let one_at_a_time = pixels(strategy);
+            super::OFF_FOR_TESTS.store(false, Relaxed);
+            assert!(lanes.iter().any(|p| p.length() > 0.0) && lanes.iter().all(|p| p.is_finite()));
+            let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+            assert_eq!(bits(&lanes), bits(&one_at_a_time), "{strategy:?}");
+        }
+    }
+}
