@@ -359,7 +359,9 @@ impl Sampling<'_> {
         let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
         let (mut rows, mut any_point) = ([0u32; LANES], false);
         for l in 0..n {
-            if let Some((id, q)) = self.sampler.sample(&self.context(point[l]), u[l]) {
+            let finite = p[0][l].is_finite() && p[1][l].is_finite() && p[2][l].is_finite();
+            let choice = self.sampler.sample_context_free(finite, u[l]);
+            if let Some((id, q)) = choice.unwrap_or_else(|| self.sampler.sample(&self.context(point[l]), u[l])) {
                 (light[l], pmf[l], chosen[l]) = (id, q, true);
                 if id.kind == LightKind::Point {
                     (rows[l], any_point) = (id.row, true);

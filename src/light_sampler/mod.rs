@@ -71,6 +71,19 @@ impl LightSampler {
         .filter(|_| ctx.p.is_finite())
     }
 
+    /// [`Self::sample`] for the samplers that read nothing of the context but whether its point
+    /// is finite (uniform and power), given that; None for the BVH sampler. Lane code calls this
+    /// rather than build a context per point.
+    #[inline(always)]
+    pub fn sample_context_free(&self, p_finite: bool, u: f32) -> Option<Option<(LightId, f32)>> {
+        let chosen = match self {
+            Self::Uniform(s) => s.sample(u),
+            Self::Power(s) => s.sample(u),
+            Self::Bvh(_) => return None,
+        };
+        Some(chosen.filter(|_| p_finite))
+    }
+
     /// Calls `f` with every light and its pmf at `ctx`, in one pass (for exact variances).
     pub fn for_each_pmf(&self, ctx: &LightSampleContext, f: impl FnMut(LightId, f32)) {
         match self {
