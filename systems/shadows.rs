@@ -4,7 +4,8 @@ use bevy_ecs::prelude::*;
 
 use glam::Vec3;
 
-use crate::geometry::{RAY_CHUNK, Ray, RayLanes, SceneBvh, SurfacePoint};
+use crate::geometry::ray::{Lanes3, spawn_rays_to_points_lanes};
+use crate::geometry::{RAY_CHUNK, Ray, RayLanes, SHADOW_EPSILON, SceneBvh, ShadowOffset, SurfacePoint};
 use crate::lanes::LANES;
 use crate::shading::{RunReport, Settings, ShadingBatch};
 
@@ -68,10 +69,19 @@ pub fn trace_shadow_rays(
                     let n = LANES.min(chunk.len() - b);
                     let first = c * RAY_CHUNK + b;
                     let mut rays = RayLanes::default();
-                    if k == 1 && n == LANES && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point) {
-                        for l in 0..LANES {
-                            rays.set(l, &offset.spawn_ray_to_point(&from(first + l), target[first + l]));
-                        }
+                    let points = k == 1 && n == LANES && offset == ShadowOffset::ErrorBound;
+                    if points && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point) {
+                        let columns = |v: &[Vec3]| {
+                            let mut c: Lanes3 = [[0.0; LANES]; 3];
+                            for (l, x) in v[first..first + LANES].iter().enumerate() {
+                                (c[0][l], c[1][l], c[2][l]) = (x.x, x.y, x.z);
+                            }
+                            c
+                        };
+                        let (p, e, n) =
+                            (columns(&batch.position), columns(&batch.position_error), columns(&batch.normal));
+                        let segments = spawn_rays_to_points_lanes([&p, &e, &n], &columns(target));
+                        rays = RayLanes::from_columns(&segments, 1.0 - SHADOW_EPSILON);
                     } else {
                         for l in 0..n {
                             rays.set(l, &segment(first + l));

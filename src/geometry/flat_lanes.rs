@@ -7,7 +7,7 @@
 use glam::Vec3;
 
 use super::bvh::{NO_SHAPE, SceneBvh};
-use super::ray::Ray;
+use super::ray::{Lanes3, Ray};
 use super::shapes::{PlacedShape, Shape};
 use super::visibility::{FEW_PRIMITIVES, Hit};
 use crate::lanes::LANES;
@@ -36,6 +36,21 @@ impl RayLanes {
         let mut r = Self::default();
         for (l, ray) in rays.iter().enumerate() {
             r.set(l, ray);
+        }
+        r
+    }
+
+    /// Rays from lane columns of origins and directions, all with the same `t_max`.
+    #[inline(always)]
+    pub fn from_columns([origin, dir]: &[Lanes3; 2], t_max: f32) -> Self {
+        let mut r = Self::default();
+        for l in 0..LANES {
+            for a in 0..3 {
+                (r.o[a][l], r.d[a][l]) = (origin[a][l] as f64, dir[a][l] as f64);
+            }
+            let valid = (0..3).all(|a| origin[a][l].is_finite() && dir[a][l].is_finite());
+            let nonzero = dir[0][l] != 0.0 || dir[1][l] != 0.0 || dir[2][l] != 0.0;
+            (r.t_max[l], r.valid[l]) = (t_max, valid && nonzero && t_max > 0.0);
         }
         r
     }

@@ -21,6 +21,8 @@
 
 use glam::{DVec3, Vec3};
 
+use crate::lanes::LANES;
+
 /// Unit roundoff of f32 round-to-nearest: half the distance from 1 to the next float (2^-24).
 pub const F32_UNIT_ROUNDOFF: f32 = f32::EPSILON * 0.5;
 
@@ -169,6 +171,47 @@ pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     if po.is_finite() { stepped } else { po }
 }
 
+/// [`ShadowOffset::ErrorBound`]'s [`ShadowOffset::spawn_ray_to_point`] from [`LANES`] surface
+/// points (lane columns x, y, z of position, error bound and normal) to `target`: the segments'
+/// origins and directions (each t_max is `1 - SHADOW_EPSILON`). The operations of
+/// [`offset_ray_origin`] in the same order, so the rays are the same bit for bit.
+#[inline(always)]
+pub fn spawn_rays_to_points_lanes(from: [&Lanes3; 3], target: &Lanes3) -> [Lanes3; 2] {
+    // One statement per loop over all lanes: LLVM vectorises such loops across lanes, where a
+    // loop holding the whole computation per lane was vectorised across x, y, z only.
+    let [p, e, n] = from;
+    let (mut d, mut side, mut finite) = ([0.0f32; LANES], [0.0f32; LANES], [true; LANES]);
+    for l in 0..LANES {
+        d[l] = n[0][l].abs() * e[0][l] + n[1][l].abs() * e[1][l] + n[2][l].abs() * e[2][l];
+    }
+    for l in 0..LANES {
+        let w = [target[0][l] - p[0][l], target[1][l] - p[1][l], target[2][l] - p[2][l]];
+        side[l] = w[0] * n[0][l] + w[1] * n[1][l] + w[2] * n[2][l];
+    }
+    for l in 0..LANES {
+        d[l] = if side[l] < 0.0 { -d[l] } else { d[l] };
+    }
+    let (mut offset, mut po) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+    for a in 0..3 {
+        for l in 0..LANES {
+            offset[a][l] = d[l] * n[a][l];
+            po[a][l] = p[a][l] + offset[a][l];
+            finite[l] &= po[a][l].is_finite();
+        }
+    }
+    let (mut origin, mut dir) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+    for a in 0..3 {
+        for l in 0..LANES {
+            origin[a][l] = if finite[l] { step_toward(po[a][l], offset[a][l]) } else { po[a][l] };
+            dir[a][l] = target[a][l] - origin[a][l];
+        }
+    }
+    [origin, dir]
+}
+
+/// Lane columns x, y, z of [`LANES`] vectors.
+pub type Lanes3 = [[f32; LANES]; 3];
+
 /// Finite `v` moved one float in the direction of `towards` (`next_up` for positive `towards`,
 /// `next_down` for negative), unchanged for zero `towards`. Integer steps on the bit pattern
 /// instead of std's checks for NaN and infinities, which the caller has ruled out.
@@ -217,6 +260,37 @@ pub fn triangle_surface_point(v: &[Vec3; 3], b: [f32; 3]) -> SurfacePoint {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Hard cases among random points: a point at the origin (steps from zero), a zero error
+    /// bound, a light behind the surface, a light at the point, and an overflowing offset.
+    #[test]
+    fn lane_segments_match_one_at_a_time() {
+        let mut rng = crate::rng::SplitMix64::new(3);
+        let mut v = |s: f32| Vec3::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5) * s;
+        let mut cases: Vec<(SurfacePoint, Vec3)> = (0..60)
+            .map(|_| (SurfacePoint { p: v(20.0), p_error: v(1e-4).abs(), n: v(2.0).normalize() }, v(20.0)))
+            .collect();
+        let up = SurfacePoint { p: Vec3::ZERO, p_error: Vec3::ZERO, n: Vec3::Y };
+        cases.extend([
+            (up, Vec3::new(0.0, 2.0, 0.0)),
+            (up, Vec3::new(1.0, -2.0, 0.0)),
+            (SurfacePoint { p_error: Vec3::splat(1e-6), ..up }, Vec3::ZERO),
+            (SurfacePoint { p: Vec3::splat(f32::MAX), p_error: Vec3::splat(f32::MAX), n: Vec3::X }, Vec3::ONE),
+        ]);
+        for block in cases.chunks(LANES) {
+            let column = |f: &dyn Fn(usize) -> Vec3| -> Lanes3 {
+                std::array::from_fn(|a| std::array::from_fn(|l| f(l.min(block.len() - 1))[a]))
+            };
+            let from = [column(&|l| block[l].0.p), column(&|l| block[l].0.p_error), column(&|l| block[l].0.n)];
+            let [origin, dir] = spawn_rays_to_points_lanes([&from[0], &from[1], &from[2]], &column(&|l| block[l].1));
+            for (l, (sp, target)) in block.iter().enumerate() {
+                let one = ShadowOffset::ErrorBound.spawn_ray_to_point(sp, *target);
+                let lane = [0, 1, 2].map(|a| (origin[a][l].to_bits(), dir[a][l].to_bits()));
+                let want = [0, 1, 2].map(|a| (one.origin[a].to_bits(), one.dir[a].to_bits()));
+                assert_eq!(lane, want, "{sp:?} -> {target}");
+            }
+        }
+    }
 
     #[test]
     fn gamma_matches_definition() {
