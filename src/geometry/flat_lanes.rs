@@ -4,11 +4,11 @@
 //! [`PlacedShape::flat_world_coordinate`]) run as lane loops, which compile to vector code
 //! inside `lanes::widest`. Other scenes answer one ray at a time.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::bvh::{NO_SHAPE, SceneBvh};
 use super::ray::{Lanes3, Ray};
-use super::shapes::{PlacedShape, Shape};
+use super::shapes::{PlacedShape, Shape, flat_hit_from_rows};
 use super::visibility::{FEW_PRIMITIVES, Hit};
 use crate::lanes::LANES;
 
@@ -98,9 +98,17 @@ fn flat_hits(
         t_max: &[f32; LANES],
         contains: impl Fn(f64, f64) -> bool,
     ) -> ([bool; LANES], [f32; LANES], [f64; LANES], [f64; LANES]) {
+        // One step per loop over all lanes, so that LLVM vectorises across lanes.
+        let (mut o_row, mut d_row) = ([[0.0f64; LANES]; 3], [[0.0f64; LANES]; 3]);
+        for i in 0..3 {
+            for l in 0..LANES {
+                (o_row[i][l], d_row[i][l]) = shape.object_row(i, r.origin(l), r.dir(l));
+            }
+        }
         let mut out = ([false; LANES], [0.0f32; LANES], [0.0f64; LANES], [0.0f64; LANES]);
         for l in 0..LANES {
-            (out.0[l], out.1[l], out.2[l], out.3[l]) = shape.flat_hit_in(r.origin(l), r.dir(l), t_max[l], &contains);
+            let rows = [(o_row[0][l], d_row[0][l]), (o_row[1][l], d_row[1][l]), (o_row[2][l], d_row[2][l])];
+            (out.0[l], out.1[l], out.2[l], out.3[l]) = flat_hit_from_rows(rows, t_max[l], &contains);
         }
         out
     }
@@ -108,6 +116,24 @@ fn flat_hits(
         Shape::Rectangle(rect) => each(shape, r, t_max, |x, y| Shape::Rectangle(rect).flat_contains(x, y)),
         Shape::Disk(disk) => each(shape, r, t_max, |x, y| Shape::Disk(disk).flat_contains(x, y)),
         Shape::Sphere(_) => ([false; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]),
+    }
+}
+
+/// [`Shape::flat_uv`] of every lane, one loop per shape kind (as [`flat_hits`]).
+#[inline(always)]
+fn flat_uvs(shape: &Shape, x: &[f64; LANES], y: &[f64; LANES]) -> [[f32; LANES]; 2] {
+    #[inline(always)]
+    fn each(x: &[f64; LANES], y: &[f64; LANES], uv: impl Fn(f64, f64) -> Vec2) -> [[f32; LANES]; 2] {
+        let mut out = [[0.0; LANES]; 2];
+        for l in 0..LANES {
+            (out[0][l], out[1][l]) = uv(x[l], y[l]).into();
+        }
+        out
+    }
+    match *shape {
+        Shape::Rectangle(rect) => each(x, y, |x, y| Shape::Rectangle(rect).flat_uv(x, y)),
+        Shape::Disk(disk) => each(x, y, |x, y| Shape::Disk(disk).flat_uv(x, y)),
+        Shape::Sphere(_) => [[0.0; LANES]; 2],
     }
 }
 
@@ -153,17 +179,17 @@ impl SceneBvh {
             }
             let shape = &self.shapes[self.leaf[slot].shape as usize];
             let (mut p, mut err) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
-            for l in 0..LANES {
-                for a in 0..3 {
+            for a in 0..3 {
+                for l in 0..LANES {
                     (p[a][l], err[a][l]) = shape.flat_world_coordinate(a, best_x[l], best_y[l]);
                 }
             }
+            let uv = flat_uvs(&shape.shape, &best_x, &best_y);
             let (instance, id, material) = self.id_of(self.prim_of_slot(slot));
             let n = shape.flat_normal.unwrap_or(Vec3::Z);
             for l in (0..LANES).filter(|&l| best_slot[l] == slot) {
                 let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
-                let uv = shape.shape.flat_uv(best_x[l], best_y[l]);
-                let (t, p, p_error) = (best_t[l], v(&p), v(&err));
+                let (t, p, p_error, uv) = (best_t[l], v(&p), v(&err), Vec2::new(uv[0][l], uv[1][l]));
                 out[l] = Some(Hit { t, p, p_error, ng: n, ns: n, uv, id, material, instance });
             }
         }

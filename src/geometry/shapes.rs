@@ -363,31 +363,27 @@ impl PlacedShape {
         self.flat_hit_in(o, d, t_max, |x, y| self.shape.flat_contains(x, y))
     }
 
-    /// [`Self::flat_hit`] with the shape's `flat_contains` passed in (lane loops pass one
-    /// without a `match`).
+    /// [`Self::flat_hit`] with the shape's `flat_contains` passed in.
     #[inline(always)]
-    pub(super) fn flat_hit_in(
+    fn flat_hit_in(
         &self,
         o: [f64; 3],
         d: [f64; 3],
         t_max: f32,
         contains: impl Fn(f64, f64) -> bool,
     ) -> (bool, f32, f64, f64) {
-        // The ray in object space, one row at a time: each row is the f64 sum that
-        // `transform_point3` forms.
+        let rows = [self.object_row(0, o, d), self.object_row(1, o, d), self.object_row(2, o, d)];
+        flat_hit_from_rows(rows, t_max, contains)
+    }
+
+    /// Row `i` of the ray o + t d in object space: origin and direction components, the f64
+    /// sums that `transform_point3` and `transform_vector3` form.
+    #[inline(always)]
+    pub(super) fn object_row(&self, i: usize, o: [f64; 3], d: [f64; 3]) -> (f64, f64) {
         let m = &self.to_object.matrix3;
-        let row = |i: usize| {
-            let (ox, oy, oz) = (m.x_axis[i] * o[0], m.y_axis[i] * o[1], m.z_axis[i] * o[2]);
-            let (dx, dy, dz) = (m.x_axis[i] * d[0], m.y_axis[i] * d[1], m.z_axis[i] * d[2]);
-            (ox + oy + oz + self.to_object.translation[i], dx + dy + dz)
-        };
-        let ((ox, dx), (oy, dy), (oz, dz)) = (row(0), row(1), row(2));
-        // dz = 0 (parallel to the plane) makes t infinite or NaN, which the tests reject.
-        let t = -oz / dz;
-        let t32 = t as f32;
-        let (x, y) = (ox + t * dx, oy + t * dy);
-        let hit = (dz != 0.0) & (t > 0.0) & (t32 > 0.0) & (t32 <= t_max) & contains(x, y);
-        (hit, t32, x, y)
+        let (ox, oy, oz) = (m.x_axis[i] * o[0], m.y_axis[i] * o[1], m.z_axis[i] * o[2]);
+        let (dx, dy, dz) = (m.x_axis[i] * d[0], m.y_axis[i] * d[1], m.z_axis[i] * d[2]);
+        (ox + oy + oz + self.to_object.translation[i], dx + dy + dz)
     }
 
     /// A point uniformly distributed over the surface (density 1 / area per m^2), with its error
@@ -417,6 +413,22 @@ impl PlacedShape {
         let terms = abs_m.x_axis[a] * x.abs() + abs_m.y_axis[a] * y.abs() + self.abs_translation[a];
         (p as f32, f64_coordinate_error(p, terms))
     }
+}
+
+/// The rest of [`PlacedShape::flat_hit`] from the object-space ray's rows (origin, direction)
+/// for x, y and z, with the shape's containment test.
+#[inline(always)]
+pub(super) fn flat_hit_from_rows(
+    [(ox, dx), (oy, dy), (oz, dz)]: [(f64, f64); 3],
+    t_max: f32,
+    contains: impl Fn(f64, f64) -> bool,
+) -> (bool, f32, f64, f64) {
+    // dz = 0 (parallel to the plane) makes t infinite or NaN, which the tests reject.
+    let t = -oz / dz;
+    let t32 = t as f32;
+    let (x, y) = (ox + t * dx, oy + t * dy);
+    let hit = (dz != 0.0) & (t > 0.0) & (t32 > 0.0) & (t32 <= t_max) & contains(x, y);
+    (hit, t32, x, y)
 }
 
 /// Smallest `t` in (0, t_max] where the object-space ray `o + t d` meets a sphere of radius `r`
