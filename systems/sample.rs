@@ -369,7 +369,8 @@ impl Sampling<'_> {
             }
         }
         // Blocks where no entry chose a point light (scenes lit by other kinds) skip the kernel.
-        let lit = any_point.then(|| self.table.points.sample_li_rgb_lanes(&rows, &p));
+        // `if`, not `bool::then`: a closure would keep the kernel out of the wide code.
+        let lit = if any_point { Some(self.table.points.sample_li_rgb_lanes(&rows, &p)) } else { None };
         let mut traced = 0;
         for l in 0..n {
             let chosen = chosen[l].then_some((light[l], pmf[l]));

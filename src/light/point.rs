@@ -233,19 +233,27 @@ impl PointColumns {
             (target[0][l], target[1][l], target[2][l]) = (x.x, x.y, x.z);
             (rgb[0][l], rgb[1][l], rgb[2][l]) = (c.x, c.y, c.z);
         }
-        let (mut wi, mut radiance, mut valid) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3], [false; LANES]);
-        for l in 0..LANES {
-            // The operations of `LightSampleContext::toward` and `Self::sample_li`, in order.
-            let d = [target[0][l] - p[0][l], target[1][l] - p[1][l], target[2][l] - p[2][l]];
-            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-            let (r, inv_r2) = (r2.sqrt(), 1.0 / r2);
-            let mut finite = r2 > 0.0 && r2.is_finite() && inv_r2.is_finite();
-            for a in 0..3 {
-                wi[a][l] = d[a] / r;
-                radiance[a][l] = rgb[a][l] * inv_r2;
-                finite &= radiance[a][l].is_finite();
+        // The operations of `LightSampleContext::toward` and `Self::sample_li`, in order, one step
+        // per loop over all lanes (so that LLVM vectorises across lanes).
+        let mut d = [[0.0f32; LANES]; 3];
+        for a in 0..3 {
+            for l in 0..LANES {
+                d[a][l] = target[a][l] - p[a][l];
             }
-            valid[l] = finite;
+        }
+        let (mut r, mut inv_r2, mut valid) = ([0.0f32; LANES], [0.0f32; LANES], [false; LANES]);
+        for l in 0..LANES {
+            let r2 = d[0][l] * d[0][l] + d[1][l] * d[1][l] + d[2][l] * d[2][l];
+            (r[l], inv_r2[l]) = (r2.sqrt(), 1.0 / r2);
+            valid[l] = r2 > 0.0 && r2.is_finite() && inv_r2[l].is_finite();
+        }
+        let (mut wi, mut radiance) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+        for a in 0..3 {
+            for l in 0..LANES {
+                wi[a][l] = d[a][l] / r[l];
+                radiance[a][l] = rgb[a][l] * inv_r2[l];
+                valid[l] &= radiance[a][l].is_finite();
+            }
         }
         PointLanes { target, wi, radiance, valid }
     }
