@@ -58,8 +58,15 @@ pub fn trace_shadow_rays(
             ShadowTarget::Surface => offset.spawn_ray_to(&from, &SurfacePoint::from_point(target[e], target_normal[e])),
         }
     };
-    // Segments are traced LANES at a time (in lanes where the scene allows). Blocks of point-light
-    // segments, one entry per point, are built in a loop without branches, which vectorises.
+    if !bvh.few_flat_shapes() {
+        // Rays one at a time: the lane queries would answer them so anyway.
+        r.occluded.par_iter_mut().enumerate().with_min_len(RAY_CHUNK).for_each(|(e, occluded)| {
+            *occluded = bvh.occluded(&segment(e));
+        });
+        return;
+    }
+    // Segments traced LANES at a time. Blocks of point-light segments, one entry per point, are
+    // built in a loop without branches, which vectorises.
     r.occluded.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
         crate::lanes::widest(
             #[inline(always)]

@@ -141,23 +141,26 @@ fn flat_uvs(shape: &Shape, x: &[f64; LANES], y: &[f64; LANES]) -> [[f32; LANES];
 const NO_SLOT: usize = usize::MAX;
 
 impl SceneBvh {
-    /// Whether the lane queries apply: one to `FEW_PRIMITIVES` primitives, all flat shapes.
+    /// Whether [`Self::closest_hits_lanes`] and [`Self::occluded_lanes`] run in lanes: the scene
+    /// has one to `FEW_PRIMITIVES` primitives, all flat shapes. Otherwise they answer one ray at
+    /// a time, and callers holding single rays may as well ask for them directly.
     #[inline(always)]
-    fn few_flat_shapes(&self) -> bool {
+    pub fn few_flat_shapes(&self) -> bool {
         let flat = |s: u32| s != NO_SHAPE && !matches!(self.shapes[s as usize].shape, Shape::Sphere(_));
         !self.leaf.is_empty() && self.leaf.len() <= FEW_PRIMITIVES && self.leaf.iter().all(|p| flat(p.shape))
     }
 
     /// [`Self::closest_hit`] of `LANES` rays, bit for bit.
     #[inline(always)]
-    pub fn closest_hits_lanes(&self, r: &RayLanes) -> [Option<Hit>; LANES] {
+    pub fn closest_hits_lanes(&self, rays: &[Ray; LANES]) -> [Option<Hit>; LANES] {
         let mut out = [None; LANES];
         if !self.few_flat_shapes() {
-            for (l, o) in out.iter_mut().enumerate() {
-                *o = self.closest_hit(&r.ray(l));
+            for (o, ray) in out.iter_mut().zip(rays) {
+                *o = self.closest_hit(ray);
             }
             return out;
         }
+        let r = &RayLanes::from_rays(rays);
         // As `closest_hit_each`: primitives in input order; a later one wins only when nearer.
         let (mut best_t, mut best_slot) = (r.t_max, [NO_SLOT; LANES]);
         let (mut best_x, mut best_y) = ([0.0f64; LANES], [0.0f64; LANES]);
@@ -290,7 +293,7 @@ mod tests {
                 let mut lane_rays = [Ray::new(Vec3::ZERO, Vec3::ZERO); LANES];
                 lane_rays[..block.len()].copy_from_slice(block);
                 let lanes = RayLanes::from_rays(&lane_rays);
-                let got = crate::lanes::widest(|| bvh.closest_hits_lanes(&lanes));
+                let got = crate::lanes::widest(|| bvh.closest_hits_lanes(&lane_rays));
                 let occluded = crate::lanes::widest(|| bvh.occluded_lanes(&lanes, block.len()));
                 for (l, ray) in block.iter().enumerate() {
                     assert_eq!(got[l], bvh.closest_hit(ray), "closest hit of {ray:?}");

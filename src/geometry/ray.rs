@@ -129,7 +129,6 @@ pub enum ShadowOffset {
 
 impl ShadowOffset {
     /// `p` moved off its surface (normal `n`) to the side `w` points to.
-    #[inline(always)]
     pub fn offset(self, p: &SurfacePoint, w: Vec3) -> Vec3 {
         match self {
             Self::ErrorBound => offset_ray_origin(p.p, p.p_error, p.n, w),
@@ -143,7 +142,6 @@ impl ShadowOffset {
     }
 
     /// As [`SurfacePoint::spawn_ray_to_point`] with this offset.
-    #[inline(always)]
     pub fn spawn_ray_to_point(self, from: &SurfacePoint, p: Vec3) -> Ray {
         let o = self.offset(from, p - from.p);
         Ray { origin: o, dir: p - o, t_max: 1.0 - SHADOW_EPSILON }
@@ -161,14 +159,14 @@ impl ShadowOffset {
 /// `dot(|n|, p_error)`, each moved component then rounded one float further. If the exact surface
 /// point is within `p ± p_error` and the surface is planar there, the result lies strictly on the
 /// `w` side of the surface. `n` should be unit length; `w` only chooses the side.
-#[inline(always)]
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     let d = n.abs().dot(p_error);
     let offset = if w.dot(n) < 0.0 { -d * n } else { d * n };
     let po = p + offset;
-    let stepped = Vec3::new(step_toward(po.x, offset.x), step_toward(po.y, offset.y), step_toward(po.z, offset.z));
-    // A selection rather than an early return, so that lane loops over this vectorise.
-    if po.is_finite() { stepped } else { po }
+    if !po.is_finite() {
+        return po;
+    }
+    Vec3::new(step_toward(po.x, offset.x), step_toward(po.y, offset.y), step_toward(po.z, offset.z))
 }
 
 /// [`ShadowOffset::ErrorBound`]'s [`ShadowOffset::spawn_ray_to_point`] from [`LANES`] surface
@@ -230,11 +228,12 @@ fn step_toward(v: f32, towards: f32) -> f32 {
 /// then rounded to f32. Rounding to nearest is off by at most 2^-24 |p|; we allow 2^-23 |p|, plus
 /// 2^-40 * abs_terms, which dwarfs the f64 roundings (a few 2^-53 each).
 pub fn f64_point_error(p64: DVec3, abs_terms: DVec3) -> Vec3 {
-    let e = |a: usize| f64_coordinate_error(p64[a], abs_terms[a]);
-    Vec3::new(e(0), e(1), e(2))
+    let e = p64.abs() * 2f64.powi(-23) + abs_terms * 2f64.powi(-40);
+    // `f64_coordinate_error` per axis (for lane loops): the same operations.
+    (e * (1.0 + 2f64.powi(-20)) + DVec3::splat(f32::MIN_POSITIVE as f64)).as_vec3()
 }
 
-/// [`f64_point_error`] of one coordinate.
+/// [`f64_point_error`] of one coordinate (the same operations).
 #[inline(always)]
 pub(crate) fn f64_coordinate_error(p64: f64, abs_terms: f64) -> f32 {
     let e = p64.abs() * 2f64.powi(-23) + abs_terms * 2f64.powi(-40);

@@ -355,25 +355,18 @@ impl PlacedShape {
         hit.then_some((t, DVec3::new(x, y, 0.0)))
     }
 
-    /// [`Self::local_hit`] of a flat shape, without branches so that lane loops vectorise:
-    /// whether the ray o + t d meets it in (0, t_max], at t (rounded to f32) and object-space
-    /// (x, y, 0).
+    /// [`Self::local_hit`] of a flat shape: whether the ray o + t d meets it in (0, t_max], at t
+    /// (rounded to f32) and object-space (x, y, 0). The plane test needs only row z, and most
+    /// shadow rays fail it (they leave the plane), so rows x and y wait for it. (Lane loops use
+    /// [`flat_hit_from_rows`] on all three rows, without branches.)
     #[inline(always)]
-    pub(super) fn flat_hit(&self, o: [f64; 3], d: [f64; 3], t_max: f32) -> (bool, f32, f64, f64) {
-        self.flat_hit_in(o, d, t_max, |x, y| self.shape.flat_contains(x, y))
-    }
-
-    /// [`Self::flat_hit`] with the shape's `flat_contains` passed in.
-    #[inline(always)]
-    fn flat_hit_in(
-        &self,
-        o: [f64; 3],
-        d: [f64; 3],
-        t_max: f32,
-        contains: impl Fn(f64, f64) -> bool,
-    ) -> (bool, f32, f64, f64) {
-        let rows = [self.object_row(0, o, d), self.object_row(1, o, d), self.object_row(2, o, d)];
-        flat_hit_from_rows(rows, t_max, contains)
+    fn flat_hit(&self, o: [f64; 3], d: [f64; 3], t_max: f32) -> (bool, f32, f64, f64) {
+        let (oz, dz) = self.object_row(2, o, d);
+        if !plane_t(oz, dz, t_max).0 {
+            return (false, 0.0, 0.0, 0.0);
+        }
+        let rows = [self.object_row(0, o, d), self.object_row(1, o, d), (oz, dz)];
+        flat_hit_from_rows(rows, t_max, |x, y| self.shape.flat_contains(x, y))
     }
 
     /// Row `i` of the ray o + t d in object space: origin and direction components, the f64
@@ -394,18 +387,26 @@ impl PlacedShape {
     }
 
     fn surface_point(&self, p_obj: DVec3, n_obj: DVec3) -> SurfacePoint {
-        if let Some(n) = self.flat_normal {
-            let [x, y, z] = [0, 1, 2].map(|a| self.flat_world_coordinate(a, p_obj.x, p_obj.y));
-            return SurfacePoint { p: Vec3::new(x.0, y.0, z.0), p_error: Vec3::new(x.1, y.1, z.1), n };
-        }
-        let p64 = self.to_world.transform_point3(p_obj);
-        let terms = self.abs_linear * p_obj.abs() + self.abs_translation;
-        let n = (self.normal_matrix * n_obj).normalize().as_vec3();
+        let (m, abs_m) = (&self.to_world.matrix3, &self.abs_linear);
+        let (p64, terms, n) = match self.flat_normal {
+            // Flat shapes' points have z = 0: the z column drops out (`flat_world_coordinate`
+            // forms the same sums one axis at a time).
+            Some(n) => (
+                m.x_axis * p_obj.x + m.y_axis * p_obj.y + self.to_world.translation,
+                abs_m.x_axis * p_obj.x.abs() + abs_m.y_axis * p_obj.y.abs() + self.abs_translation,
+                n,
+            ),
+            None => (
+                self.to_world.transform_point3(p_obj),
+                *abs_m * p_obj.abs() + self.abs_translation,
+                (self.normal_matrix * n_obj).normalize().as_vec3(),
+            ),
+        };
         SurfacePoint { p: p64.as_vec3(), p_error: f64_point_error(p64, terms), n }
     }
 
-    /// World coordinate `a` of object-space point (x, y, 0) of a flat shape (the z column drops
-    /// out) and its error bound: the f64 sums rounded once.
+    /// World coordinate `a` of object-space point (x, y, 0) of a flat shape and its error bound:
+    /// `surface_point`'s f64 sums for one axis, rounded once (for lane loops).
     #[inline(always)]
     pub(super) fn flat_world_coordinate(&self, a: usize, x: f64, y: f64) -> (f32, f32) {
         let (m, abs_m) = (&self.to_world.matrix3, &self.abs_linear);
@@ -423,12 +424,19 @@ pub(super) fn flat_hit_from_rows(
     t_max: f32,
     contains: impl Fn(f64, f64) -> bool,
 ) -> (bool, f32, f64, f64) {
+    let (ahead, t, t32) = plane_t(oz, dz, t_max);
+    let (x, y) = (ox + t * dx, oy + t * dy);
+    (ahead & contains(x, y), t32, x, y)
+}
+
+/// Where a ray with object-space z row (oz, dz) meets the plane z = 0: whether in (0, t_max]
+/// (tested on t rounded to f32, so that every caller agrees), t and t as f32.
+#[inline(always)]
+fn plane_t(oz: f64, dz: f64, t_max: f32) -> (bool, f64, f32) {
     // dz = 0 (parallel to the plane) makes t infinite or NaN, which the tests reject.
     let t = -oz / dz;
     let t32 = t as f32;
-    let (x, y) = (ox + t * dx, oy + t * dy);
-    let hit = (dz != 0.0) & (t > 0.0) & (t32 > 0.0) & (t32 <= t_max) & contains(x, y);
-    (hit, t32, x, y)
+    ((dz != 0.0) & (t > 0.0) & (t32 > 0.0) & (t32 <= t_max), t, t32)
 }
 
 /// Smallest `t` in (0, t_max] where the object-space ray `o + t d` meets a sphere of radius `r`

@@ -10,7 +10,7 @@ use super::bsdf::Bsdf;
 use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::film::Film;
 use super::material::Material;
-use crate::geometry::{Hit, RAY_CHUNK, RayLanes, SceneBvh};
+use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
 use crate::lanes::LANES;
 use crate::light::{ColorQuery, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
@@ -263,7 +263,7 @@ fn render_on_pool(
                         }
                         let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
                         let rays = camera.rays_lanes([&x, &y], &u, &v);
-                        let hits = bvh.closest_hits_lanes(&RayLanes::from_rays(&rays));
+                        let hits = bvh.closest_hits_lanes(&rays);
                         for (l, s) in block.iter_mut().enumerate() {
                             (s.pixel, s.sample, s.dir, s.point) = (pixel[l], sample[l], rays[l].dir, NOT_SHADED);
                             s.hit = hits[l];
@@ -339,29 +339,37 @@ fn render_on_pool(
                 .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.dir, query)));
             (to_rgb(le, lambda), false)
         };
-        // Blocks of the common case go through the lane kernel (`shade_lanes.rs`).
-        let lane_shading = !spectral && !bsdf_sampling && !super::shade_lanes::turned_off();
-        (contributions.clear(), traced.clear());
-        (contributions.resize(samples.len(), Vec3::ZERO), traced.resize(samples.len(), false));
-        let chunks =
-            (samples.par_chunks(RAY_CHUNK), contributions.par_chunks_mut(RAY_CHUNK), traced.par_chunks_mut(RAY_CHUNK));
-        chunks.into_par_iter().enumerate().for_each(|(c, (samples, out, traced))| {
-            crate::lanes::widest(
-                #[inline(always)]
-                || {
-                    let mut b = 0;
-                    while b < samples.len() {
-                        let end = (b + LANES).min(samples.len());
-                        if !(lane_shading && shade.shade_lanes(&samples[b..end], &mut out[b..end])) {
-                            for i in b..end {
-                                (out[i], traced[i]) = shade_one(c * RAY_CHUNK + i, &samples[i]);
+        // Where the lane kernel may apply (`shade_lanes.rs`), blocks of the common case go
+        // through it; elsewhere samples are shaded one at a time.
+        if !spectral && !bsdf_sampling && !super::shade_lanes::turned_off() {
+            (contributions.clear(), traced.clear());
+            (contributions.resize(samples.len(), Vec3::ZERO), traced.resize(samples.len(), false));
+            let chunks = (
+                samples.par_chunks(RAY_CHUNK),
+                contributions.par_chunks_mut(RAY_CHUNK),
+                traced.par_chunks_mut(RAY_CHUNK),
+            );
+            chunks.into_par_iter().enumerate().for_each(|(c, (samples, out, traced))| {
+                crate::lanes::widest(
+                    #[inline(always)]
+                    || {
+                        let mut b = 0;
+                        while b < samples.len() {
+                            let end = (b + LANES).min(samples.len());
+                            if !shade.shade_lanes(&samples[b..end], &mut out[b..end]) {
+                                for i in b..end {
+                                    (out[i], traced[i]) = shade_one(c * RAY_CHUNK + i, &samples[i]);
+                                }
                             }
+                            b = end;
                         }
-                        b = end;
-                    }
-                },
-            )
-        });
+                    },
+                )
+            });
+        } else {
+            let shaded = samples.par_iter().enumerate().with_min_len(RAY_CHUNK).map(|(k, s)| shade_one(k, s));
+            shaded.unzip_into_vecs(&mut contributions, &mut traced);
+        }
         // Sample k is sample k % spp of pixel k / spp (see `pixel_and_sample`).
         film.par_add_samples(first, opts.spp as usize, &contributions);
         stats.bsdf_rays += traced.par_iter().filter(|&&t| t).count() as u64;
