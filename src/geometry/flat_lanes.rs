@@ -150,15 +150,15 @@ impl SceneBvh {
         !self.leaf.is_empty() && self.leaf.len() <= FEW_PRIMITIVES && self.leaf.iter().all(|p| flat(p.shape))
     }
 
-    /// [`Self::closest_hit`] of `LANES` rays, bit for bit.
+    /// [`Self::closest_hit`] of `LANES` rays, bit for bit, handed to `out` (lane, hit) in place
+    /// (a returned array of hits would be copied once more).
     #[inline(always)]
-    pub fn closest_hits_lanes(&self, rays: &[Ray; LANES]) -> [Option<Hit>; LANES] {
-        let mut out = [None; LANES];
+    pub fn closest_hits_lanes(&self, rays: &[Ray; LANES], mut out: impl FnMut(usize, Option<Hit>)) {
         if !self.few_flat_shapes() {
-            for (o, ray) in out.iter_mut().zip(rays) {
-                *o = self.closest_hit(ray);
+            for (l, ray) in rays.iter().enumerate() {
+                out(l, self.closest_hit(ray));
             }
-            return out;
+            return;
         }
         let r = &RayLanes::from_rays(rays);
         // As `closest_hit_each`: primitives in input order; a later one wins only when nearer.
@@ -174,6 +174,9 @@ impl SceneBvh {
                     (best_t[l], best_slot[l], best_x[l], best_y[l]) = (t, slot, x, y);
                 }
             }
+        }
+        for l in (0..LANES).filter(|&l| best_slot[l] == NO_SLOT) {
+            out(l, None);
         }
         // Hit records, one primitive's lanes at a time.
         for slot in 0..self.leaf.len() {
@@ -193,10 +196,9 @@ impl SceneBvh {
             for l in (0..LANES).filter(|&l| best_slot[l] == slot) {
                 let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
                 let (t, p, p_error, uv) = (best_t[l], v(&p), v(&err), Vec2::new(uv[0][l], uv[1][l]));
-                out[l] = Some(Hit { t, p, p_error, ng: n, ns: n, uv, id, material, instance });
+                out(l, Some(Hit { t, p, p_error, ng: n, ns: n, uv, id, material, instance }));
             }
         }
-        out
     }
 
     /// [`Self::occluded`] of the first `n` of `LANES` rays, bit for bit (later lanes: false).
@@ -293,7 +295,8 @@ mod tests {
                 let mut lane_rays = [Ray::new(Vec3::ZERO, Vec3::ZERO); LANES];
                 lane_rays[..block.len()].copy_from_slice(block);
                 let lanes = RayLanes::from_rays(&lane_rays);
-                let got = crate::lanes::widest(|| bvh.closest_hits_lanes(&lane_rays));
+                let mut got = [None; LANES];
+                crate::lanes::widest(|| bvh.closest_hits_lanes(&lane_rays, |l, hit| got[l] = hit));
                 let occluded = crate::lanes::widest(|| bvh.occluded_lanes(&lanes, block.len()));
                 for (l, ray) in block.iter().enumerate() {
                     assert_eq!(got[l], bvh.closest_hit(ray), "closest hit of {ray:?}");

@@ -263,11 +263,14 @@ fn render_on_pool(
                         }
                         let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
                         let rays = camera.rays_lanes([&x, &y], &u, &v);
-                        let hits = bvh.closest_hits_lanes(&rays);
                         for (l, s) in block.iter_mut().enumerate() {
                             (s.pixel, s.sample, s.dir, s.point) = (pixel[l], sample[l], rays[l].dir, NOT_SHADED);
-                            s.hit = hits[l];
                         }
+                        bvh.closest_hits_lanes(&rays, |l, hit| {
+                            if let Some(s) = block.get_mut(l) {
+                                s.hit = hit;
+                            }
+                        });
                     }
                 },
             )
