@@ -345,8 +345,10 @@ fn render_on_pool(
         // Where the lane kernel may apply (`shade_lanes.rs`), blocks of the common case go
         // through it; elsewhere samples are shaded one at a time.
         if !spectral && !bsdf_sampling && !super::shade_lanes::turned_off() {
-            (contributions.clear(), traced.clear());
-            (contributions.resize(samples.len(), Vec3::ZERO), traced.resize(samples.len(), false));
+            contributions.clear();
+            contributions.resize(samples.len(), Vec3::ZERO);
+            traced.clear();
+            traced.resize(samples.len(), false);
             let chunks = (
                 samples.par_chunks(RAY_CHUNK),
                 contributions.par_chunks_mut(RAY_CHUNK),

@@ -32,8 +32,8 @@ impl ShadeContext<'_> {
                 return false;
             }
             point[l] = s.point as usize;
-            for c in 0..3 {
-                f_up[c][l] = bsdf.base.0[c] * FRAC_1_PI;
+            for (f, base) in f_up.iter_mut().zip(bsdf.base.0) {
+                f[l] = base * FRAC_1_PI;
             }
         }
         let lighting = self.lighting;
@@ -55,7 +55,7 @@ impl ShadeContext<'_> {
                 let w = if lighting.delta[e] { 1.0 } else { self.strategy.light_weight(pdf, bsdf_pdf) };
                 let s = wi.dot(ns).abs() * w / pdf;
                 // `shade` skips entries with pdf <= 0 and weight 0 (NaN goes on, as there).
-                let counts = !(pdf <= 0.0) && w != 0.0;
+                let counts = (pdf > 0.0 || pdf.is_nan()) && w != 0.0;
                 for c in 0..3 {
                     let f = if upper { f_up[c][l] } else { 0.0 };
                     let term = f * li.0[c] * s;
