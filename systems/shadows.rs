@@ -66,7 +66,7 @@ pub fn trace_shadow_rays(
         return;
     }
     // Segments traced LANES at a time. Blocks of point-light segments, one entry per point, are
-    // built in a loop without branches, which vectorises.
+    // built from columns by a lane kernel; others one segment at a time.
     r.occluded.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
         crate::lanes::widest(
             #[inline(always)]
@@ -85,9 +85,8 @@ pub fn trace_shadow_rays(
                             }
                             c
                         };
-                        let (p, e, n) =
-                            (columns(&batch.position), columns(&batch.position_error), columns(&batch.normal));
-                        let segments = spawn_rays_to_points_lanes([&p, &e, &n], &columns(target));
+                        let from = [&batch.position, &batch.position_error, &batch.normal].map(|v| columns(v));
+                        let segments = spawn_rays_to_points_lanes([&from[0], &from[1], &from[2]], &columns(target));
                         rays = RayLanes::from_columns(&segments, 1.0 - SHADOW_EPSILON);
                     } else {
                         for l in 0..n {

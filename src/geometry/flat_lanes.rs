@@ -1,8 +1,8 @@
 //! Ray queries of [`LANES`] rays at once for scenes of a few flat shapes (a ground rectangle, a
 //! disk light): the answers of [`SceneBvh::closest_hit`] and [`SceneBvh::occluded`] bit for bit,
-//! from the same f64 operations in the same order ([`PlacedShape::flat_hit`],
-//! [`PlacedShape::flat_world_coordinate`]) run as lane loops, which compile to vector code
-//! inside `lanes::widest`. Other scenes answer one ray at a time.
+//! from the same f64 operations in the same order (`PlacedShape::object_row`,
+//! `flat_hit_from_rows`, `PlacedShape::flat_world_coordinate`) run as lane loops, which compile
+//! to vector code inside `lanes::widest`. Other scenes answer one ray at a time.
 
 use glam::{Vec2, Vec3};
 
@@ -82,8 +82,8 @@ impl RayLanes {
     }
 }
 
-/// [`PlacedShape::flat_hit`] of every lane over (0, t_max[l]]: hit flags, t, object-space x
-/// and y. Each shape kind gets its own loop, so that no `match` stops it vectorising.
+/// The flat-shape hit test (`PlacedShape::local_hit`) of every lane over (0, t_max[l]]: hit
+/// flags, t, object-space x and y. Each shape kind gets its own loop, so that no `match` stops it vectorising.
 #[inline(always)]
 #[allow(clippy::type_complexity)]
 fn flat_hits(
@@ -269,6 +269,26 @@ mod tests {
             down,
         ]);
         rays
+    }
+
+    #[test]
+    fn lanes_from_columns_equal_lanes_from_rays() {
+        let mut rng = SplitMix64::new(5);
+        let mut rays = rays(&mut rng);
+        rays.retain(|r| r.t_max == f32::INFINITY);
+        rays.reverse(); // The hard cases (zero, NaN and infinite directions) come first.
+        for block in rays.chunks_exact(LANES) {
+            let rays: [Ray; LANES] = std::array::from_fn(|l| block[l]);
+            let column =
+                |f: fn(&Ray) -> Vec3| -> Lanes3 { std::array::from_fn(|a| std::array::from_fn(|l| f(&rays[l])[a])) };
+            let (a, b) = (
+                RayLanes::from_rays(&rays),
+                RayLanes::from_columns(&[column(|r| r.origin), column(|r| r.dir)], f32::INFINITY),
+            );
+            let bits =
+                |r: &RayLanes| (r.o.map(|c| c.map(f64::to_bits)), r.d.map(|c| c.map(f64::to_bits)), r.t_max, r.valid);
+            assert_eq!(bits(&a), bits(&b));
+        }
     }
 
     #[test]
