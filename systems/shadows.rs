@@ -85,7 +85,8 @@ pub fn trace_shadow_rays(
                             }
                             c
                         };
-                        let from = [&batch.position, &batch.position_error, &batch.normal].map(|v| columns(v));
+                        // (Not `array::map`: its closure may stay out of the wide code.)
+                        let from = [columns(&batch.position), columns(&batch.position_error), columns(&batch.normal)];
                         let segments = spawn_rays_to_points_lanes([&from[0], &from[1], &from[2]], &columns(target));
                         rays = RayLanes::from_columns(&segments, 1.0 - SHADOW_EPSILON);
                     } else {
