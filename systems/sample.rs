@@ -347,11 +347,24 @@ impl Sampling<'_> {
         let n = LANES.min(cols.len() - e);
         let (mut point, mut pixel, mut stream) = ([0usize; LANES], [0u32; LANES], [0u32; LANES]);
         let mut p = [[0.0f32; LANES]; 3];
-        for l in 0..n {
-            let (i, _, s) = self.point_and_stream(first + e + l);
-            (point[l], pixel[l], stream[l]) = (i, self.batch.pixel[i], s);
-            let x = self.batch.position[i];
-            (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
+        if self.k == 1 && n == LANES {
+            // One entry per point: entries are points, read as contiguous runs (as
+            // `point_and_stream`, whose slot and sample offset are then 0).
+            let i = first + e;
+            let (pixels, samples) = (&self.batch.pixel[i..i + LANES], &self.batch.sample[i..i + LANES]);
+            for l in 0..LANES {
+                (point[l], pixel[l], stream[l]) = (i + l, pixels[l], samples[l] * self.spp);
+            }
+            for (l, x) in self.batch.position[i..i + LANES].iter().enumerate() {
+                (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
+            }
+        } else {
+            for l in 0..n {
+                let (i, _, s) = self.point_and_stream(first + e + l);
+                (point[l], pixel[l], stream[l]) = (i, self.batch.pixel[i], s);
+                let x = self.batch.position[i];
+                (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
+            }
         }
         let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
         // The choices as plain lane arrays: arrays of `Option<(LightId, f32)>` cost store-to-load
