@@ -124,16 +124,15 @@ pub(super) const NOT_SHADED: u32 = u32::MAX;
 const UNUSED_SAMPLE: CameraSample = CameraSample { pixel: 0, sample: 0, dir: Vec3::ZERO, hit: None, point: NOT_SHADED };
 
 /// Numbers the samples that hit a surface (`CameraSample::point`) in sample order, in parallel,
-/// and fills `shaded` with the index of each numbered sample.
-fn number_hits(samples: &mut [CameraSample], shaded: &mut Vec<u32>) {
-    let counts: Vec<usize> =
-        samples.par_chunks(RAY_CHUNK).map(|c| c.iter().filter(|s| s.hit.is_some()).count()).collect();
+/// and fills `shaded` with the index of each numbered sample. `counts` holds the number of hits in
+/// each `RAY_CHUNK` of samples.
+fn number_hits(samples: &mut [CameraSample], counts: &[usize], shaded: &mut Vec<u32>) {
     shaded.resize(counts.iter().sum(), 0);
     // Each chunk of samples gets the run of `shaded` its hits fill, and the number of its first hit.
     let mut rest = shaded.as_mut_slice();
     let mut runs = Vec::with_capacity(counts.len());
     let mut first = 0;
-    for &c in &counts {
+    for &c in counts {
         let (run, tail) = std::mem::take(&mut rest).split_at_mut(c);
         runs.push((run, first));
         rest = tail;
@@ -241,40 +240,47 @@ fn render_on_pool(
         samples.resize(last - first, UNUSED_SAMPLE);
         // Random numbers, rays and (in scenes of a few flat shapes) hits in lanes: dimensions 0 and
         // 1 of each sample's stream.
-        samples.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
-            crate::lanes::widest(
-                #[inline(always)]
-                || {
-                    // Counters walk the pixels and samples: one division per chunk, not per sample.
-                    let (mut next_pixel, mut next_sample) = pixel_and_sample(first + c * RAY_CHUNK);
-                    let (mut next_x, mut next_y) = (next_pixel % opts.width, next_pixel / opts.width);
-                    for block in chunk.chunks_mut(LANES) {
-                        let (mut pixel, mut sample) = ([0u32; LANES], [0u32; LANES]);
-                        let (mut x, mut y) = ([0u32; LANES], [0u32; LANES]);
-                        for l in 0..block.len() {
-                            (pixel[l], sample[l], x[l], y[l]) = (next_pixel, next_sample, next_x, next_y);
-                            next_sample += 1;
-                            if next_sample == opts.spp {
-                                (next_pixel, next_sample, next_x) = (next_pixel + 1, 0, next_x + 1);
-                                if next_x == opts.width {
-                                    (next_x, next_y) = (0, next_y + 1);
+        // Each chunk returns its number of hits, for `number_hits`.
+        let hit_counts: Vec<usize> = samples
+            .par_chunks_mut(RAY_CHUNK)
+            .enumerate()
+            .map(|(c, chunk)| {
+                crate::lanes::widest(
+                    #[inline(always)]
+                    || {
+                        let mut hits = 0;
+                        // Counters walk the pixels and samples: one division per chunk, not per sample.
+                        let (mut next_pixel, mut next_sample) = pixel_and_sample(first + c * RAY_CHUNK);
+                        let (mut next_x, mut next_y) = (next_pixel % opts.width, next_pixel / opts.width);
+                        for block in chunk.chunks_mut(LANES) {
+                            let (mut pixel, mut sample) = ([0u32; LANES], [0u32; LANES]);
+                            let (mut x, mut y) = ([0u32; LANES], [0u32; LANES]);
+                            for l in 0..block.len() {
+                                (pixel[l], sample[l], x[l], y[l]) = (next_pixel, next_sample, next_x, next_y);
+                                next_sample += 1;
+                                if next_sample == opts.spp {
+                                    (next_pixel, next_sample, next_x) = (next_pixel + 1, 0, next_x + 1);
+                                    if next_x == opts.width {
+                                        (next_x, next_y) = (0, next_y + 1);
+                                    }
                                 }
                             }
-                        }
-                        let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
-                        let rays = camera.rays_lanes([&x, &y], &u, &v);
-                        for (l, s) in block.iter_mut().enumerate() {
-                            (s.pixel, s.sample, s.dir, s.point) = (pixel[l], sample[l], rays[l].dir, NOT_SHADED);
-                        }
-                        bvh.closest_hits_lanes(&rays, |l, hit| {
-                            if let Some(s) = block.get_mut(l) {
-                                s.hit = hit;
+                            let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
+                            let rays = camera.rays_lanes([&x, &y], &u, &v);
+                            for (l, s) in block.iter_mut().enumerate() {
+                                (s.pixel, s.sample, s.dir, s.point) = (pixel[l], sample[l], rays[l].dir, NOT_SHADED);
                             }
-                        });
-                    }
-                },
-            )
-        });
+                            bvh.closest_hits_lanes(&rays, |l, hit| {
+                                if let Some(s) = block.get_mut(l) {
+                                    (s.hit, hits) = (hit, hits + hit.is_some() as usize);
+                                }
+                            });
+                        }
+                        hits
+                    },
+                )
+            })
+            .collect();
         // Spectral mode: the wavelengths of each sample (dimension 2 of its stream), kept apart
         // so that RGB renders do not carry them.
         wavelengths.clear();
@@ -286,7 +292,7 @@ fn render_on_pool(
         }
         // Points on surfaces go to the light system, numbered in sample order; normals face the
         // viewer.
-        number_hits(&mut samples, &mut shaded);
+        number_hits(&mut samples, &hit_counts, &mut shaded);
         {
             let mut batch = world.resource_mut::<ShadingBatch>();
             batch.par_fill(shaded.len(), |j| {
