@@ -84,22 +84,12 @@ impl Default for Settings {
     }
 }
 
-/// One point to shade, the row form of [`ShadingBatch`]'s columns (see there).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShadingPoint {
-    pub position: Vec3,
-    pub position_error: Vec3,
-    pub normal: Vec3,
-    pub shading_normal: Vec3,
-    pub pixel: u32,
-    pub sample: u32,
-}
-
 /// Points to shade, as columns. All columns have `len()` entries; `wavelengths` is filled in
 /// spectral mode only. The caller (a renderer's camera rays or an app's G-buffer) writes it.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct ShadingBatch {
-    /// World positions, m.
+    /// World positions, m. A non-finite position marks a slot with no point (a camera ray that
+    /// hit nothing, a G-buffer's sky): it gets entries, all without light or shadow ray.
     pub position: Vec<Vec3>,
     /// Per-axis error bound of each position (for robust shadow-ray offsets; see
     /// `geometry::ray`). `push` fills a conservative bound for points of unknown origin.
@@ -134,11 +124,9 @@ impl ShadingBatch {
         self.sample.clear();
         self.wavelengths.clear();
     }
-    /// Replaces the points by `n` points computed in parallel, point `j` by `point(j)`.
-    /// Spectral callers fill `wavelengths` to match.
-    pub fn par_fill(&mut self, n: usize, point: impl Fn(usize) -> ShadingPoint + Sync) {
-        use rayon::prelude::*;
-        // Every point is written below, so the columns are only resized (no fill in steady state).
+    /// Sizes every column but `wavelengths` (which it empties) to `n` points, keeping whatever
+    /// values they held: for a caller about to write every slot of every column.
+    pub fn set_len(&mut self, n: usize) {
         self.wavelengths.clear();
         self.position.resize(n, Vec3::ZERO);
         self.position_error.resize(n, Vec3::ZERO);
@@ -146,19 +134,6 @@ impl ShadingBatch {
         self.shading_normal.resize(n, Vec3::ZERO);
         self.pixel.resize(n, 0);
         self.sample.resize(n, 0);
-        let columns = (
-            self.position.par_iter_mut(),
-            self.position_error.par_iter_mut(),
-            self.normal.par_iter_mut(),
-            self.shading_normal.par_iter_mut(),
-            self.pixel.par_iter_mut(),
-            self.sample.par_iter_mut(),
-        );
-        columns.into_par_iter().enumerate().with_min_len(256).for_each(|(j, (p, e, ng, ns, pixel, sample))| {
-            let q = point(j);
-            (*p, *e, *ng, *ns, *pixel, *sample) =
-                (q.position, q.position_error, q.normal, q.shading_normal, q.pixel, q.sample);
-        });
     }
 
     /// Appends a point on a surface whose position error is unknown (an app's G-buffer).

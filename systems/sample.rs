@@ -233,6 +233,10 @@ impl Sampling<'_> {
     fn entry(&self, first: usize, e: usize, cols: &mut EntryColumns) -> bool {
         let (i, slot, stream) = self.point_and_stream(first + e);
         let ctx = self.context(i);
+        // A slot with no point (see `ShadingBatch::position`) gets no light.
+        if !ctx.p.is_finite() {
+            return self.write(cols, e, NO_LIGHT, None);
+        }
         // Under `All`, light j of a sample draws its u from dimensions 1 + 2j.
         let (chosen, dim) = match self.settings.selection {
             LightSelection::All => {
@@ -373,6 +377,9 @@ impl Sampling<'_> {
         let (mut rows, mut any_point) = ([0u32; LANES], false);
         for l in 0..n {
             let finite = p[0][l].is_finite() && p[1][l].is_finite() && p[2][l].is_finite();
+            if !finite {
+                continue;
+            }
             let choice = self.sampler.sample_context_free(finite, u[l]);
             if let Some((id, q)) = choice.unwrap_or_else(|| self.sampler.sample(&self.context(point[l]), u[l])) {
                 (light[l], pmf[l], chosen[l]) = (id, q, true);
@@ -436,6 +443,35 @@ mod tests {
     use crate::geometry::Transform;
     use crate::light::{Amount, DistantLight, PointLight, SpotLight, UniformInfiniteLight};
     use crate::rng::SplitMix64;
+
+    /// A slot with no point (a non-finite position: an escaped camera ray) gets empty entries
+    /// and no shadow rays under every selection, even from lights whose samples ignore the
+    /// point (a uniform sky, a distant light).
+    #[test]
+    fn slot_without_point_gets_no_light() {
+        for selection in [LightSelection::OneSampled, LightSelection::All] {
+            let mut world = World::new();
+            let mut schedule = Schedule::default();
+            world.insert_resource(Settings { selection, samples_per_point: 2, ..Default::default() });
+            crate::systems::LightingPlugin::build(&mut world, &mut schedule);
+            world.spawn((UniformInfiniteLight::default(), Transform::default()));
+            world.spawn((DistantLight { amount: Amount::Lux(1.0), ..Default::default() }, Transform::default()));
+            world.spawn((PointLight::candela(10.0), Transform::from_translation(Vec3::Y)));
+            {
+                let mut batch = world.resource_mut::<ShadingBatch>();
+                batch.push(Vec3::ZERO, Vec3::Y, 0, 0);
+                batch.push(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::ZERO, 1, 0);
+                batch.push(Vec3::new(0.0, f32::INFINITY, 0.0), Vec3::ZERO, 2, 0);
+            }
+            schedule.run(&mut world);
+            let (lit, rays) = (world.resource::<DirectLighting>(), world.resource::<ShadowRays>());
+            assert!(lit.entries(0).any(|e| lit.pdf[e] > 0.0), "{selection:?}: the real point is lit");
+            for e in lit.entries(1).chain(lit.entries(2)) {
+                assert_eq!((lit.pdf[e], lit.radiance[e], lit.light[e]), (0.0, SampledSpectrum::default(), NO_LIGHT));
+                assert_eq!(rays.kind[e], ShadowTarget::None, "{selection:?}");
+            }
+        }
+    }
 
     /// Entries the schedule wrote (through the lane path: one sampled light, RGB, f32) must equal
     /// those of the one-at-a-time path, bit for bit, for a mix of light kinds, under the power,

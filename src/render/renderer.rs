@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use super::bsdf::Bsdf;
 use super::camera::{Camera, CameraModel, PinholeCamera};
+use super::camera_pass::{CameraColumns, SampleRange, SampleSurface, trace_camera_rays};
 use super::film::Film;
 use super::material::Material;
 use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
@@ -16,7 +17,7 @@ use crate::light::{ColorQuery, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
 use crate::sampling::Frame;
-use crate::shading::{ColorMode, DirectLighting, SceneBounds, Settings, ShadingBatch, ShadingPoint};
+use crate::shading::{ColorMode, DirectLighting, SceneBounds, Settings, ShadingBatch};
 use crate::spectrum::{SampledSpectrum, SampledWavelengths, color};
 use crate::systems::GeometryIndex;
 
@@ -105,48 +106,6 @@ fn to_rgb(v: SampledSpectrum, wavelengths: Option<&SampledWavelengths>) -> Vec3 
 /// The material of geometry that has none.
 static DEFAULT_MATERIAL: std::sync::LazyLock<Material> = std::sync::LazyLock::new(Material::default);
 
-/// Everything about a camera sample that the shading pass needs.
-#[derive(Clone, Copy)]
-pub(super) struct CameraSample {
-    pixel: u32,
-    sample: u32,
-    /// Unit direction of the camera ray.
-    pub(super) dir: Vec3,
-    pub(super) hit: Option<Hit>,
-    /// Index of the point in the `ShadingBatch`, or `NOT_SHADED` for rays that escaped.
-    pub(super) point: u32,
-}
-
-/// `CameraSample::point` of a sample that hit nothing.
-pub(super) const NOT_SHADED: u32 = u32::MAX;
-
-/// Filler for sample slots about to be written.
-const UNUSED_SAMPLE: CameraSample = CameraSample { pixel: 0, sample: 0, dir: Vec3::ZERO, hit: None, point: NOT_SHADED };
-
-/// Numbers the samples that hit a surface (`CameraSample::point`) in sample order, in parallel,
-/// and fills `shaded` with the index of each numbered sample. `counts` holds the number of hits in
-/// each `RAY_CHUNK` of samples.
-fn number_hits(samples: &mut [CameraSample], counts: &[usize], shaded: &mut Vec<u32>) {
-    shaded.resize(counts.iter().sum(), 0);
-    // Each chunk of samples gets the run of `shaded` its hits fill, and the number of its first hit.
-    let mut rest = shaded.as_mut_slice();
-    let mut runs = Vec::with_capacity(counts.len());
-    let mut first = 0;
-    for &c in counts {
-        let (run, tail) = std::mem::take(&mut rest).split_at_mut(c);
-        runs.push((run, first));
-        rest = tail;
-        first += c as u32;
-    }
-    samples.par_chunks_mut(RAY_CHUNK).zip(runs).enumerate().for_each(|(c, (chunk, (run, start)))| {
-        let hits = chunk.iter_mut().enumerate().filter(|(_, s)| s.hit.is_some());
-        for (n, (i, s)) in hits.enumerate() {
-            s.point = start + n as u32;
-            run[n] = (c * RAY_CHUNK + i) as u32;
-        }
-    });
-}
-
 /// The camera of the world (the first `Camera` with a `Transform`), or one framing the scene.
 fn find_camera(world: &mut World, width: u32, height: u32) -> PinholeCamera {
     let mut q = world.query::<(&Camera, &crate::geometry::Transform)>();
@@ -224,95 +183,28 @@ fn render_on_pool(
     let mut film = Film::new(opts.width, opts.height);
     let mut stats = RenderStats::default();
     let total = opts.width as usize * opts.height as usize * opts.spp as usize;
-    let mut samples: Vec<CameraSample> = Vec::with_capacity(BATCH_SAMPLES.min(total));
+    let mut columns = CameraColumns::default();
     let mut contributions: Vec<Vec3> = Vec::new();
     let mut traced: Vec<bool> = Vec::new();
-    let mut wavelengths: Vec<SampledWavelengths> = Vec::new();
-    let mut shaded: Vec<u32> = Vec::new();
-    // Sample index k is sample k % spp of pixel k / spp: a pixel's samples are adjacent.
-    let pixel_and_sample = |k: usize| ((k / opts.spp as usize) as u32, (k % opts.spp as usize) as u32);
     let mut first = 0usize;
     while first < total {
-        let last = (first + BATCH_SAMPLES).min(total);
-        // Camera rays and their closest hits in one parallel pass.
-        let bvh = world.resource::<SceneBvh>();
-        // Samples are written in place: a returned `CameraSample` would be copied twice.
-        samples.resize(last - first, UNUSED_SAMPLE);
-        // Random numbers, rays and (in scenes of a few flat shapes) hits in lanes: dimensions 0 and
-        // 1 of each sample's stream.
-        // Each chunk returns its number of hits, for `number_hits`.
-        let hit_counts: Vec<usize> = samples
-            .par_chunks_mut(RAY_CHUNK)
-            .enumerate()
-            .map(|(c, chunk)| {
-                crate::lanes::widest(
-                    #[inline(always)]
-                    || {
-                        let mut hits = 0;
-                        // Counters walk the pixels and samples: one division per chunk, not per sample.
-                        let (mut next_pixel, mut next_sample) = pixel_and_sample(first + c * RAY_CHUNK);
-                        let (mut next_x, mut next_y) = (next_pixel % opts.width, next_pixel / opts.width);
-                        for block in chunk.chunks_mut(LANES) {
-                            let (mut pixel, mut sample) = ([0u32; LANES], [0u32; LANES]);
-                            let (mut x, mut y) = ([0u32; LANES], [0u32; LANES]);
-                            for l in 0..block.len() {
-                                (pixel[l], sample[l], x[l], y[l]) = (next_pixel, next_sample, next_x, next_y);
-                                next_sample += 1;
-                                if next_sample == opts.spp {
-                                    (next_pixel, next_sample, next_x) = (next_pixel + 1, 0, next_x + 1);
-                                    if next_x == opts.width {
-                                        (next_x, next_y) = (0, next_y + 1);
-                                    }
-                                }
-                            }
-                            let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
-                            let rays = camera.rays_lanes([&x, &y], &u, &v);
-                            for (l, s) in block.iter_mut().enumerate() {
-                                (s.pixel, s.sample, s.dir, s.point) = (pixel[l], sample[l], rays[l].dir, NOT_SHADED);
-                            }
-                            bvh.closest_hits_lanes(&rays, |l, hit| {
-                                if let Some(s) = block.get_mut(l) {
-                                    (s.hit, hits) = (hit, hits + hit.is_some() as usize);
-                                }
-                            });
-                        }
-                        hits
-                    },
-                )
-            })
-            .collect();
-        // Spectral mode: the wavelengths of each sample (dimension 2 of its stream), kept apart
-        // so that RGB renders do not carry them.
-        wavelengths.clear();
-        if spectral {
-            wavelengths.par_extend((first..last).into_par_iter().with_min_len(RAY_CHUNK).map(|k| {
-                let (pixel, sample) = pixel_and_sample(k);
-                SampledWavelengths::sample_visible(SampleStream::new(seed, pixel, sample).at_dimension(2).next_f32())
-            }));
-        }
-        // Points on surfaces go to the light system, numbered in sample order; normals face the
-        // viewer.
-        number_hits(&mut samples, &hit_counts, &mut shaded);
-        {
-            let mut batch = world.resource_mut::<ShadingBatch>();
-            batch.par_fill(shaded.len(), |j| {
-                let s = &samples[shaded[j] as usize];
-                let h = s.hit.as_ref().expect("numbered samples have hits");
-                let flip = if h.ng.dot(s.dir) > 0.0 { -1.0 } else { 1.0 };
-                let ns = if h.ns.dot(h.ng) * flip < 0.0 { h.ng * flip } else { h.ns * flip };
-                ShadingPoint {
-                    position: h.p,
-                    position_error: h.p_error,
-                    normal: h.ng * flip,
-                    shading_normal: ns,
-                    pixel: s.pixel,
-                    sample: s.sample,
-                }
-            });
+        let len = BATCH_SAMPLES.min(total - first);
+        let range = SampleRange { first, len, width: opts.width, spp: opts.spp, seed };
+        // Every camera sample takes a slot of the batch (one with no point if its ray escaped).
+        world.resource_scope(|world, mut batch: Mut<ShadingBatch>| {
+            trace_camera_rays(&mut batch, &mut columns, world.resource::<SceneBvh>(), &camera, range);
+            // Spectral mode: the wavelengths of each sample (dimension 2 of its stream).
             if spectral {
-                batch.wavelengths.par_extend(shaded.par_iter().map(|&k| wavelengths[k as usize]));
+                let batch = &mut *batch;
+                let lambda =
+                    batch.pixel.par_iter().zip(&batch.sample).with_min_len(RAY_CHUNK).map(|(&pixel, &sample)| {
+                        SampledWavelengths::sample_visible(
+                            SampleStream::new(seed, pixel, sample).at_dimension(2).next_f32(),
+                        )
+                    });
+                batch.wavelengths.par_extend(lambda);
             }
-        }
+        });
         schedule.run(world);
         stats.shadow_rays += world.resource::<crate::systems::ShadowRays>().len() as u64;
 
@@ -323,6 +215,7 @@ fn render_on_pool(
             lighting: world_ref.resource::<DirectLighting>(),
             batch: world_ref.resource::<ShadingBatch>(),
             bvh: world_ref.resource::<SceneBvh>(),
+            columns: &columns,
             lights_of_instance: {
                 let table = world_ref.resource::<LightTable>();
                 world_ref.resource::<GeometryIndex>().entities.iter().map(|&e| table.rows_of(e)).collect()
@@ -336,40 +229,36 @@ fn render_on_pool(
         };
         let escape_ids: Vec<_> = shade.table.escape_lights().collect();
         let bsdf_sampling = opts.strategy != Strategy::LightOnly && shade.table.has_non_delta_lights();
-        let shade_one = |k: usize, s: &CameraSample| {
-            let lambda = wavelengths.get(k);
-            if s.point != NOT_SHADED {
-                return shade.shade(s.point as usize, s, lambda, &escape_ids, bsdf_sampling);
+        let shade_one = |k: usize| {
+            let lambda = shade.batch.wavelengths.get(k);
+            if !columns.surface[k].escaped() {
+                return shade.shade(k, lambda, &escape_ids, bsdf_sampling);
             }
             // Escaped camera rays see the infinite lights directly.
             let query = lambda.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
             let le = escape_ids
                 .iter()
-                .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, s.dir, query)));
+                .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, columns.dir[k], query)));
             (to_rgb(le, lambda), false)
         };
         // Where the lane kernel may apply (`shade_lanes.rs`), blocks of the common case go
         // through it; elsewhere samples are shaded one at a time.
         if !spectral && !bsdf_sampling && !super::shade_lanes::turned_off() {
             contributions.clear();
-            contributions.resize(samples.len(), Vec3::ZERO);
+            contributions.resize(len, Vec3::ZERO);
             traced.clear();
-            traced.resize(samples.len(), false);
-            let chunks = (
-                samples.par_chunks(RAY_CHUNK),
-                contributions.par_chunks_mut(RAY_CHUNK),
-                traced.par_chunks_mut(RAY_CHUNK),
-            );
-            chunks.into_par_iter().enumerate().for_each(|(c, (samples, out, traced))| {
+            traced.resize(len, false);
+            let chunks = (contributions.par_chunks_mut(RAY_CHUNK), traced.par_chunks_mut(RAY_CHUNK));
+            chunks.into_par_iter().enumerate().for_each(|(c, (out, traced))| {
                 crate::lanes::widest(
                     #[inline(always)]
                     || {
-                        let mut b = 0;
-                        while b < samples.len() {
-                            let end = (b + LANES).min(samples.len());
-                            if !shade.shade_lanes(&samples[b..end], &mut out[b..end]) {
+                        let (first, mut b) = (c * RAY_CHUNK, 0);
+                        while b < out.len() {
+                            let end = (b + LANES).min(out.len());
+                            if !shade.shade_lanes(first + b, &mut out[b..end]) {
                                 for i in b..end {
-                                    (out[i], traced[i]) = shade_one(c * RAY_CHUNK + i, &samples[i]);
+                                    (out[i], traced[i]) = shade_one(first + i);
                                 }
                             }
                             b = end;
@@ -378,14 +267,14 @@ fn render_on_pool(
                 )
             });
         } else {
-            let shaded = samples.par_iter().enumerate().with_min_len(RAY_CHUNK).map(|(k, s)| shade_one(k, s));
+            let shaded = (0..len).into_par_iter().with_min_len(RAY_CHUNK).map(shade_one);
             shaded.unzip_into_vecs(&mut contributions, &mut traced);
         }
-        // Sample k is sample k % spp of pixel k / spp (see `pixel_and_sample`).
+        // Sample k is sample k % spp of pixel k / spp (see `SampleRange`).
         film.par_add_samples(first, opts.spp as usize, &contributions);
         stats.bsdf_rays += traced.par_iter().filter(|&&t| t).count() as u64;
-        stats.camera_samples += samples.len() as u64;
-        first = last;
+        stats.camera_samples += len as u64;
+        first += len;
         progress(first as f32 / total as f32);
     }
     stats.seconds = start.elapsed().as_secs_f64();
@@ -399,6 +288,8 @@ pub(super) struct ShadeContext<'a> {
     pub(super) lighting: &'a DirectLighting,
     pub(super) batch: &'a ShadingBatch,
     bvh: &'a SceneBvh,
+    /// The camera samples' directions and surfaces, indexed like `batch`.
+    pub(super) columns: &'a CameraColumns,
     /// The light rows of each BVH instance's entity (empty for geometry that emits nothing).
     pub(super) lights_of_instance: Vec<&'a [crate::light::LightId]>,
     materials: &'a [Material],
@@ -415,37 +306,57 @@ pub(super) struct ShadeContext<'a> {
 impl ShadeContext<'_> {
     /// The area light `hit` landed on and its radiance toward `w` (unit, away from the surface).
     fn emitted(&self, hit: &Hit, w: Vec3, query: ColorQuery) -> Option<(crate::light::LightId, SampledSpectrum)> {
-        let rows = self.lights_of_instance.get(hit.instance as usize)?;
+        let surface = SampleSurface {
+            uv: hit.uv,
+            material: hit.material,
+            instance: hit.instance,
+            primitive: hit.id.primitive,
+            flipped: false,
+        };
+        self.emitted_at(&surface, hit.p, hit.ng, w, query)
+    }
+
+    /// [`Self::emitted`] at point `p` of `surface`, whose geometric normal is `ng`.
+    fn emitted_at(
+        &self,
+        surface: &SampleSurface,
+        p: Vec3,
+        ng: Vec3,
+        w: Vec3,
+        query: ColorQuery,
+    ) -> Option<(crate::light::LightId, SampledSpectrum)> {
+        let rows = self.lights_of_instance.get(surface.instance as usize)?;
         if rows.is_empty() {
             return None;
         }
-        let id = self.table.area_light_among(rows, hit.id.primitive)?;
+        let id = self.table.area_light_among(rows, surface.primitive)?;
         let light = &self.table.area.items[id.row as usize].light;
-        Some((id, light.radiance(hit.p, hit.ng, hit.uv, w, query)))
+        Some((id, light.radiance(p, ng, surface.uv, w, query)))
     }
 
-    /// Direct light at batch point `j` (camera sample `s`, at `wavelengths` in spectral mode): the
-    /// light system's samples weighted by MIS, plus one BSDF sample toward non-delta lights.
+    /// Direct light at camera sample `j`, which hit a surface (at `wavelengths` in spectral mode):
+    /// the light system's samples weighted by MIS, plus one BSDF sample toward non-delta lights.
     /// Returns RGB and whether a ray was traced.
     fn shade(
         &self,
         j: usize,
-        s: &CameraSample,
         wavelengths: Option<&SampledWavelengths>,
         escape_ids: &[crate::light::LightId],
         bsdf_sampling: bool,
     ) -> (Vec3, bool) {
-        let hit = s.hit.expect("shaded samples have hits");
+        let surface = &self.columns.surface[j];
+        let (p, n) = (self.batch.position[j], self.batch.normal[j]);
         let query = wavelengths.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
-        let wo = -s.dir;
+        let wo = -self.columns.dir[j];
         let ns = self.batch.shading_normal[j];
-        let material = self.materials.get(hit.material as usize).unwrap_or(&DEFAULT_MATERIAL);
-        let bsdf = match (query, self.uniform_bsdfs.get(hit.material as usize)) {
+        let material = self.materials.get(surface.material as usize).unwrap_or(&DEFAULT_MATERIAL);
+        let bsdf = match (query, self.uniform_bsdfs.get(surface.material as usize)) {
             (ColorQuery::Rgb, Some(Some(b))) => Bsdf { frame: Frame::from_z(ns), ..*b },
-            _ => material.bsdf(hit.uv, ns, query),
+            _ => material.bsdf(surface.uv, ns, query),
         };
-        // Light the camera sees on emitters directly.
-        let mut l = self.emitted(&hit, wo, query).map_or(SampledSpectrum::default(), |(_, le)| le);
+        // Light the camera sees on emitters directly (their sidedness needs the unflipped normal).
+        let ng = if surface.flipped { -n } else { n };
+        let mut l = self.emitted_at(surface, p, ng, wo, query).map_or(SampledSpectrum::default(), |(_, le)| le);
         for e in self.lighting.entries(j) {
             let (li, wi, pdf) = (self.lighting.radiance[e], self.lighting.wi[e], self.lighting.pdf[e]);
             if pdf <= 0.0 {
@@ -460,12 +371,12 @@ impl ShadeContext<'_> {
         }
         let mut traced = false;
         if bsdf_sampling {
-            let mut rng = SampleStream::new(self.seed, s.pixel, s.sample).at_dimension(16);
+            let mut rng = SampleStream::new(self.seed, self.batch.pixel[j], self.batch.sample[j]).at_dimension(16);
             if let Some(bs) = bsdf.sample(wo, rng.next_f32(), rng.next_2d()) {
                 traced = true;
-                let from = crate::geometry::SurfacePoint { p: hit.p, p_error: hit.p_error, n: self.batch.normal[j] };
+                let from = crate::geometry::SurfacePoint { p, p_error: self.batch.position_error[j], n };
                 let ray = self.offset.spawn_ray(&from, bs.wi);
-                let ctx = LightSampleContext { p: hit.p, n: self.batch.normal[j], ns };
+                let ctx = LightSampleContext { p, n, ns };
                 let pmf = |id| if self.all_lights { 1.0 } else { self.sampler.pmf(&ctx, id) };
                 if let Some(h2) = self.bvh.closest_hit(&ray) {
                     if let Some((id, le)) = self.emitted(&h2, -bs.wi, query) {

@@ -8,43 +8,44 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
 
-use super::renderer::{CameraSample, NOT_SHADED, ShadeContext};
+use super::renderer::ShadeContext;
 use crate::lanes::LANES;
 use crate::sampling::cosine_hemisphere_pdf;
 
 impl ShadeContext<'_> {
-    /// Shades `block` into `out` (RGB) if it is `LANES` samples of the common case (see the
-    /// module docs); returns whether it did.
+    /// Shades camera samples `first..first + out.len()` into `out` (RGB) if they are `LANES`
+    /// samples of the common case (see the module docs); returns whether it did.
     #[inline(always)]
-    pub(super) fn shade_lanes(&self, block: &[CameraSample], out: &mut [Vec3]) -> bool {
-        if block.len() != LANES {
+    pub(super) fn shade_lanes(&self, first: usize, out: &mut [Vec3]) -> bool {
+        if out.len() != LANES {
             return false;
         }
-        // Batch point and base colour / pi (the Lambertian f above the surface) per lane.
-        let (mut point, mut f_up) = ([0usize; LANES], [[0.0f32; LANES]; 3]);
-        for (l, s) in block.iter().enumerate() {
-            let Some(hit) = s.hit.as_ref().filter(|_| s.point != NOT_SHADED) else { return false };
-            let bsdf = match self.uniform_bsdfs.get(hit.material as usize) {
+        // Base colour / pi (the Lambertian f above the surface) per lane.
+        let mut f_up = [[0.0f32; LANES]; 3];
+        for (l, surface) in self.columns.surface[first..first + LANES].iter().enumerate() {
+            if surface.escaped() {
+                return false;
+            }
+            let bsdf = match self.uniform_bsdfs.get(surface.material as usize) {
                 Some(Some(b)) if !b.has_specular() => b,
                 _ => return false,
             };
-            if self.lights_of_instance.get(hit.instance as usize).is_some_and(|rows| !rows.is_empty()) {
+            if self.lights_of_instance.get(surface.instance as usize).is_some_and(|rows| !rows.is_empty()) {
                 return false;
             }
-            point[l] = s.point as usize;
             for (f, base) in f_up.iter_mut().zip(bsdf.base.0) {
                 f[l] = base * FRAC_1_PI;
             }
         }
         let lighting = self.lighting;
-        let k = lighting.entries(point[0]).len();
-        if point.iter().any(|&j| lighting.entries(j).len() != k) {
+        let k = lighting.entries(first).len();
+        if (first..first + LANES).any(|j| lighting.entries(j).len() != k) {
             return false;
         }
         let mut sum = [[0.0f32; LANES]; 3];
         for slot in 0..k {
             for l in 0..LANES {
-                let (j, wo) = (point[l], -block[l].dir);
+                let (j, wo) = (first + l, -self.columns.dir[first + l]);
                 let e = lighting.offsets[j] as usize + slot;
                 let (li, wi, pdf) = (lighting.radiance[e], lighting.wi[e], lighting.pdf[e]);
                 let ns = self.batch.shading_normal[j];

@@ -1,0 +1,162 @@
+//! The camera pass: a batch's camera rays and their closest hits, written straight into the
+//! `ShadingBatch` (one slot per camera sample, hit or not) and the renderer's own columns. No
+//! per-sample record is copied on: the light system and the shading pass read these columns.
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use super::camera::CameraModel;
+use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
+use crate::lanes::LANES;
+use crate::rng::SampleStream;
+use crate::shading::ShadingBatch;
+
+/// What shading needs of a camera sample's surface besides its `ShadingBatch` slot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct SampleSurface {
+    pub(super) uv: Vec2,
+    pub(super) material: u32,
+    /// BVH instance that was hit; `ESCAPED` for rays that hit nothing.
+    pub(super) instance: u32,
+    pub(super) primitive: u32,
+    /// The batch's normal is the hit's geometric normal negated (so that it faces the camera).
+    pub(super) flipped: bool,
+}
+
+impl SampleSurface {
+    const ESCAPED: Self = Self { uv: Vec2::ZERO, material: 0, instance: u32::MAX, primitive: 0, flipped: false };
+
+    /// Whether the camera ray hit nothing.
+    #[inline(always)]
+    pub(super) fn escaped(&self) -> bool {
+        self.instance == Self::ESCAPED.instance
+    }
+}
+
+/// The renderer's per-sample columns, indexed like the `ShadingBatch`.
+#[derive(Default)]
+pub(super) struct CameraColumns {
+    /// Unit direction of the camera ray.
+    pub(super) dir: Vec<Vec3>,
+    pub(super) surface: Vec<SampleSurface>,
+}
+
+/// Which samples a batch holds and how they map to pixels: sample index k is sample k % spp of
+/// pixel k / spp, so a pixel's samples are adjacent.
+#[derive(Clone, Copy)]
+pub(super) struct SampleRange {
+    pub(super) first: usize,
+    pub(super) len: usize,
+    pub(super) width: u32,
+    pub(super) spp: u32,
+    pub(super) seed: u64,
+}
+
+/// Writes slot `i` of every column for a ray with direction `dir` and closest hit `hit`. Escaped
+/// rays get a NaN position (the light system chooses no light there) and zero normals.
+#[inline(always)]
+fn write_slot(batch: &mut BatchChunk, i: usize, dir: Vec3, hit: Option<Hit>) {
+    let Some(h) = hit else {
+        (batch.position[i], batch.position_error[i]) = (Vec3::NAN, Vec3::ZERO);
+        (batch.normal[i], batch.shading_normal[i]) = (Vec3::ZERO, Vec3::ZERO);
+        (batch.dir[i], batch.surface[i]) = (dir, SampleSurface::ESCAPED);
+        return;
+    };
+    // Normals face the viewer.
+    let flipped = h.ng.dot(dir) > 0.0;
+    let flip = if flipped { -1.0 } else { 1.0 };
+    let ns = if h.ns.dot(h.ng) * flip < 0.0 { h.ng * flip } else { h.ns * flip };
+    (batch.position[i], batch.position_error[i]) = (h.p, h.p_error);
+    (batch.normal[i], batch.shading_normal[i]) = (h.ng * flip, ns);
+    batch.dir[i] = dir;
+    batch.surface[i] =
+        SampleSurface { uv: h.uv, material: h.material, instance: h.instance, primitive: h.id.primitive, flipped };
+}
+
+/// One `RAY_CHUNK` of every column the camera pass writes.
+struct BatchChunk<'a> {
+    position: &'a mut [Vec3],
+    position_error: &'a mut [Vec3],
+    normal: &'a mut [Vec3],
+    shading_normal: &'a mut [Vec3],
+    pixel: &'a mut [u32],
+    sample: &'a mut [u32],
+    dir: &'a mut [Vec3],
+    surface: &'a mut [SampleSurface],
+}
+
+/// Traces the camera rays of `range` and writes every slot of `batch` (resized to
+/// `range.len`, wavelengths left empty) and of `columns`. Random numbers, rays and (in scenes of a
+/// few flat shapes) hits are computed in lanes: dimensions 0 and 1 of each sample's stream.
+pub(super) fn trace_camera_rays(
+    batch: &mut ShadingBatch,
+    columns: &mut CameraColumns,
+    bvh: &SceneBvh,
+    camera: &CameraModel,
+    range: SampleRange,
+) {
+    let n = range.len;
+    batch.set_len(n);
+    columns.dir.resize(n, Vec3::ZERO);
+    columns.surface.resize(n, SampleSurface::ESCAPED);
+    let chunks = (
+        batch.position.par_chunks_mut(RAY_CHUNK),
+        batch.position_error.par_chunks_mut(RAY_CHUNK),
+        batch.normal.par_chunks_mut(RAY_CHUNK),
+        batch.shading_normal.par_chunks_mut(RAY_CHUNK),
+        batch.pixel.par_chunks_mut(RAY_CHUNK),
+        batch.sample.par_chunks_mut(RAY_CHUNK),
+        columns.dir.par_chunks_mut(RAY_CHUNK),
+        columns.surface.par_chunks_mut(RAY_CHUNK),
+    );
+    chunks.into_par_iter().enumerate().for_each(
+        |(c, (position, position_error, normal, shading_normal, pixel, sample, dir, surface))| {
+            let mut chunk =
+                BatchChunk { position, position_error, normal, shading_normal, pixel, sample, dir, surface };
+            crate::lanes::widest(
+                #[inline(always)]
+                || trace_chunk(&mut chunk, range.first + c * RAY_CHUNK, bvh, camera, range),
+            )
+        },
+    );
+}
+
+/// [`trace_camera_rays`] for one chunk whose first sample has index `first`.
+#[inline(always)]
+fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &CameraModel, range: SampleRange) {
+    let SampleRange { width, spp, seed, .. } = range;
+    // Counters walk the pixels and samples: one division per chunk, not per sample.
+    let (mut next_pixel, mut next_sample) = ((first / spp as usize) as u32, (first % spp as usize) as u32);
+    let (mut next_x, mut next_y) = (next_pixel % width, next_pixel / width);
+    let len = chunk.pixel.len();
+    let mut b = 0;
+    while b < len {
+        let end = (b + LANES).min(len);
+        let (mut pixel, mut sample) = ([0u32; LANES], [0u32; LANES]);
+        let (mut x, mut y) = ([0u32; LANES], [0u32; LANES]);
+        for l in 0..end - b {
+            (pixel[l], sample[l], x[l], y[l]) = (next_pixel, next_sample, next_x, next_y);
+            next_sample += 1;
+            if next_sample == spp {
+                (next_pixel, next_sample, next_x) = (next_pixel + 1, 0, next_x + 1);
+                if next_x == width {
+                    (next_x, next_y) = (0, next_y + 1);
+                }
+            }
+        }
+        chunk.pixel[b..end].copy_from_slice(&pixel[..end - b]);
+        chunk.sample[b..end].copy_from_slice(&sample[..end - b]);
+        let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
+        let rays = camera.rays_lanes([&x, &y], &u, &v);
+        bvh.closest_hits_lanes(
+            &rays,
+            #[inline(always)]
+            |l, hit| {
+                if b + l < end {
+                    write_slot(chunk, b + l, rays[l].dir, hit);
+                }
+            },
+        );
+        b = end;
+    }
+}
