@@ -75,6 +75,10 @@ impl AliasTable {
             return None;
         }
         let n = self.bins.len();
+        if n == 1 {
+            // One outcome (a one-light scene): the result is the same for every u.
+            return Some((0, self.bins[0].pmf));
+        }
         let t = (u as f64).clamp(0.0, 1.0) * n as f64; // exact: 24-bit mantissa times n < 2^32
         let i = (t as usize).min(n - 1);
         let remainder = t - i as f64; // in [0, 1] for u <= 1; 1 only for u = 1, which keeps the alias
@@ -125,6 +129,12 @@ mod tests {
             let u = k as f32 / 400.0;
             assert_eq!(t.sample(u), Some((2, 1.0)), "u = {u}");
         }
+        // A table of one outcome (the shortcut) and one of zero weight.
+        let one = AliasTable::new(&[3.0]);
+        for u in [0.0, 0.5, 1.0, f32::NAN] {
+            assert_eq!(one.sample(u), Some((0, 1.0)), "u = {u}");
+        }
+        assert!(AliasTable::new(&[0.0]).sample(0.5).is_none());
     }
 
     #[test]
