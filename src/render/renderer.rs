@@ -86,13 +86,10 @@ pub struct RenderStats {
 #[inline]
 pub fn power_heuristic(a: f32, b: f32) -> f32 {
     let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 && a2.is_finite() {
-        a2 / (a2 + b2)
-    } else if a.is_infinite() {
-        1.0
-    } else {
-        0.0
-    }
+    // Selects, not branches (`&`, the quotient always computed): lane loops vectorise.
+    let ratio = a2 / (a2 + b2);
+    let infinite = if a.is_infinite() { 1.0 } else { 0.0 };
+    if (a2 + b2 > 0.0) & a2.is_finite() { ratio } else { infinite }
 }
 
 /// Photometric linear sRGB of a 4-lane value in the given mode.

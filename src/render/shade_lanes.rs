@@ -8,7 +8,7 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
 
-use super::renderer::ShadeContext;
+use super::renderer::{ShadeContext, Strategy, power_heuristic};
 use crate::lanes::LANES;
 use crate::sampling::cosine_hemisphere_pdf;
 
@@ -20,56 +20,97 @@ impl ShadeContext<'_> {
         if out.len() != LANES {
             return false;
         }
-        // Base colour / pi (the Lambertian f above the surface) per lane.
+        // Base colour / pi (the Lambertian f above the surface) per lane. Neighbouring samples
+        // usually share a surface, so its checks run once per run of equal (material, instance).
         let mut f_up = [[0.0f32; LANES]; 3];
+        let (mut surface_of_base, mut base) = ((u32::MAX, u32::MAX), [0.0f32; 3]);
         for (l, surface) in self.columns.surface[first..first + LANES].iter().enumerate() {
-            if surface.escaped() {
-                return false;
+            if (surface.material, surface.instance) != surface_of_base {
+                if surface.escaped() {
+                    return false;
+                }
+                let bsdf = match self.uniform_bsdfs.get(surface.material as usize) {
+                    Some(Some(b)) if !b.has_specular() => b,
+                    _ => return false,
+                };
+                if self.lights_of_instance.get(surface.instance as usize).is_some_and(|rows| !rows.is_empty()) {
+                    return false;
+                }
+                (surface_of_base, base) =
+                    ((surface.material, surface.instance), [bsdf.base.0[0], bsdf.base.0[1], bsdf.base.0[2]]);
             }
-            let bsdf = match self.uniform_bsdfs.get(surface.material as usize) {
-                Some(Some(b)) if !b.has_specular() => b,
-                _ => return false,
-            };
-            if self.lights_of_instance.get(surface.instance as usize).is_some_and(|rows| !rows.is_empty()) {
-                return false;
-            }
-            for (f, base) in f_up.iter_mut().zip(bsdf.base.0) {
-                f[l] = base * FRAC_1_PI;
+            for c in 0..3 {
+                f_up[c][l] = base[c] * FRAC_1_PI;
             }
         }
-        let lighting = self.lighting;
-        let k = lighting.entries(first).len();
-        if (first..first + LANES).any(|j| lighting.entries(j).len() != k) {
+        // Point j's entries must be `e0 + (j - first) k ..` for a k shared by the block.
+        let offsets = &self.lighting.offsets[first..=first + LANES];
+        let (e0, k) = (offsets[0] as usize, (offsets[1] - offsets[0]) as usize);
+        if offsets.iter().enumerate().any(|(l, &o)| o as usize != e0 + l * k) {
             return false;
         }
         let mut sum = [[0.0f32; LANES]; 3];
-        for slot in 0..k {
-            for l in 0..LANES {
-                let (j, wo) = (first + l, -self.columns.dir[first + l]);
-                let e = lighting.offsets[j] as usize + slot;
-                let (li, wi, pdf) = (lighting.radiance[e], lighting.wi[e], lighting.pdf[e]);
-                let ns = self.batch.shading_normal[j];
-                // `Bsdf::f` and `Bsdf::pdf` without a specular lobe: the frame's z is `ns`.
-                let (cos_o, cos_i) = (wo.dot(ns), wi.dot(ns));
-                let upper = cos_o > 0.0 && cos_i > 0.0;
-                let bsdf_pdf = if upper { cosine_hemisphere_pdf(cos_i) } else { 0.0 };
-                let w = if lighting.delta[e] { 1.0 } else { self.strategy.light_weight(pdf, bsdf_pdf) };
-                let s = wi.dot(ns).abs() * w / pdf;
-                // `shade` skips entries with pdf <= 0 and weight 0 (NaN goes on, as there).
-                let counts = (pdf > 0.0 || pdf.is_nan()) && w != 0.0;
-                for c in 0..3 {
-                    let f = if upper { f_up[c][l] } else { 0.0 };
-                    let term = f * li.0[c] * s;
-                    if counts {
-                        sum[c][l] += term;
-                    }
-                }
+        // A literal stride of 1 lets LLVM load the common case's columns as contiguous runs.
+        if k == 1 {
+            self.add_entry_lanes(first, e0, 1, &f_up, &mut sum);
+        } else {
+            for slot in 0..k {
+                self.add_entry_lanes(first, e0 + slot, k, &f_up, &mut sum);
             }
         }
         for (l, o) in out.iter_mut().enumerate() {
             *o = Vec3::new(sum[0][l], sum[1][l], sum[2][l]);
         }
         true
+    }
+}
+
+impl ShadeContext<'_> {
+    /// Adds to `sum` the light of entry `e + l stride` at camera sample `first + l` for every lane
+    /// l, as `ShadeContext::shade` would. One loop over the lanes without branches (selects, `&`,
+    /// both sides computed), so that it vectorises.
+    #[inline(always)]
+    fn add_entry_lanes(
+        &self,
+        first: usize,
+        e: usize,
+        stride: usize,
+        f_up: &[[f32; LANES]; 3],
+        sum: &mut [[f32; LANES]; 3],
+    ) {
+        let lighting = self.lighting;
+        let mis = self.strategy == Strategy::Mis;
+        // The other strategies weigh every light sample alike, whatever its pdfs.
+        let fixed_weight = self.strategy.light_weight(1.0, 1.0);
+        let (dir, shading_normal) =
+            (&self.columns.dir[first..first + LANES], &self.batch.shading_normal[first..first + LANES]);
+        // Slices of a length known at compile time for a literal stride: no bounds checks in the loop.
+        let span = e..e + (LANES - 1) * stride + 1;
+        let (wi, pdf, delta, radiance) = (
+            &lighting.wi[span.clone()],
+            &lighting.pdf[span.clone()],
+            &lighting.delta[span.clone()],
+            &lighting.radiance[span],
+        );
+        for l in 0..LANES {
+            let e = l * stride;
+            let (wo, ns, wi, pdf) = (-dir[l], shading_normal[l], wi[e], pdf[e]);
+            // `Bsdf::f` and `Bsdf::pdf` without a specular lobe: the frame's z is `ns`.
+            let (cos_o, cos_i) = (wo.dot(ns), wi.dot(ns));
+            let upper = (cos_o > 0.0) & (cos_i > 0.0);
+            let bsdf_pdf = if upper { cosine_hemisphere_pdf(cos_i) } else { 0.0 };
+            let light_weight = if mis { power_heuristic(pdf, bsdf_pdf) } else { fixed_weight };
+            let w = if delta[e] { 1.0 } else { light_weight };
+            let s = cos_i.abs() * w / pdf;
+            // `shade` skips entries with pdf <= 0 and weight 0 (NaN goes on, as there).
+            let counts = ((pdf > 0.0) | pdf.is_nan()) & (w != 0.0);
+            let li = radiance[e];
+            for c in 0..3 {
+                let f = if upper { f_up[c][l] } else { 0.0 };
+                let added = sum[c][l] + f * li.0[c] * s;
+                sum[c][l] = if counts { added } else { sum[c][l] };
+            }
+        }
     }
 }
 
