@@ -44,7 +44,8 @@ pub struct ShadowRays {
     pub entries_per_point: usize,
     /// Where each entry's ray ends (`None`: the entry has no ray).
     pub kind: Vec<ShadowTarget>,
-    /// Segment end (the light point) and the light's surface normal there (`Surface` only).
+    /// Segment end (the light point) and the light's surface normal there (`Surface` only); zero
+    /// for entries without a ray.
     pub target: Vec<Vec3>,
     pub target_normal: Vec<Vec3>,
     /// Answers, filled by the trace step (false for entries without a ray).
@@ -288,6 +289,7 @@ impl Sampling<'_> {
         cols.light[e] = light;
         cols.occluded[e] = false;
         cols.ray_kind[e] = ShadowTarget::None;
+        (cols.target[e], cols.target_normal[e]) = (Vec3::ZERO, Vec3::ZERO);
         let Some((ls, pmf, flags)) = sampled else {
             (cols.radiance[e], cols.wi[e], cols.pdf[e], cols.delta[e]) =
                 (SampledSpectrum::default(), Vec3::ZERO, 0.0, false);
@@ -336,10 +338,47 @@ impl Sampling<'_> {
         cols.delta[e] = LightKind::Point.flags().is_delta();
         let ray = self.wants_shadow_ray(pmf, &radiance, light);
         cols.ray_kind[e] = if ray { ShadowTarget::Point } else { ShadowTarget::None };
-        if ray {
-            (cols.target[e], cols.target_normal[e]) = (v(&lit.target), Vec3::ZERO);
-        }
+        let target = if ray { v(&lit.target) } else { Vec3::ZERO };
+        (cols.target[e], cols.target_normal[e]) = (target, Vec3::ZERO);
         ray
+    }
+
+    /// [`Self::write_point`] of the `LANES` entries from `e`, every one a point light chosen with
+    /// `pmf` (`casts[l]`: whether light l casts shadows). Branch-free loops over slices of a known
+    /// length, so that the stores vectorise. Returns the number of shadow rays.
+    #[inline(always)]
+    fn write_point_block(
+        &self,
+        cols: &mut EntryColumns,
+        e: usize,
+        (light, pmf, casts): (&[LightId; LANES], &[f32; LANES], &[bool; LANES]),
+        lit: &PointLanes,
+    ) -> usize {
+        let r = e..e + LANES;
+        let (radiance, wi, pdf) = (&mut cols.radiance[r.clone()], &mut cols.wi[r.clone()], &mut cols.pdf[r.clone()]);
+        let (light_col, delta) = (&mut cols.light[r.clone()], &mut cols.delta[r.clone()]);
+        let (occluded, ray_kind) = (&mut cols.occluded[r.clone()], &mut cols.ray_kind[r.clone()]);
+        let (target, target_normal) = (&mut cols.target[r.clone()], &mut cols.target_normal[r]);
+        let shadows = self.settings.shadows;
+        let mut traced = 0;
+        for l in 0..LANES {
+            // An invalid lane is `write`'s failed sample: zero radiance, pdf and direction, not delta.
+            let valid = lit.valid[l];
+            let rgb = [lit.radiance[0][l], lit.radiance[1][l], lit.radiance[2][l]];
+            let rgb = if valid { rgb } else { [0.0; 3] };
+            let toward = Vec3::new(lit.wi[0][l], lit.wi[1][l], lit.wi[2][l]);
+            let p = if valid { pmf[l] } else { 0.0 };
+            (radiance[l], wi[l], pdf[l]) =
+                (SampledSpectrum([rgb[0], rgb[1], rgb[2], 0.0]), if valid { toward } else { Vec3::ZERO }, p);
+            (light_col[l], delta[l], occluded[l]) = (light[l], valid, false);
+            // `wants_shadow_ray`, with `&` for `&&`.
+            let ray = shadows & (p > 0.0) & ((rgb[0] > 0.0) | (rgb[1] > 0.0) | (rgb[2] > 0.0)) & casts[l];
+            ray_kind[l] = if ray { ShadowTarget::Point } else { ShadowTarget::None };
+            let light_point = Vec3::new(lit.target[0][l], lit.target[1][l], lit.target[2][l]);
+            (target[l], target_normal[l]) = (if ray { light_point } else { Vec3::ZERO }, Vec3::ZERO);
+            traced += ray as usize;
+        }
+        traced
     }
 
     /// Samples entries `e..e + LANES` (or to the chunk's end) of the chunk starting at global
@@ -374,7 +413,7 @@ impl Sampling<'_> {
         // The choices as plain lane arrays: arrays of `Option<(LightId, f32)>` cost store-to-load
         // forwarding stalls on every read.
         let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
-        let (mut rows, mut any_point) = ([0u32; LANES], false);
+        let (mut rows, mut casts, mut points) = ([0u32; LANES], [false; LANES], 0);
         for l in 0..n {
             let finite = p[0][l].is_finite() && p[1][l].is_finite() && p[2][l].is_finite();
             if !finite {
@@ -384,13 +423,19 @@ impl Sampling<'_> {
             if let Some((id, q)) = choice.unwrap_or_else(|| self.sampler.sample(&self.context(point[l]), u[l])) {
                 (light[l], pmf[l], chosen[l]) = (id, q, true);
                 if id.kind == LightKind::Point {
-                    (rows[l], any_point) = (id.row, true);
+                    (rows[l], casts[l], points) =
+                        (id.row, self.table.points.casts_shadows[id.row as usize], points + 1);
                 }
             }
         }
         // Blocks where no entry chose a point light (scenes lit by other kinds) skip the kernel.
         // `if`, not `bool::then`: a closure would keep the kernel out of the wide code.
-        let lit = if any_point { Some(self.table.points.sample_li_rgb_lanes(&rows, &p)) } else { None };
+        let lit = if points > 0 { Some(self.table.points.sample_li_rgb_lanes(&rows, &p)) } else { None };
+        if let Some(lit) = &lit
+            && points == LANES
+        {
+            return self.write_point_block(cols, e, (&light, &pmf, &casts), lit);
+        }
         let mut traced = 0;
         for l in 0..n {
             let chosen = chosen[l].then_some((light[l], pmf[l]));
@@ -477,11 +522,14 @@ mod tests {
     /// those of the one-at-a-time path, bit for bit, for a mix of light kinds, under the power,
     /// uniform and BVH samplers. Hard cases: a point exactly at a light, one 1e-30 m from it
     /// (r^2 underflows to 0), one 1e30 m away (r^2 overflows) and one at NaN (no light may be
-    /// chosen), plus a batch length that is no multiple of the lane count.
+    /// chosen), plus a batch length that is no multiple of the lane count. With point lights
+    /// only, whole blocks take `write_point_block`. The schedule runs twice, on two orders of the
+    /// points, so that a column the lane path fails to write keeps the first run's value.
     #[test]
     fn lane_path_matches_entry_by_entry() {
         use crate::shading::LightSamplerKind::{Bvh, Power, Uniform};
-        for (samples_per_point, light_sampler) in [(1, Power), (3, Power), (2, Uniform), (1, Bvh)] {
+        let runs = [(1, Power, false), (3, Power, false), (2, Uniform, false), (1, Bvh, false), (1, Power, true)];
+        for (samples_per_point, light_sampler, points_only) in runs {
             let mut world = World::new();
             let mut schedule = Schedule::default();
             crate::systems::LightingPlugin::build(&mut world, &mut schedule);
@@ -489,10 +537,12 @@ mod tests {
             world.spawn((PointLight::candela(1e4), at(0.0, 2.0, 0.0)));
             world.spawn((PointLight { casts_shadows: false, ..PointLight::candela(5e3) }, at(1.0, 1.0, 1.0)));
             world.spawn((PointLight::candela(3e3), at(-3.0, 0.5, 2.0)));
-            let spot = SpotLight { amount: Amount::Candela(1e4), ..Default::default() };
-            world.spawn((spot, at(0.0, 3.0, 0.0).looking_to(Vec3::NEG_Y, Vec3::Z)));
-            world.spawn((DistantLight { amount: Amount::Lux(1.0), ..Default::default() }, Transform::default()));
-            world.spawn((UniformInfiniteLight::default(), Transform::default()));
+            if !points_only {
+                let spot = SpotLight { amount: Amount::Candela(1e4), ..Default::default() };
+                world.spawn((spot, at(0.0, 3.0, 0.0).looking_to(Vec3::NEG_Y, Vec3::Z)));
+                world.spawn((DistantLight { amount: Amount::Lux(1.0), ..Default::default() }, Transform::default()));
+                world.spawn((UniformInfiniteLight::default(), Transform::default()));
+            }
             {
                 let mut settings = world.resource_mut::<Settings>();
                 (settings.samples_per_point, settings.light_sampler) = (samples_per_point, light_sampler);
@@ -500,15 +550,25 @@ mod tests {
             {
                 let mut batch = world.resource_mut::<ShadingBatch>();
                 batch.clear();
-                batch.push(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, 0, 0);
-                batch.push(Vec3::new(0.0, 2.0 + 1e-30, 0.0), Vec3::Y, 1, 0);
-                batch.push(Vec3::new(1e30, 0.0, 0.0), Vec3::Y, 2, 0);
-                batch.push(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y, 101, 0);
+                // The hard cases sit in whole blocks of 16 in both orders.
                 let mut rng = SplitMix64::new(3);
                 for i in 3..101 {
+                    if i == 40 {
+                        batch.push(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, 0, 0);
+                        batch.push(Vec3::new(0.0, 2.0 + 1e-30, 0.0), Vec3::Y, 1, 0);
+                        batch.push(Vec3::new(1e30, 0.0, 0.0), Vec3::Y, 2, 0);
+                        batch.push(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y, 101, 0);
+                    }
                     let p = Vec3::new(rng.f32() * 8.0 - 4.0, rng.f32() * 2.0, rng.f32() * 8.0 - 4.0);
                     batch.push(p, Vec3::Y, i, i % 5);
                 }
+            }
+            schedule.run(&mut world);
+            {
+                let mut batch = world.resource_mut::<ShadingBatch>();
+                batch.position.reverse();
+                batch.pixel.reverse();
+                batch.sample.reverse();
             }
             schedule.run(&mut world);
             let lit = world.resource::<DirectLighting>().clone();
@@ -526,8 +586,9 @@ mod tests {
             let (mut radiance, mut wi, mut pdf) =
                 (vec![SampledSpectrum::default(); m], vec![Vec3::ZERO; m], vec![0.0; m]);
             let (mut light, mut delta, mut occluded) = (vec![NO_LIGHT; m], vec![false; m], vec![true; m]);
+            // Stale values the one-at-a-time path must overwrite, as the lane path must.
             let (mut ray_kind, mut target, mut target_normal) =
-                (vec![ShadowTarget::None; m], vec![Vec3::ZERO; m], vec![Vec3::ZERO; m]);
+                (vec![ShadowTarget::None; m], vec![Vec3::splat(7.0); m], vec![Vec3::splat(7.0); m]);
             let mut cols = EntryColumns {
                 radiance: &mut radiance,
                 wi: &mut wi,
@@ -553,12 +614,13 @@ mod tests {
             assert_eq!(vec_bits(&rays.target), vec_bits(&target));
             assert_eq!(vec_bits(&rays.target_normal), vec_bits(&target_normal));
             // The mix reached every path: point lights in lanes, other kinds, failed samples.
-            assert!(
-                light.iter().any(|l| l.kind == LightKind::Point) && light.iter().any(|l| l.kind != LightKind::Point)
-            );
-            assert!(ray_kind.contains(&ShadowTarget::Point) && ray_kind.contains(&ShadowTarget::Infinity));
+            assert!(light.iter().any(|l| l.kind == LightKind::Point));
+            assert!(points_only || light.iter().any(|l| l.kind != LightKind::Point));
+            assert!(ray_kind.contains(&ShadowTarget::Point));
+            assert!(points_only || ray_kind.contains(&ShadowTarget::Infinity));
             // (The power sampler's choices for the point at a light include that light.)
-            let at_light = pdf[..k].iter().zip(&light).any(|(&p, l)| p == 0.0 && l.kind == LightKind::Point);
+            let at_light =
+                (0..m).any(|e| batch.pixel[e / k] == 0 && pdf[e] == 0.0 && light[e].kind == LightKind::Point);
             assert!(at_light || light_sampler != Power, "at the light");
         }
     }
