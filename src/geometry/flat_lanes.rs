@@ -150,17 +150,16 @@ impl SceneBvh {
         !self.leaf.is_empty() && self.leaf.len() <= FEW_PRIMITIVES && self.leaf.iter().all(|p| flat(p.shape))
     }
 
-    /// [`Self::closest_hit`] of `LANES` rays, bit for bit, handed to `out` (lane, hit) in place
-    /// (a returned array of hits would be copied once more).
+    /// [`Self::closest_hit`] of the `LANES` rays `r`, bit for bit, handed to `out` (lane, hit) in
+    /// place (a returned array of hits would be copied once more).
     #[inline(always)]
-    pub fn closest_hits_lanes(&self, rays: &[Ray; LANES], mut out: impl FnMut(usize, Option<Hit>)) {
+    pub fn closest_hits_lanes(&self, r: &RayLanes, mut out: impl FnMut(usize, Option<Hit>)) {
         if !self.few_flat_shapes() {
-            for (l, ray) in rays.iter().enumerate() {
-                out(l, self.closest_hit(ray));
+            for l in 0..LANES {
+                out(l, self.closest_hit(&r.ray(l)));
             }
             return;
         }
-        let r = &RayLanes::from_rays(rays);
         // As `closest_hit_each`: primitives in input order; a later one wins only when nearer.
         let (mut best_t, mut best_slot) = (r.t_max, [NO_SLOT; LANES]);
         let (mut best_x, mut best_y) = ([0.0f64; LANES], [0.0f64; LANES]);
@@ -316,7 +315,9 @@ mod tests {
                 lane_rays[..block.len()].copy_from_slice(block);
                 let lanes = RayLanes::from_rays(&lane_rays);
                 let mut got = [None; LANES];
-                crate::lanes::widest(|| bvh.closest_hits_lanes(&lane_rays, |l, hit| got[l] = hit));
+                crate::lanes::widest(|| {
+                    bvh.closest_hits_lanes(&RayLanes::from_rays(&lane_rays), |l, hit| got[l] = hit)
+                });
                 let occluded = crate::lanes::widest(|| bvh.occluded_lanes(&lanes, block.len()));
                 for (l, ray) in block.iter().enumerate() {
                     assert_eq!(got[l], bvh.closest_hit(ray), "closest hit of {ray:?}");

@@ -5,7 +5,7 @@ use bevy_ecs::component::Component;
 use glam::{Vec2, Vec3};
 
 use crate::geometry::Transform;
-use crate::geometry::ray::Ray;
+use crate::geometry::ray::{Lanes3, Ray};
 use crate::lanes::LANES;
 
 /// A perspective camera at its entity's `Transform`, looking along local -Z.
@@ -70,10 +70,10 @@ impl PinholeCamera {
         Ray::new(self.origin, dir.normalize())
     }
 
-    /// [`Self::ray`] for `LANES` samples at once, bit for bit: lane `l` is pixel (`x[l]`, `y[l]`)
-    /// at offset (`u[l]`, `v[l]`).
+    /// The directions of [`Self::ray`] for `LANES` samples at once, bit for bit: lane `l` is
+    /// pixel (`x[l]`, `y[l]`) at offset (`u[l]`, `v[l]`).
     #[inline(always)]
-    pub fn rays_lanes(&self, [x, y]: [&[u32; LANES]; 2], u: &[f32; LANES], v: &[f32; LANES]) -> [Ray; LANES] {
+    pub fn dirs_lanes(&self, [x, y]: [&[u32; LANES]; 2], u: &[f32; LANES], v: &[f32; LANES]) -> Lanes3 {
         let mut d = [[0.0f32; LANES]; 3];
         for l in 0..LANES {
             let (fx, fy) = (x[l] as f32 + u[l], y[l] as f32 + v[l]);
@@ -86,7 +86,7 @@ impl PinholeCamera {
                 d[a][l] = w[a] * inv;
             }
         }
-        std::array::from_fn(|l| Ray::new(self.origin, Vec3::new(d[0][l], d[1][l], d[2][l])))
+        d
     }
 
     /// Image size.
@@ -114,12 +114,28 @@ pub enum CameraModel {
 }
 
 impl CameraModel {
-    /// [`Self::ray`] for `LANES` samples of pixels (`x`, `y`) at offsets (`u`, `v`).
+    /// The directions of [`Self::ray`] for `LANES` samples of pixels (`x`, `y`) at offsets
+    /// (`u`, `v`), as lane columns. Every ray starts at [`Self::origin`].
     #[inline(always)]
-    pub fn rays_lanes(&self, xy: [&[u32; LANES]; 2], u: &[f32; LANES], v: &[f32; LANES]) -> [Ray; LANES] {
+    pub fn dirs_lanes(&self, xy: [&[u32; LANES]; 2], u: &[f32; LANES], v: &[f32; LANES]) -> Lanes3 {
         match self {
-            Self::Pinhole(c) => c.rays_lanes(xy, u, v),
-            Self::LatLong { .. } => std::array::from_fn(|l| self.ray(xy[0][l], xy[1][l], Vec2::new(u[l], v[l]))),
+            Self::Pinhole(c) => c.dirs_lanes(xy, u, v),
+            Self::LatLong { .. } => {
+                let mut d = [[0.0; LANES]; 3];
+                for l in 0..LANES {
+                    let dir = self.ray(xy[0][l], xy[1][l], Vec2::new(u[l], v[l])).dir;
+                    (d[0][l], d[1][l], d[2][l]) = (dir.x, dir.y, dir.z);
+                }
+                d
+            }
+        }
+    }
+
+    /// Where every ray starts.
+    pub fn origin(&self) -> Vec3 {
+        match *self {
+            Self::Pinhole(c) => c.origin,
+            Self::LatLong { origin, .. } => origin,
         }
     }
 
@@ -153,15 +169,12 @@ mod tests {
                 let y: [u32; LANES] = std::array::from_fn(|_| (rng.next_u64() % h as u64) as u32);
                 let (u, v): ([f32; LANES], [f32; LANES]) =
                     (std::array::from_fn(|_| rng.f32()), std::array::from_fn(|_| rng.f32()));
-                let rays = camera.rays_lanes([&x, &y], &u, &v);
+                let dirs = camera.dirs_lanes([&x, &y], &u, &v);
                 for l in 0..LANES {
                     let one = camera.ray(x[l], y[l], Vec2::new(u[l], v[l]));
-                    assert_eq!(rays[l].origin, one.origin);
-                    assert_eq!(
-                        rays[l].dir.to_array().map(f32::to_bits),
-                        one.dir.to_array().map(f32::to_bits),
-                        "{camera:?}"
-                    );
+                    assert_eq!(camera.origin(), one.origin);
+                    let dir = Vec3::new(dirs[0][l], dirs[1][l], dirs[2][l]);
+                    assert_eq!(dir.to_array().map(f32::to_bits), one.dir.to_array().map(f32::to_bits), "{camera:?}");
                 }
             }
         }

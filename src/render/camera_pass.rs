@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::camera::CameraModel;
-use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
+use crate::geometry::{Hit, RAY_CHUNK, RayLanes, SceneBvh};
 use crate::lanes::LANES;
 use crate::rng::SampleStream;
 use crate::shading::ShadingBatch;
@@ -129,6 +129,8 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
     let (mut next_pixel, mut next_sample) = ((first / spp as usize) as u32, (first % spp as usize) as u32);
     let (mut next_x, mut next_y) = (next_pixel % width, next_pixel / width);
     let len = chunk.pixel.len();
+    let o = camera.origin();
+    let origin = [[o.x; LANES], [o.y; LANES], [o.z; LANES]];
     let mut b = 0;
     while b < len {
         let end = (b + LANES).min(len);
@@ -144,16 +146,23 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
                 }
             }
         }
-        chunk.pixel[b..end].copy_from_slice(&pixel[..end - b]);
-        chunk.sample[b..end].copy_from_slice(&sample[..end - b]);
+        // A copy of a length known at compile time is a vector store; a variable one calls memmove.
+        if end - b == LANES {
+            chunk.pixel[b..end].copy_from_slice(&pixel);
+            chunk.sample[b..end].copy_from_slice(&sample);
+        } else {
+            chunk.pixel[b..end].copy_from_slice(&pixel[..end - b]);
+            chunk.sample[b..end].copy_from_slice(&sample[..end - b]);
+        }
         let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
-        let rays = camera.rays_lanes([&x, &y], &u, &v);
+        let dirs = camera.dirs_lanes([&x, &y], &u, &v);
+        let rays = RayLanes::from_columns(&[origin, dirs], f32::INFINITY);
         bvh.closest_hits_lanes(
             &rays,
             #[inline(always)]
             |l, hit| {
                 if b + l < end {
-                    write_slot(chunk, b + l, rays[l].dir, hit);
+                    write_slot(chunk, b + l, Vec3::new(dirs[0][l], dirs[1][l], dirs[2][l]), hit);
                 }
             },
         );
