@@ -409,22 +409,35 @@ impl Sampling<'_> {
                 (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
             }
         }
-        let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
         // The choices as plain lane arrays: arrays of `Option<(LightId, f32)>` cost store-to-load
         // forwarding stalls on every read.
         let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
         let (mut rows, mut casts, mut points) = ([0u32; LANES], [false; LANES], 0);
-        for l in 0..n {
-            let finite = p[0][l].is_finite() && p[1][l].is_finite() && p[2][l].is_finite();
-            if !finite {
-                continue;
+        let finite = |l: usize| p[0][l].is_finite() && p[1][l].is_finite() && p[2][l].is_finite();
+        if let Some((id, q)) = self.sampler.only_choice() {
+            // Every point with a position chooses this light whatever its u, so none is drawn
+            // (the streams are counter based: no other number changes).
+            let point_light = id.kind == LightKind::Point;
+            let casts_shadows = point_light && self.table.casts_shadows(id);
+            for l in 0..n {
+                if finite(l) {
+                    (light[l], pmf[l], chosen[l]) = (id, q, true);
+                    (rows[l], casts[l], points) = (id.row, casts_shadows, points + point_light as usize);
+                }
             }
-            let choice = self.sampler.sample_context_free(finite, u[l]);
-            if let Some((id, q)) = choice.unwrap_or_else(|| self.sampler.sample(&self.context(point[l]), u[l])) {
-                (light[l], pmf[l], chosen[l]) = (id, q, true);
-                if id.kind == LightKind::Point {
-                    (rows[l], casts[l], points) =
-                        (id.row, self.table.points.casts_shadows[id.row as usize], points + 1);
+        } else {
+            let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
+            for l in 0..n {
+                if !finite(l) {
+                    continue;
+                }
+                let choice = self.sampler.sample_context_free(true, u[l]);
+                if let Some((id, q)) = choice.unwrap_or_else(|| self.sampler.sample(&self.context(point[l]), u[l])) {
+                    (light[l], pmf[l], chosen[l]) = (id, q, true);
+                    if id.kind == LightKind::Point {
+                        (rows[l], casts[l], points) =
+                            (id.row, self.table.points.casts_shadows[id.row as usize], points + 1);
+                    }
                 }
             }
         }
@@ -523,20 +536,26 @@ mod tests {
     /// uniform and BVH samplers. Hard cases: a point exactly at a light, one 1e-30 m from it
     /// (r^2 underflows to 0), one 1e30 m away (r^2 overflows) and one at NaN (no light may be
     /// chosen), plus a batch length that is no multiple of the lane count. With point lights
-    /// only, whole blocks take `write_point_block`. The schedule runs twice, on two orders of the
-    /// points, so that a column the lane path fails to write keeps the first run's value.
+    /// only, whole blocks take `write_point_block`; with one light, the choice skips u
+    /// (`LightSampler::only_choice`). The schedule runs twice, on two orders of the points, so
+    /// that a column the lane path fails to write keeps the first run's value.
     #[test]
     fn lane_path_matches_entry_by_entry() {
         use crate::shading::LightSamplerKind::{Bvh, Power, Uniform};
-        let runs = [(1, Power, false), (3, Power, false), (2, Uniform, false), (1, Bvh, false), (1, Power, true)];
-        for (samples_per_point, light_sampler, points_only) in runs {
+        // (samples per point, sampler, lights: 6 of four kinds, 3 points, or 1 point)
+        let runs =
+            [(1, Power, 6), (3, Power, 6), (2, Uniform, 6), (1, Bvh, 6), (1, Power, 3), (1, Power, 1), (2, Uniform, 1)];
+        for (samples_per_point, light_sampler, lights) in runs {
+            let points_only = lights <= 3;
             let mut world = World::new();
             let mut schedule = Schedule::default();
             crate::systems::LightingPlugin::build(&mut world, &mut schedule);
             let at = |x, y, z| Transform::from_translation(Vec3::new(x, y, z));
             world.spawn((PointLight::candela(1e4), at(0.0, 2.0, 0.0)));
-            world.spawn((PointLight { casts_shadows: false, ..PointLight::candela(5e3) }, at(1.0, 1.0, 1.0)));
-            world.spawn((PointLight::candela(3e3), at(-3.0, 0.5, 2.0)));
+            if lights > 1 {
+                world.spawn((PointLight { casts_shadows: false, ..PointLight::candela(5e3) }, at(1.0, 1.0, 1.0)));
+                world.spawn((PointLight::candela(3e3), at(-3.0, 0.5, 2.0)));
+            }
             if !points_only {
                 let spot = SpotLight { amount: Amount::Candela(1e4), ..Default::default() };
                 world.spawn((spot, at(0.0, 3.0, 0.0).looking_to(Vec3::NEG_Y, Vec3::Z)));
@@ -622,6 +641,7 @@ mod tests {
             let at_light =
                 (0..m).any(|e| batch.pixel[e / k] == 0 && pdf[e] == 0.0 && light[e].kind == LightKind::Point);
             assert!(at_light || light_sampler != Power, "at the light");
+            assert_eq!(world.resource::<LightSampler>().only_choice().is_some(), lights == 1);
         }
     }
 }

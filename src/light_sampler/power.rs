@@ -43,6 +43,16 @@ impl PowerSampler {
         self.alias.sample(u).map(|(i, pmf)| (self.ids[i], pmf))
     }
 
+    /// Number of lights.
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// True with no lights.
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
     /// Calls `f` with every light and its pmf.
     pub fn for_each_pmf(&self, mut f: impl FnMut(LightId, f32)) {
         self.ids.iter().enumerate().for_each(|(i, &id)| f(id, self.alias.pmf(i)));

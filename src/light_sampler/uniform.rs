@@ -37,6 +37,16 @@ impl UniformSampler {
         Some((self.ids[i], 1.0 / n as f32))
     }
 
+    /// Number of lights.
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// True with no lights.
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
     /// Calls `f` with every light and its pmf.
     pub fn for_each_pmf(&self, mut f: impl FnMut(LightId, f32)) {
         let pmf = self.pmf(LightId { kind: crate::light::LightKind::Point, row: 0 });
