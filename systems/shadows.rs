@@ -94,7 +94,14 @@ pub fn trace_shadow_rays(
                             rays.set(l, &segment(first + l));
                         }
                     }
-                    chunk[b..b + n].copy_from_slice(&bvh.occluded_lanes(&rays, n)[..n]);
+                    let occluded = bvh.occluded_lanes(&rays, n);
+                    // A copy of a length known at compile time is a vector store; a variable one
+                    // calls memmove.
+                    if n == LANES {
+                        chunk[b..b + LANES].copy_from_slice(&occluded);
+                    } else {
+                        chunk[b..b + n].copy_from_slice(&occluded[..n]);
+                    }
                     b += LANES;
                 }
             },

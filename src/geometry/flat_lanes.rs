@@ -210,14 +210,15 @@ impl SceneBvh {
             }
             return out;
         }
+        // Plain index loops: iterator adapters may stay out of the wide code.
         for prim in &self.leaf {
             let hits = flat_hits(&self.shapes[prim.shape as usize], r, &r.t_max);
-            for (o, hit) in out.iter_mut().zip(hits.0) {
-                *o |= hit;
+            for l in 0..LANES {
+                out[l] |= hits.0[l];
             }
         }
-        for (l, (o, valid)) in out.iter_mut().zip(r.valid).enumerate() {
-            *o &= valid & (l < n);
+        for l in 0..LANES {
+            out[l] &= r.valid[l] & (l < n);
         }
         out
     }
