@@ -431,7 +431,7 @@ impl Sampling<'_> {
                 if !finite(l) {
                     continue;
                 }
-                let choice = self.sampler.sample_context_free(true, u[l]);
+                let choice = self.sampler.sample_context_free(u[l]);
                 if let Some((id, q)) = choice.unwrap_or_else(|| self.sampler.sample(&self.context(point[l]), u[l])) {
                     (light[l], pmf[l], chosen[l]) = (id, q, true);
                     if id.kind == LightKind::Point {

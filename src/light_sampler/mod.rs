@@ -71,17 +71,16 @@ impl LightSampler {
         .filter(|_| ctx.p.is_finite())
     }
 
-    /// [`Self::sample`] for the samplers that read nothing of the context but whether its point
-    /// is finite (uniform and power), given that; None for the BVH sampler. Lane code calls this
-    /// rather than build a context per point.
+    /// [`Self::sample`] at a point with a finite position, for the samplers that read nothing else
+    /// of the context (uniform and power); None for the BVH sampler. Lane code calls this rather
+    /// than build a context per point.
     #[inline(always)]
-    pub fn sample_context_free(&self, p_finite: bool, u: f32) -> Option<Option<(LightId, f32)>> {
-        let chosen = match self {
-            Self::Uniform(s) => s.sample(u),
-            Self::Power(s) => s.sample(u),
-            Self::Bvh(_) => return None,
-        };
-        Some(chosen.filter(|_| p_finite))
+    pub fn sample_context_free(&self, u: f32) -> Option<Option<(LightId, f32)>> {
+        match self {
+            Self::Uniform(s) => Some(s.sample(u)),
+            Self::Power(s) => Some(s.sample(u)),
+            Self::Bvh(_) => None,
+        }
     }
 
     /// The light and pmf that [`Self::sample`] returns for every point with a finite position and

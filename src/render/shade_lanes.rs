@@ -63,9 +63,7 @@ impl ShadeContext<'_> {
         }
         true
     }
-}
 
-impl ShadeContext<'_> {
     /// Adds to `sum` the light of entry `e + l stride` at camera sample `first + l` for every lane
     /// l, as `ShadeContext::shade` would. One loop over the lanes without branches (selects, `&`,
     /// both sides computed), so that it vectorises.
