@@ -202,6 +202,7 @@ impl SceneBvh {
 
     /// [`Self::occluded`] of the first `n` of `LANES` rays, bit for bit (later lanes: false).
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // index loops on purpose (see below)
     pub fn occluded_lanes(&self, r: &RayLanes, n: usize) -> [bool; LANES] {
         let mut out = [false; LANES];
         if !self.few_flat_shapes() {
