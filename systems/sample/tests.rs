@@ -1,0 +1,146 @@
+//! Tests of the sampling pass: lane paths against the one-at-a-time path, slots with no point.
+
+use super::*;
+use crate::geometry::Transform;
+use crate::light::{Amount, DistantLight, PointLight, SpotLight, UniformInfiniteLight};
+use crate::rng::SplitMix64;
+
+/// A slot with no point (a non-finite position: an escaped camera ray) gets empty entries
+/// and no shadow rays under every selection, even from lights whose samples ignore the
+/// point (a uniform sky, a distant light).
+#[test]
+fn slot_without_point_gets_no_light() {
+    for selection in [LightSelection::OneSampled, LightSelection::All] {
+        let mut world = World::new();
+        let mut schedule = Schedule::default();
+        world.insert_resource(Settings { selection, samples_per_point: 2, ..Default::default() });
+        crate::systems::LightingPlugin::build(&mut world, &mut schedule);
+        world.spawn((UniformInfiniteLight::default(), Transform::default()));
+        world.spawn((DistantLight { amount: Amount::Lux(1.0), ..Default::default() }, Transform::default()));
+        world.spawn((PointLight::candela(10.0), Transform::from_translation(Vec3::Y)));
+        {
+            let mut batch = world.resource_mut::<ShadingBatch>();
+            batch.push(Vec3::ZERO, Vec3::Y, 0, 0);
+            batch.push(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::ZERO, 1, 0);
+            batch.push(Vec3::new(0.0, f32::INFINITY, 0.0), Vec3::ZERO, 2, 0);
+        }
+        schedule.run(&mut world);
+        let (lit, rays) = (world.resource::<DirectLighting>(), world.resource::<ShadowRays>());
+        assert!(lit.entries(0).any(|e| lit.pdf[e] > 0.0), "{selection:?}: the real point is lit");
+        for e in lit.entries(1).chain(lit.entries(2)) {
+            assert_eq!((lit.pdf[e], lit.radiance[e], lit.light[e]), (0.0, SampledSpectrum::default(), NO_LIGHT));
+            assert_eq!(rays.kind[e], ShadowTarget::None, "{selection:?}");
+        }
+    }
+}
+
+/// Entries the schedule wrote (through the lane path: one sampled light, RGB, f32) must equal
+/// those of the one-at-a-time path, bit for bit, for a mix of light kinds, under the power,
+/// uniform and BVH samplers. Hard cases: a point exactly at a light, one 1e-30 m from it
+/// (r^2 underflows to 0), one 1e30 m away (r^2 overflows) and one at NaN (no light may be
+/// chosen), plus a batch length that is no multiple of the lane count. With point lights
+/// only, whole blocks take `write_point_block`; with one light, the choice skips u
+/// (`LightSampler::only_choice`). The schedule runs twice, on two orders of the points, so
+/// that a column the lane path fails to write keeps the first run's value.
+#[test]
+fn lane_path_matches_entry_by_entry() {
+    use crate::shading::LightSamplerKind::{Bvh, Power, Uniform};
+    // (samples per point, sampler, lights: 6 of four kinds, 3 points, or 1 point)
+    let runs =
+        [(1, Power, 6), (3, Power, 6), (2, Uniform, 6), (1, Bvh, 6), (1, Power, 3), (1, Power, 1), (2, Uniform, 1)];
+    for (samples_per_point, light_sampler, lights) in runs {
+        let points_only = lights <= 3;
+        let mut world = World::new();
+        let mut schedule = Schedule::default();
+        crate::systems::LightingPlugin::build(&mut world, &mut schedule);
+        let at = |x, y, z| Transform::from_translation(Vec3::new(x, y, z));
+        world.spawn((PointLight::candela(1e4), at(0.0, 2.0, 0.0)));
+        if lights > 1 {
+            world.spawn((PointLight { casts_shadows: false, ..PointLight::candela(5e3) }, at(1.0, 1.0, 1.0)));
+            world.spawn((PointLight::candela(3e3), at(-3.0, 0.5, 2.0)));
+        }
+        if !points_only {
+            let spot = SpotLight { amount: Amount::Candela(1e4), ..Default::default() };
+            world.spawn((spot, at(0.0, 3.0, 0.0).looking_to(Vec3::NEG_Y, Vec3::Z)));
+            world.spawn((DistantLight { amount: Amount::Lux(1.0), ..Default::default() }, Transform::default()));
+            world.spawn((UniformInfiniteLight::default(), Transform::default()));
+        }
+        {
+            let mut settings = world.resource_mut::<Settings>();
+            (settings.samples_per_point, settings.light_sampler) = (samples_per_point, light_sampler);
+        }
+        {
+            let mut batch = world.resource_mut::<ShadingBatch>();
+            batch.clear();
+            // The hard cases sit in whole blocks of 16 in both orders.
+            let mut rng = SplitMix64::new(3);
+            for i in 3..101 {
+                if i == 40 {
+                    batch.push(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, 0, 0);
+                    batch.push(Vec3::new(0.0, 2.0 + 1e-30, 0.0), Vec3::Y, 1, 0);
+                    batch.push(Vec3::new(1e30, 0.0, 0.0), Vec3::Y, 2, 0);
+                    batch.push(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y, 101, 0);
+                }
+                let p = Vec3::new(rng.f32() * 8.0 - 4.0, rng.f32() * 2.0, rng.f32() * 8.0 - 4.0);
+                batch.push(p, Vec3::Y, i, i % 5);
+            }
+        }
+        schedule.run(&mut world);
+        {
+            let mut batch = world.resource_mut::<ShadingBatch>();
+            batch.position.reverse();
+            batch.pixel.reverse();
+            batch.sample.reverse();
+        }
+        schedule.run(&mut world);
+        let lit = world.resource::<DirectLighting>().clone();
+        let rays = world.resource::<ShadowRays>().clone();
+
+        let (batch, table, sampler, settings) = (
+            world.resource::<ShadingBatch>(),
+            world.resource::<LightTable>(),
+            world.resource::<LightSampler>(),
+            world.resource::<Settings>(),
+        );
+        let k = samples_per_point as usize;
+        let sampling = Sampling { batch, table, sampler, settings, all_ids: &[], k, spp: samples_per_point };
+        let m = batch.len() * k;
+        let (mut radiance, mut wi, mut pdf) = (vec![SampledSpectrum::default(); m], vec![Vec3::ZERO; m], vec![0.0; m]);
+        let (mut light, mut delta, mut occluded) = (vec![NO_LIGHT; m], vec![false; m], vec![true; m]);
+        // Stale values the one-at-a-time path must overwrite, as the lane path must.
+        let (mut ray_kind, mut target, mut target_normal) =
+            (vec![ShadowTarget::None; m], vec![Vec3::splat(7.0); m], vec![Vec3::splat(7.0); m]);
+        let mut cols = EntryColumns {
+            radiance: &mut radiance,
+            wi: &mut wi,
+            pdf: &mut pdf,
+            light: &mut light,
+            delta: &mut delta,
+            occluded: &mut occluded,
+            ray_kind: &mut ray_kind,
+            target: &mut target,
+            target_normal: &mut target_normal,
+        };
+        let traced: usize = (0..m).map(|e| sampling.entry(0, e, &mut cols) as usize).sum();
+        assert_eq!(traced, rays.len());
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let vec_bits = |v: &[Vec3]| v.iter().flat_map(|x| x.to_array()).map(f32::to_bits).collect::<Vec<_>>();
+        let spectrum_bits = |v: &[SampledSpectrum]| v.iter().flat_map(|x| x.0).map(f32::to_bits).collect::<Vec<_>>();
+        assert_eq!(spectrum_bits(&lit.radiance), spectrum_bits(&radiance));
+        assert_eq!(vec_bits(&lit.wi), vec_bits(&wi));
+        assert_eq!(bits(&lit.pdf), bits(&pdf));
+        assert_eq!((&lit.light, &lit.delta, &lit.occluded), (&light, &delta, &vec![false; m]));
+        assert_eq!(rays.kind, ray_kind);
+        assert_eq!(vec_bits(&rays.target), vec_bits(&target));
+        assert_eq!(vec_bits(&rays.target_normal), vec_bits(&target_normal));
+        // The mix reached every path: point lights in lanes, other kinds, failed samples.
+        assert!(light.iter().any(|l| l.kind == LightKind::Point));
+        assert!(points_only || light.iter().any(|l| l.kind != LightKind::Point));
+        assert!(ray_kind.contains(&ShadowTarget::Point));
+        assert!(points_only || ray_kind.contains(&ShadowTarget::Infinity));
+        // (The power sampler's choices for the point at a light include that light.)
+        let at_light = (0..m).any(|e| batch.pixel[e / k] == 0 && pdf[e] == 0.0 && light[e].kind == LightKind::Point);
+        assert!(at_light || light_sampler != Power, "at the light");
+        assert_eq!(world.resource::<LightSampler>().only_choice().is_some(), lights == 1);
+    }
+}
