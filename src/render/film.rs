@@ -11,6 +11,9 @@ pub struct Film {
     count: Vec<u32>,
 }
 
+/// Pixels whose samples [`Film::par_add_samples`] adds side by side.
+const PIXEL_GROUP: usize = 4;
+
 impl Film {
     /// A black film.
     pub fn new(width: u32, height: u32) -> Self {
@@ -37,14 +40,36 @@ impl Film {
         let pixels = first / spp..(end - 1) / spp + 1;
         let sums = &mut self.sum[pixels.clone()];
         let counts = &mut self.count[pixels.clone()];
-        // Small runs per task when a pixel has many samples; about 256 samples per task otherwise.
-        let min_len = (256 / spp).max(1);
-        (sums, counts).into_par_iter().enumerate().with_min_len(min_len).for_each(|(j, (sum, count))| {
-            let p = pixels.start + j;
-            let samples = (p * spp).max(first)..((p + 1) * spp).min(end);
-            *count += samples.len() as u32;
-            for k in samples {
-                *sum += rgb[k - first].as_dvec3();
+        // Groups of pixels per task: small runs when a pixel has many samples, about 256 samples
+        // per task otherwise.
+        let min_len = (256 / (spp * PIXEL_GROUP)).max(1);
+        let groups = (sums.par_chunks_mut(PIXEL_GROUP), counts.par_chunks_mut(PIXEL_GROUP));
+        groups.into_par_iter().enumerate().with_min_len(min_len).for_each(|(g, (sums, counts))| {
+            let p0 = pixels.start + g * PIXEL_GROUP;
+            let whole = sums.len() == PIXEL_GROUP && p0 * spp >= first && (p0 + PIXEL_GROUP) * spp <= end;
+            if whole {
+                // The group's pixels add their samples side by side: independent chains of
+                // additions overlap, where one pixel's chain waits on each addition. Each pixel
+                // still adds its own samples in order.
+                let base = p0 * spp - first;
+                let mut acc = [DVec3::ZERO; PIXEL_GROUP];
+                acc.copy_from_slice(sums);
+                for k in 0..spp {
+                    for (j, acc) in acc.iter_mut().enumerate() {
+                        *acc += rgb[base + j * spp + k].as_dvec3();
+                    }
+                }
+                sums.copy_from_slice(&acc);
+                counts.iter_mut().for_each(|c| *c += spp as u32);
+                return;
+            }
+            for (j, (sum, count)) in sums.iter_mut().zip(counts).enumerate() {
+                let p = p0 + j;
+                let samples = (p * spp).max(first)..((p + 1) * spp).min(end);
+                *count += samples.len() as u32;
+                for k in samples {
+                    *sum += rgb[k - first].as_dvec3();
+                }
             }
         });
     }
@@ -89,5 +114,22 @@ mod tests {
             assert_eq!(serial.sum, parallel.sum, "spp {spp}");
             assert_eq!(serial.count, parallel.count, "spp {spp}");
         }
+    }
+
+    /// Sums in which order matters (1e20 + 1 - 1e20 is 0 in f64; 1e20 - 1e20 + 1 is 1) come out as
+    /// the sample-by-sample sums, in whole groups of pixels and in the partial ones around them.
+    #[test]
+    fn each_pixel_adds_its_samples_in_order() {
+        let (spp, pixels) = (4usize, 13usize);
+        let pattern = [1e20, 1.0, -1e20, 0.5];
+        let rgb: Vec<Vec3> = (0..spp * pixels).map(|k| Vec3::splat(pattern[(k + k / spp) % spp])).collect();
+        let (mut serial, mut parallel) = (Film::new(pixels as u32, 1), Film::new(pixels as u32, 1));
+        for (k, &c) in rgb.iter().enumerate() {
+            serial.add((k / spp) as u32, c);
+        }
+        parallel.par_add_samples(0, spp, &rgb[..6]);
+        parallel.par_add_samples(6, spp, &rgb[6..]);
+        assert_eq!(serial.sum, parallel.sum);
+        assert!(serial.sum.iter().any(|s| s.x == 0.0) && serial.sum.iter().any(|s| s.x != 0.0));
     }
 }
