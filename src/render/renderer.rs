@@ -241,7 +241,8 @@ fn render_on_pool(
         // Where the lane kernel may apply (`shade_lanes.rs`), blocks of the common case go
         // through it; elsewhere samples are shaded one at a time.
         if !spectral && !bsdf_sampling && !super::shade_lanes::turned_off() {
-            contributions.clear();
+            // Every contribution is written below, so that column is only resized (no serial fill
+            // in steady state); lane blocks trace no rays, so `traced` starts false.
             contributions.resize(len, Vec3::ZERO);
             traced.clear();
             traced.resize(len, false);
