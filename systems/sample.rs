@@ -149,6 +149,7 @@ pub fn sample_direct_lighting(
         all_ids: &all_ids,
         k,
         spp: settings.samples_per_point.max(1),
+        only_choice: sampler.only_choice(),
     };
     // Point lights sampled one per entry in RGB f32 go through the lane kernel.
     let lanes = settings.selection == LightSelection::OneSampled
@@ -208,6 +209,8 @@ struct Sampling<'a> {
     k: usize,
     /// Light samples per point.
     spp: u32,
+    /// `LightSampler::only_choice`, asked once per batch.
+    only_choice: Option<(LightId, f32)>,
 }
 
 impl Sampling<'_> {
@@ -414,7 +417,7 @@ impl Sampling<'_> {
         let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
         let (mut rows, mut casts, mut points) = ([0u32; LANES], [false; LANES], 0);
         let finite = |l: usize| p[0][l].is_finite() && p[1][l].is_finite() && p[2][l].is_finite();
-        if let Some((id, q)) = self.sampler.only_choice() {
+        if let Some((id, q)) = self.only_choice {
             // Every point with a position chooses this light whatever its u, so none is drawn
             // (the streams are counter based: no other number changes).
             let point_light = id.kind == LightKind::Point;
