@@ -14,8 +14,21 @@
 //!   arrays stalls on store-to-load forwarding, and a `match` per lane keeps a loop scalar (pass
 //!   the variant's test in as a closure, as `geometry::flat_lanes` does).
 
+use glam::Vec3;
+
 /// Values per lane array: one AVX-512 register of f32.
 pub const LANES: usize = 16;
+
+/// Lane columns (x, y, z) as `LANES` vectors: a loop of this one step becomes a few vector
+/// shuffles, where a loop that also computes the values stays scalar.
+#[inline(always)]
+pub fn vec3s(c: &[[f32; LANES]; 3]) -> [Vec3; LANES] {
+    let mut out = [Vec3::ZERO; LANES];
+    for l in 0..LANES {
+        out[l] = Vec3::new(c[0][l], c[1][l], c[2][l]);
+    }
+    out
+}
 
 /// Runs `f` compiled for AVX-512 or AVX2 when the CPU has them (else as it is). Only the code
 /// inlined into the wrapper is compiled for the wider set, and LLVM does not inline a large

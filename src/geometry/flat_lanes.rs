@@ -6,7 +6,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::bvh::{NO_SHAPE, SceneBvh};
+use super::bvh::{GeometryId, NO_SHAPE, SceneBvh};
 use super::ray::{Lanes3, Ray};
 use super::shapes::{PlacedShape, Shape, flat_hit_from_rows};
 use super::visibility::{FEW_PRIMITIVES, Hit};
@@ -137,6 +137,60 @@ fn flat_uvs(shape: &Shape, x: &[f64; LANES], y: &[f64; LANES]) -> [[f32; LANES];
     }
 }
 
+/// The closest hits of `LANES` rays that all hit the same flat primitive, as lane columns.
+#[derive(Clone, Copy, Debug)]
+pub struct FlatHitBlock {
+    pub t: [f32; LANES],
+    pub p: [[f32; LANES]; 3],
+    pub p_error: [[f32; LANES]; 3],
+    pub uv: [[f32; LANES]; 2],
+    /// The shape's normal: the geometric and the shading normal of every lane.
+    pub n: Vec3,
+    pub id: GeometryId,
+    pub material: u32,
+    pub instance: u32,
+}
+
+impl FlatHitBlock {
+    /// Lane `l` as a [`Hit`].
+    #[inline(always)]
+    pub fn hit(&self, l: usize) -> Hit {
+        let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
+        let (t, n, uv) = (self.t[l], self.n, Vec2::new(self.uv[0][l], self.uv[1][l]));
+        Hit {
+            t,
+            p: v(&self.p),
+            p_error: v(&self.p_error),
+            ng: n,
+            ns: n,
+            uv,
+            id: self.id,
+            material: self.material,
+            instance: self.instance,
+        }
+    }
+}
+
+/// Where [`SceneBvh::closest_hits_lanes`] hands its hits. Any `FnMut(lane, hit)` is one.
+pub trait HitSink {
+    /// The closest hit of lane `l` (None: the ray hit nothing).
+    fn hit(&mut self, l: usize, hit: Option<Hit>);
+    /// Every lane hit the same flat primitive. By default, its lanes one by one.
+    #[inline(always)]
+    fn block(&mut self, hits: &FlatHitBlock) {
+        for l in 0..LANES {
+            self.hit(l, Some(hits.hit(l)));
+        }
+    }
+}
+
+impl<F: FnMut(usize, Option<Hit>)> HitSink for F {
+    #[inline(always)]
+    fn hit(&mut self, l: usize, hit: Option<Hit>) {
+        self(l, hit)
+    }
+}
+
 /// The leaf slot of no primitive.
 const NO_SLOT: usize = usize::MAX;
 
@@ -150,13 +204,14 @@ impl SceneBvh {
         !self.leaf.is_empty() && self.leaf.len() <= FEW_PRIMITIVES && self.leaf.iter().all(|p| flat(p.shape))
     }
 
-    /// [`Self::closest_hit`] of the `LANES` rays `r`, bit for bit, handed to `out` (lane, hit) in
-    /// place (a returned array of hits would be copied once more).
+    /// [`Self::closest_hit`] of the `LANES` rays `r`, bit for bit, handed to `out` in place (a
+    /// returned array of hits would be copied once more): lane by lane, or as one block when
+    /// every lane hit the same flat primitive.
     #[inline(always)]
-    pub fn closest_hits_lanes(&self, r: &RayLanes, mut out: impl FnMut(usize, Option<Hit>)) {
+    pub fn closest_hits_lanes(&self, r: &RayLanes, out: &mut impl HitSink) {
         if !self.few_flat_shapes() {
             for l in 0..LANES {
-                out(l, self.closest_hit(&r.ray(l)));
+                out.hit(l, self.closest_hit(&r.ray(l)));
             }
             return;
         }
@@ -174,30 +229,39 @@ impl SceneBvh {
                 }
             }
         }
+        if best_slot[0] != NO_SLOT && best_slot.iter().all(|&s| s == best_slot[0]) {
+            out.block(&self.flat_hit_block(best_slot[0], &best_t, &best_x, &best_y));
+            return;
+        }
         for l in (0..LANES).filter(|&l| best_slot[l] == NO_SLOT) {
-            out(l, None);
+            out.hit(l, None);
         }
         // Hit records, one primitive's lanes at a time.
         for slot in 0..self.leaf.len() {
             if !best_slot.contains(&slot) {
                 continue;
             }
-            let shape = &self.shapes[self.leaf[slot].shape as usize];
-            let (mut p, mut err) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
-            for a in 0..3 {
-                for l in 0..LANES {
-                    (p[a][l], err[a][l]) = shape.flat_world_coordinate(a, best_x[l], best_y[l]);
-                }
-            }
-            let uv = flat_uvs(&shape.shape, &best_x, &best_y);
-            let (instance, id, material) = self.id_of(self.prim_of_slot(slot));
-            let n = shape.flat_normal.unwrap_or(Vec3::Z);
+            let block = self.flat_hit_block(slot, &best_t, &best_x, &best_y);
             for l in (0..LANES).filter(|&l| best_slot[l] == slot) {
-                let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
-                let (t, p, p_error, uv) = (best_t[l], v(&p), v(&err), Vec2::new(uv[0][l], uv[1][l]));
-                out(l, Some(Hit { t, p, p_error, ng: n, ns: n, uv, id, material, instance }));
+                out.hit(l, Some(block.hit(l)));
             }
         }
+    }
+
+    /// The hit records of every lane as hits on leaf `slot` at flat coordinates (x, y).
+    #[inline(always)]
+    fn flat_hit_block(&self, slot: usize, t: &[f32; LANES], x: &[f64; LANES], y: &[f64; LANES]) -> FlatHitBlock {
+        let shape = &self.shapes[self.leaf[slot].shape as usize];
+        let (mut p, mut p_error) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
+        for a in 0..3 {
+            for l in 0..LANES {
+                (p[a][l], p_error[a][l]) = shape.flat_world_coordinate(a, x[l], y[l]);
+            }
+        }
+        let uv = flat_uvs(&shape.shape, x, y);
+        let (instance, id, material) = self.id_of(self.prim_of_slot(slot));
+        let n = shape.flat_normal.unwrap_or(Vec3::Z);
+        FlatHitBlock { t: *t, p, p_error, uv, n, id, material, instance }
     }
 
     /// [`Self::occluded`] of the first `n` of `LANES` rays, bit for bit (later lanes: false).
@@ -318,7 +382,7 @@ mod tests {
                 let lanes = RayLanes::from_rays(&lane_rays);
                 let mut got = [None; LANES];
                 crate::lanes::widest(|| {
-                    bvh.closest_hits_lanes(&RayLanes::from_rays(&lane_rays), |l, hit| got[l] = hit)
+                    bvh.closest_hits_lanes(&RayLanes::from_rays(&lane_rays), &mut |l, hit| got[l] = hit)
                 });
                 let occluded = crate::lanes::widest(|| bvh.occluded_lanes(&lanes, block.len()));
                 for (l, ray) in block.iter().enumerate() {
@@ -332,5 +396,50 @@ mod tests {
             assert!(hits > 50 && hits < rays.len() - 50, "{hits} hits");
             assert!(blocked >= hits);
         }
+    }
+
+    /// Records hits lane by lane, and whole blocks as their lanes.
+    #[derive(Default)]
+    struct Recorder {
+        got: [Option<Hit>; LANES],
+        blocks: usize,
+    }
+
+    impl HitSink for Recorder {
+        fn hit(&mut self, l: usize, hit: Option<Hit>) {
+            self.got[l] = hit;
+        }
+        fn block(&mut self, hits: &FlatHitBlock) {
+            self.blocks += 1;
+            self.got = std::array::from_fn(|l| Some(hits.hit(l)));
+        }
+    }
+
+    #[test]
+    fn blocks_that_hit_one_shape_come_whole() {
+        let rect = Shape::Rectangle(Rectangle { half_size: Vec2::new(2.0, 1.0) });
+        let over =
+            Transform { rotation: Quat::from_rotation_x(0.7), ..Transform::from_translation(Vec3::new(1.5, 0.0, 1.0)) };
+        let bvh = scene(&[(rect, Transform::IDENTITY), (Shape::Disk(Disk { radius: 0.5, inner_radius: 0.0 }), over)]);
+        // Rays from above toward the rectangle: a block that sees the disk or misses has mixed
+        // lanes. Every other block aims at the half of the rectangle away from the disk.
+        let mut rng = SplitMix64::new(3);
+        let (mut blocks, mut mixed) = (0, 0);
+        for i in 0..64 {
+            let (from, width) = (Vec3::new(-1.0, 0.0, 4.0), if i % 2 == 0 { 1.4 } else { 4.5 });
+            let rays: [Ray; LANES] = std::array::from_fn(|_| {
+                let to = Vec3::new(width * rng.f32() - 1.9, 1.9 * rng.f32() - 0.95, 0.0);
+                Ray::new(from, (to - from).normalize())
+            });
+            let mut sink = Recorder::default();
+            crate::lanes::widest(|| bvh.closest_hits_lanes(&RayLanes::from_rays(&rays), &mut sink));
+            for (l, ray) in rays.iter().enumerate() {
+                assert_eq!(sink.got[l], bvh.closest_hit(ray), "closest hit of {ray:?}");
+            }
+            let same = rays.iter().all(|r| bvh.closest_hit(r).is_some_and(|h| h.instance == 0));
+            assert_eq!(sink.blocks, same as usize);
+            (blocks, mixed) = (blocks + sink.blocks, mixed + !same as usize);
+        }
+        assert!(blocks > 5 && mixed > 5, "{blocks} whole blocks, {mixed} mixed");
     }
 }

@@ -17,7 +17,7 @@ mod triangle;
 pub mod visibility;
 
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
-pub use flat_lanes::RayLanes;
+pub use flat_lanes::{FlatHitBlock, HitSink, RayLanes};
 pub use mesh::Mesh;
 pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin, triangle_surface_point};
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};

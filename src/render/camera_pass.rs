@@ -6,8 +6,8 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::camera::CameraModel;
-use crate::geometry::{Hit, RAY_CHUNK, RayLanes, SceneBvh};
-use crate::lanes::LANES;
+use crate::geometry::{FlatHitBlock, Hit, HitSink, RAY_CHUNK, RayLanes, SceneBvh};
+use crate::lanes::{self, LANES};
 use crate::rng::SampleStream;
 use crate::shading::ShadingBatch;
 
@@ -73,6 +73,63 @@ fn write_slot(batch: &mut BatchChunk, i: usize, dir: Vec3, hit: Option<Hit>) {
         SampleSurface { uv: h.uv, material: h.material, instance: h.instance, primitive: h.id.primitive, flipped };
 }
 
+/// Writes the closest hits of the block of camera rays from slot `b` of a chunk.
+struct SlotWriter<'c, 'a> {
+    chunk: &'c mut BatchChunk<'a>,
+    b: usize,
+    /// Lanes that are samples (the chunk's last block may be partial).
+    n: usize,
+    dirs: &'c [[f32; LANES]; 3],
+}
+
+impl HitSink for SlotWriter<'_, '_> {
+    #[inline(always)]
+    fn hit(&mut self, l: usize, hit: Option<Hit>) {
+        if l < self.n {
+            let dir = Vec3::new(self.dirs[0][l], self.dirs[1][l], self.dirs[2][l]);
+            write_slot(self.chunk, self.b + l, dir, hit);
+        }
+    }
+
+    /// [`write_slot`] of every lane at once: lane columns, interleaved by whole blocks. A flat
+    /// shape's shading normal is its geometric one, so the two need no test against each other.
+    #[inline(always)]
+    fn block(&mut self, hits: &FlatHitBlock) {
+        if self.n < LANES || super::shade_lanes::turned_off() {
+            for l in 0..self.n {
+                self.hit(l, Some(hits.hit(l)));
+            }
+            return;
+        }
+        let (dirs, n) = (self.dirs, hits.n);
+        let mut flipped = [false; LANES];
+        for l in 0..LANES {
+            flipped[l] = n.x * dirs[0][l] + n.y * dirs[1][l] + n.z * dirs[2][l] > 0.0;
+        }
+        let mut normal = [[0.0f32; LANES]; 3];
+        for (a, column) in normal.iter_mut().enumerate() {
+            for l in 0..LANES {
+                column[l] = if flipped[l] { -n[a] } else { n[a] };
+            }
+        }
+        let normal = lanes::vec3s(&normal);
+        let mut surface = [SampleSurface::ESCAPED; LANES];
+        for l in 0..LANES {
+            let uv = Vec2::new(hits.uv[0][l], hits.uv[1][l]);
+            let (material, instance, primitive) = (hits.material, hits.instance, hits.id.primitive);
+            surface[l] = SampleSurface { uv, material, instance, primitive, flipped: flipped[l] };
+        }
+        let r = self.b..self.b + LANES;
+        let chunk = &mut *self.chunk;
+        chunk.position[r.clone()].copy_from_slice(&lanes::vec3s(&hits.p));
+        chunk.position_error[r.clone()].copy_from_slice(&lanes::vec3s(&hits.p_error));
+        chunk.normal[r.clone()].copy_from_slice(&normal);
+        chunk.shading_normal[r.clone()].copy_from_slice(&normal);
+        chunk.dir[r.clone()].copy_from_slice(&lanes::vec3s(dirs));
+        chunk.surface[r].copy_from_slice(&surface);
+    }
+}
+
 /// One `RAY_CHUNK` of every column the camera pass writes.
 struct BatchChunk<'a> {
     position: &'a mut [Vec3],
@@ -136,13 +193,29 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
         let end = (b + LANES).min(len);
         let (mut pixel, mut sample) = ([0u32; LANES], [0u32; LANES]);
         let (mut x, mut y) = ([0u32; LANES], [0u32; LANES]);
-        for l in 0..end - b {
-            (pixel[l], sample[l], x[l], y[l]) = (next_pixel, next_sample, next_x, next_y);
-            next_sample += 1;
+        if end - b == LANES && next_sample as usize + LANES <= spp as usize {
+            // A whole block of one pixel's samples (any spp of 16 or more): whole lanes of one
+            // value, where the loop below would store lane by lane and stall the vector loads.
+            (pixel, x, y) = ([next_pixel; LANES], [next_x; LANES], [next_y; LANES]);
+            for (l, s) in sample.iter_mut().enumerate() {
+                *s = next_sample + l as u32;
+            }
+            next_sample += LANES as u32;
             if next_sample == spp {
                 (next_pixel, next_sample, next_x) = (next_pixel + 1, 0, next_x + 1);
                 if next_x == width {
                     (next_x, next_y) = (0, next_y + 1);
+                }
+            }
+        } else {
+            for l in 0..end - b {
+                (pixel[l], sample[l], x[l], y[l]) = (next_pixel, next_sample, next_x, next_y);
+                next_sample += 1;
+                if next_sample == spp {
+                    (next_pixel, next_sample, next_x) = (next_pixel + 1, 0, next_x + 1);
+                    if next_x == width {
+                        (next_x, next_y) = (0, next_y + 1);
+                    }
                 }
             }
         }
@@ -157,15 +230,8 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
         let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
         let dirs = camera.dirs_lanes([&x, &y], &u, &v);
         let rays = RayLanes::from_columns(&[origin, dirs], f32::INFINITY);
-        bvh.closest_hits_lanes(
-            &rays,
-            #[inline(always)]
-            |l, hit| {
-                if b + l < end {
-                    write_slot(chunk, b + l, Vec3::new(dirs[0][l], dirs[1][l], dirs[2][l]), hit);
-                }
-            },
-        );
+        let mut writer = SlotWriter { chunk: &mut *chunk, b, n: end - b, dirs: &dirs };
+        bvh.closest_hits_lanes(&rays, &mut writer);
         b = end;
     }
 }

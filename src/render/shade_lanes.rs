@@ -112,11 +112,12 @@ impl ShadeContext<'_> {
     }
 }
 
-/// Tests turn the lane kernel off to compare it with one-at-a-time shading.
+/// Tests turn the lane kernels (shading, and the camera pass's block writes) off to compare them
+/// with one-at-a-time code.
 #[cfg(test)]
 static OFF_FOR_TESTS: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
-/// Whether a test has turned the lane kernel off (never outside tests).
+/// Whether a test has turned the lane kernels off (never outside tests).
 pub(super) fn turned_off() -> bool {
     #[cfg(test)]
     return OFF_FOR_TESTS.load(std::sync::atomic::Ordering::Relaxed);
