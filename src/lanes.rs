@@ -16,6 +16,9 @@
 
 use glam::Vec3;
 
+mod transpose;
+pub use transpose::{store_rgb_spectra, store_vec3s};
+
 /// Values per lane array: one AVX-512 register of f32.
 pub const LANES: usize = 16;
 

@@ -5,7 +5,7 @@ use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::lanes::LANES;
+use crate::lanes::{self, LANES};
 use crate::light::point::PointLanes;
 use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
@@ -357,30 +357,47 @@ impl Sampling<'_> {
         (light, pmf, casts): (&[LightId; LANES], &[f32; LANES], &[bool; LANES]),
         lit: &PointLanes,
     ) -> usize {
-        let r = e..e + LANES;
-        let (radiance, wi, pdf) = (&mut cols.radiance[r.clone()], &mut cols.wi[r.clone()], &mut cols.pdf[r.clone()]);
-        let (light_col, delta) = (&mut cols.light[r.clone()], &mut cols.delta[r.clone()]);
-        let (occluded, ray_kind) = (&mut cols.occluded[r.clone()], &mut cols.ray_kind[r.clone()]);
-        let (target, target_normal) = (&mut cols.target[r.clone()], &mut cols.target_normal[r]);
+        // Each column is built whole in lane arrays and stored as a block: one store loop over
+        // ten columns stayed scalar, and its stores were most of its time.
         let shadows = self.settings.shadows;
-        let mut traced = 0;
+        // Selects as bit masks (all ones or zero): selects on arrays of bools compile to
+        // per-lane mask shuffling.
+        let (mut keep, mut aim, mut pdf) = ([0u32; LANES], [0u32; LANES], [0.0f32; LANES]);
+        let pick = |v: f32, mask: u32| f32::from_bits(v.to_bits() & mask);
         for l in 0..LANES {
             // An invalid lane is `write`'s failed sample: zero radiance, pdf and direction, not delta.
-            let valid = lit.valid[l];
-            let rgb = [lit.radiance[0][l], lit.radiance[1][l], lit.radiance[2][l]];
-            let rgb = if valid { rgb } else { [0.0; 3] };
-            let toward = Vec3::new(lit.wi[0][l], lit.wi[1][l], lit.wi[2][l]);
-            let p = if valid { pmf[l] } else { 0.0 };
-            (radiance[l], wi[l], pdf[l]) =
-                (SampledSpectrum([rgb[0], rgb[1], rgb[2], 0.0]), if valid { toward } else { Vec3::ZERO }, p);
-            (light_col[l], delta[l], occluded[l]) = (light[l], valid, false);
-            // `wants_shadow_ray`, with `&` for `&&`.
-            let ray = shadows & (p > 0.0) & ((rgb[0] > 0.0) | (rgb[1] > 0.0) | (rgb[2] > 0.0)) & casts[l];
-            ray_kind[l] = if ray { ShadowTarget::Point } else { ShadowTarget::None };
-            let light_point = Vec3::new(lit.target[0][l], lit.target[1][l], lit.target[2][l]);
-            (target[l], target_normal[l]) = (if ray { light_point } else { Vec3::ZERO }, Vec3::ZERO);
-            traced += ray as usize;
+            keep[l] = 0u32.wrapping_sub(lit.valid[l] as u32);
+            pdf[l] = pick(pmf[l], keep[l]);
+            let some = (lit.radiance[0][l] > 0.0) | (lit.radiance[1][l] > 0.0) | (lit.radiance[2][l] > 0.0);
+            // `wants_shadow_ray`, with `&` for `&&` (an invalid lane has a zero pdf).
+            aim[l] = 0u32.wrapping_sub((shadows & (pdf[l] > 0.0) & some & casts[l]) as u32);
         }
+        let (mut rgb, mut wi, mut target) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
+        for a in 0..3 {
+            for l in 0..LANES {
+                rgb[a][l] = pick(lit.radiance[a][l], keep[l]);
+                wi[a][l] = pick(lit.wi[a][l], keep[l]);
+                target[a][l] = pick(lit.target[a][l], aim[l]);
+            }
+        }
+        let (mut ray_kind, mut traced) = ([ShadowTarget::None; LANES], 0);
+        for l in 0..LANES {
+            ray_kind[l] = if aim[l] != 0 { ShadowTarget::Point } else { ShadowTarget::None };
+            traced += (aim[l] & 1) as usize;
+        }
+        #[inline(always)]
+        fn block<T>(column: &mut [T], e: usize) -> &mut [T; LANES] {
+            column[e..].first_chunk_mut().expect("a whole block")
+        }
+        lanes::store_rgb_spectra(&rgb, block(cols.radiance, e));
+        lanes::store_vec3s(&wi, block(cols.wi, e));
+        lanes::store_vec3s(&target, block(cols.target, e));
+        *block(cols.pdf, e) = pdf;
+        *block(cols.light, e) = *light;
+        *block(cols.delta, e) = lit.valid;
+        *block(cols.occluded, e) = [false; LANES];
+        *block(cols.ray_kind, e) = ray_kind;
+        *block(cols.target_normal, e) = [Vec3::ZERO; LANES];
         traced
     }
 

@@ -15,6 +15,7 @@ use crate::lanes::LANES;
 /// [`LANES`] rays as lane columns, widened to f64 (the precision of the flat-shape test).
 /// Lanes never set hold invalid rays (zero direction), which hit nothing.
 #[derive(Clone, Copy, Debug)]
+#[repr(align(64))]
 pub struct RayLanes {
     o: [[f64; LANES]; 3],
     d: [[f64; LANES]; 3],
@@ -139,6 +140,7 @@ fn flat_uvs(shape: &Shape, x: &[f64; LANES], y: &[f64; LANES]) -> [[f32; LANES];
 
 /// The closest hits of `LANES` rays that all hit the same flat primitive, as lane columns.
 #[derive(Clone, Copy, Debug)]
+#[repr(align(64))]
 pub struct FlatHitBlock {
     pub t: [f32; LANES],
     pub p: [[f32; LANES]; 3],

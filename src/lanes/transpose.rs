@@ -1,0 +1,142 @@
+//! Whole blocks of `LANES` lane columns (all x, all y, all z) stored into columns of vectors
+//! (x, y, z interleaved). Scalar stores of interleaved columns were most of the sampling pass's
+//! time (store throughput), and LLVM's vectoriser, left to itself, rebuilds the interleaving
+//! from scalars inside large kernels. With AVX-512 a block is a few registers moved by
+//! two-source permutes; elsewhere, lane by lane.
+//!
+//! The AVX-512 code is a `#[target_feature]` function, which cannot be inlined into the generic
+//! kernels: call these at the end of a block, when few vector registers are live (a call in
+//! the middle of a kernel spills them all; loads made that way were slower than scalar ones).
+
+use glam::Vec3;
+
+use super::LANES;
+use crate::spectrum::SampledSpectrum;
+
+/// `out[l] = (c[0][l], c[1][l], c[2][l])`.
+#[inline(always)]
+pub fn store_vec3s(c: &[[f32; LANES]; 3], out: &mut [Vec3; LANES]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU has AVX-512F (checked above); `Vec3` is three f32, so `out` is 48.
+        return unsafe { avx512::store3(c, out.as_mut_ptr().cast()) };
+    }
+    for l in 0..LANES {
+        out[l] = Vec3::new(c[0][l], c[1][l], c[2][l]);
+    }
+}
+
+/// `out[l] = [c[0][l], c[1][l], c[2][l], 0]`: RGB lane columns as spectra.
+#[inline(always)]
+pub fn store_rgb_spectra(c: &[[f32; LANES]; 3], out: &mut [SampledSpectrum; LANES]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU has AVX-512F (checked above); `SampledSpectrum` is a transparent
+        // [f32; 4], so `out` is 64 f32.
+        return unsafe { avx512::store4(c, out.as_mut_ptr().cast()) };
+    }
+    for l in 0..LANES {
+        out[l] = SampledSpectrum([c[0][l], c[1][l], c[2][l], 0.0]);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use std::arch::x86_64::*;
+
+    use super::LANES;
+
+    /// Permute indices that interleave `width`-float vectors from columns x, y, z (a fourth
+    /// component, if any, is zeroed by a mask): for output register k, the first step takes x
+    /// and y from registers x (indices 0..16) and y (16..32); the second keeps those (0..16) and
+    /// takes z from register z (16..32). Float j of the block is component j % width of lane
+    /// j / width.
+    const fn interleave(width: usize, k: usize) -> [[i32; 16]; 2] {
+        let (mut xy, mut z, mut i) = ([0; 16], [0; 16], 0);
+        while i < 16 {
+            let j = 16 * k + i;
+            let (lane, component) = ((j / width) as i32, j % width);
+            xy[i] = if component == 1 { 16 + lane } else { lane };
+            z[i] = if component == 2 { 16 + lane } else { i as i32 };
+            i += 1;
+        }
+        [xy, z]
+    }
+
+    const STORE3: [[[i32; 16]; 2]; 3] = [interleave(3, 0), interleave(3, 1), interleave(3, 2)];
+    const STORE4: [[[i32; 16]; 2]; 4] = [interleave(4, 0), interleave(4, 1), interleave(4, 2), interleave(4, 3)];
+    /// Every fourth float (the spectra's unused fourth value) off.
+    const XYZ_OF_4: __mmask16 = 0x7777;
+
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    fn indices(i: &[i32; 16]) -> __m512i {
+        // SAFETY: 16 i32 are 64 bytes; unaligned loads are allowed.
+        unsafe { _mm512_loadu_si512(i.as_ptr().cast()) }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    fn columns(c: &[[f32; LANES]; 3]) -> [__m512; 3] {
+        // SAFETY: each column is 16 f32 (64 bytes); unaligned loads are allowed.
+        [0, 1, 2].map(|a| unsafe { _mm512_loadu_ps(c[a].as_ptr()) })
+    }
+
+    /// Stores 48 floats at `dst`.
+    ///
+    /// # Safety
+    /// `dst` must be valid for writes of 48 f32.
+    #[inline(never)]
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn store3(c: &[[f32; LANES]; 3], dst: *mut f32) {
+        let [x, y, z] = columns(c);
+        for (k, [xy, zi]) in STORE3.iter().enumerate() {
+            let t = _mm512_permutex2var_ps(x, indices(xy), y);
+            // SAFETY: register k covers floats 16k..16k + 16 of the 48 (caller's contract).
+            unsafe { _mm512_storeu_ps(dst.add(16 * k), _mm512_permutex2var_ps(t, indices(zi), z)) };
+        }
+    }
+
+    /// Stores 64 floats at `dst`, every fourth zero.
+    ///
+    /// # Safety
+    /// `dst` must be valid for writes of 64 f32.
+    #[inline(never)]
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn store4(c: &[[f32; LANES]; 3], dst: *mut f32) {
+        let [x, y, z] = columns(c);
+        for (k, [xy, zi]) in STORE4.iter().enumerate() {
+            let t = _mm512_permutex2var_ps(x, indices(xy), y);
+            let v = _mm512_maskz_permutex2var_ps(XYZ_OF_4, t, indices(zi), z);
+            // SAFETY: register k covers floats 16k..16k + 16 of the 64 (caller's contract).
+            unsafe { _mm512_storeu_ps(dst.add(16 * k), v) };
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn block_stores_match_lane_by_lane_stores() {
+        let c: [[f32; LANES]; 3] = std::array::from_fn(|a| std::array::from_fn(|l| (100 * a + l) as f32 - 0.5));
+        // As called from plain code and from code compiled for the widest instruction set.
+        for wide in [false, true] {
+            let (mut v, mut rgb) = ([Vec3::NAN; LANES], [SampledSpectrum([f32::NAN; 4]); LANES]);
+            let mut run = || {
+                store_vec3s(&c, &mut v);
+                store_rgb_spectra(&c, &mut rgb);
+            };
+            if wide {
+                crate::lanes::widest(run)
+            } else {
+                run()
+            }
+            for l in 0..LANES {
+                assert_eq!(v[l].to_array(), [c[0][l], c[1][l], c[2][l]], "lane {l}");
+                assert_eq!(rgb[l].0, [c[0][l], c[1][l], c[2][l], 0.0], "lane {l}");
+            }
+        }
+    }
+}
