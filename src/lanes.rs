@@ -23,7 +23,9 @@ pub use transpose::{store_rgb_spectra, store_vec3s};
 pub const LANES: usize = 16;
 
 /// Lane columns (x, y, z) as `LANES` vectors: a loop of this one step becomes a few vector
-/// shuffles, where a loop that also computes the values stays scalar.
+/// shuffles, where a loop that also computes the values stays scalar. How well LLVM does it
+/// depends on the kernel: the camera pass measured fastest with this, the sampling pass with
+/// [`store_vec3s`] (explicit AVX-512 permutes).
 #[inline(always)]
 pub fn vec3s(c: &[[f32; LANES]; 3]) -> [Vec3; LANES] {
     let mut out = [Vec3::ZERO; LANES];

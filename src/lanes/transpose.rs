@@ -1,12 +1,13 @@
 //! Whole blocks of `LANES` lane columns (all x, all y, all z) stored into columns of vectors
-//! (x, y, z interleaved). Scalar stores of interleaved columns were most of the sampling pass's
+//! (x, y, z interleaved). Scalar stores of interleaved columns were about 40% of the sampling pass's
 //! time (store throughput), and LLVM's vectoriser, left to itself, rebuilds the interleaving
 //! from scalars inside large kernels. With AVX-512 a block is a few registers moved by
 //! two-source permutes; elsewhere, lane by lane.
 //!
-//! The AVX-512 code is a `#[target_feature]` function, which cannot be inlined into the generic
-//! kernels: call these at the end of a block, when few vector registers are live (a call in
-//! the middle of a kernel spills them all; loads made that way were slower than scalar ones).
+//! The AVX-512 code sits in `#[target_feature]` functions, which only code compiled for AVX-512
+//! may inline; elsewhere they are calls. Use them at the end of a block, when few vector
+//! registers are live: loads made this way at the start of a kernel measured slower than scalar
+//! loads.
 
 use glam::Vec3;
 
@@ -86,7 +87,6 @@ mod avx512 {
     ///
     /// # Safety
     /// `dst` must be valid for writes of 48 f32.
-    #[inline(never)]
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn store3(c: &[[f32; LANES]; 3], dst: *mut f32) {
         let [x, y, z] = columns(c);
@@ -101,7 +101,6 @@ mod avx512 {
     ///
     /// # Safety
     /// `dst` must be valid for writes of 64 f32.
-    #[inline(never)]
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn store4(c: &[[f32; LANES]; 3], dst: *mut f32) {
         let [x, y, z] = columns(c);
