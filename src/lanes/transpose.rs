@@ -22,9 +22,7 @@ pub fn store_vec3s(c: &[[f32; LANES]; 3], out: &mut [Vec3; LANES]) {
         // SAFETY: the CPU has AVX-512F (checked above); `Vec3` is three f32, so `out` is 48.
         return unsafe { avx512::store3(c, out.as_mut_ptr().cast()) };
     }
-    for l in 0..LANES {
-        out[l] = Vec3::new(c[0][l], c[1][l], c[2][l]);
-    }
+    portable::store_vec3s(c, out)
 }
 
 /// `out[l] = [c[0][l], c[1][l], c[2][l], 0]`: RGB lane columns as spectra.
@@ -36,8 +34,25 @@ pub fn store_rgb_spectra(c: &[[f32; LANES]; 3], out: &mut [SampledSpectrum; LANE
         // [f32; 4], so `out` is 64 f32.
         return unsafe { avx512::store4(c, out.as_mut_ptr().cast()) };
     }
-    for l in 0..LANES {
-        out[l] = SampledSpectrum([c[0][l], c[1][l], c[2][l], 0.0]);
+    portable::store_rgb_spectra(c, out)
+}
+
+/// The same stores lane by lane, for CPUs without AVX-512.
+mod portable {
+    use super::*;
+
+    #[inline(always)]
+    pub(super) fn store_vec3s(c: &[[f32; LANES]; 3], out: &mut [Vec3; LANES]) {
+        for l in 0..LANES {
+            out[l] = Vec3::new(c[0][l], c[1][l], c[2][l]);
+        }
+    }
+
+    #[inline(always)]
+    pub(super) fn store_rgb_spectra(c: &[[f32; LANES]; 3], out: &mut [SampledSpectrum; LANES]) {
+        for l in 0..LANES {
+            out[l] = SampledSpectrum([c[0][l], c[1][l], c[2][l], 0.0]);
+        }
     }
 }
 
@@ -120,12 +135,17 @@ mod tests {
     #[test]
     fn block_stores_match_lane_by_lane_stores() {
         let c: [[f32; LANES]; 3] = std::array::from_fn(|a| std::array::from_fn(|l| (100 * a + l) as f32 - 0.5));
-        // As called from plain code and from code compiled for the widest instruction set.
-        for wide in [false, true] {
+        type Stores =
+            (fn(&[[f32; LANES]; 3], &mut [Vec3; LANES]), fn(&[[f32; LANES]; 3], &mut [SampledSpectrum; LANES]));
+        let dispatched: Stores = (store_vec3s, store_rgb_spectra);
+        let portable: Stores = (portable::store_vec3s, portable::store_rgb_spectra);
+        // The portable code, and the dispatched code called from plain code and from code compiled
+        // for the widest instruction set (where AVX-512 code may inline).
+        for ((vec3s, spectra), wide) in [(portable, false), (dispatched, false), (dispatched, true)] {
             let (mut v, mut rgb) = ([Vec3::NAN; LANES], [SampledSpectrum([f32::NAN; 4]); LANES]);
             let mut run = || {
-                store_vec3s(&c, &mut v);
-                store_rgb_spectra(&c, &mut rgb);
+                vec3s(&c, &mut v);
+                spectra(&c, &mut rgb);
             };
             if wide {
                 crate::lanes::widest(run)
