@@ -86,19 +86,9 @@ impl RayLanes {
 /// The flat-shape hit test (`PlacedShape::local_hit`) of every lane over (0, t_max[l]]: hit
 /// flags, t, object-space x and y. Each shape kind gets its own loop, so that no `match` stops it vectorising.
 #[inline(always)]
-#[allow(clippy::type_complexity)]
-fn flat_hits(
-    shape: &PlacedShape,
-    r: &RayLanes,
-    t_max: &[f32; LANES],
-) -> ([bool; LANES], [f32; LANES], [f64; LANES], [f64; LANES]) {
+fn flat_hits(shape: &PlacedShape, r: &RayLanes, t_max: &[f32; LANES]) -> FlatHits {
     #[inline(always)]
-    fn each(
-        shape: &PlacedShape,
-        r: &RayLanes,
-        t_max: &[f32; LANES],
-        contains: impl Fn(f64, f64) -> bool,
-    ) -> ([bool; LANES], [f32; LANES], [f64; LANES], [f64; LANES]) {
+    fn each(shape: &PlacedShape, r: &RayLanes, t_max: &[f32; LANES], contains: impl Fn(f64, f64) -> bool) -> FlatHits {
         // One step per loop over all lanes, so that LLVM vectorises across lanes.
         let (mut o_row, mut d_row) = ([[0.0f64; LANES]; 3], [[0.0f64; LANES]; 3]);
         for i in 0..3 {
@@ -106,18 +96,29 @@ fn flat_hits(
                 (o_row[i][l], d_row[i][l]) = shape.object_row(i, r.origin(l), r.dir(l));
             }
         }
-        let mut out = ([false; LANES], [0.0f32; LANES], [0.0f64; LANES], [0.0f64; LANES]);
+        let mut out = FlatHits::default();
         for l in 0..LANES {
             let rows = [(o_row[0][l], d_row[0][l]), (o_row[1][l], d_row[1][l]), (o_row[2][l], d_row[2][l])];
-            (out.0[l], out.1[l], out.2[l], out.3[l]) = flat_hit_from_rows(rows, t_max[l], &contains);
+            (out.hit[l], out.t[l], out.x[l], out.y[l]) = flat_hit_from_rows(rows, t_max[l], &contains);
         }
         out
     }
     match shape.shape {
         Shape::Rectangle(rect) => each(shape, r, t_max, |x, y| Shape::Rectangle(rect).flat_contains(x, y)),
         Shape::Disk(disk) => each(shape, r, t_max, |x, y| Shape::Disk(disk).flat_contains(x, y)),
-        Shape::Sphere(_) => ([false; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]),
+        Shape::Sphere(_) => FlatHits::default(),
     }
+}
+
+/// What [`flat_hits`] finds per lane: whether the ray hits, t, and the object-space x and y.
+/// 64-byte aligned, as `RayLanes` is (a tuple of these arrays had them straddle cache lines).
+#[derive(Clone, Copy, Default)]
+#[repr(C, align(64))]
+struct FlatHits {
+    x: [f64; LANES],
+    y: [f64; LANES],
+    t: [f32; LANES],
+    hit: [bool; LANES],
 }
 
 /// [`Shape::flat_uv`] of every lane, one loop per shape kind (as [`flat_hits`]).
@@ -224,7 +225,7 @@ impl SceneBvh {
             let slot = self.slot_of(prim);
             let hits = flat_hits(&self.shapes[self.leaf[slot].shape as usize], r, &best_t);
             for l in 0..LANES {
-                let (hit, t, x, y) = (hits.0[l], hits.1[l], hits.2[l], hits.3[l]);
+                let (hit, t, x, y) = (hits.hit[l], hits.t[l], hits.x[l], hits.y[l]);
                 let first = best_slot[l] == NO_SLOT;
                 if r.valid[l] & hit & (first | (t < best_t[l])) {
                     (best_t[l], best_slot[l], best_x[l], best_y[l]) = (t, slot, x, y);
@@ -281,7 +282,7 @@ impl SceneBvh {
         for prim in &self.leaf {
             let hits = flat_hits(&self.shapes[prim.shape as usize], r, &r.t_max);
             for l in 0..LANES {
-                out[l] |= hits.0[l];
+                out[l] |= hits.hit[l];
             }
         }
         for l in 0..LANES {
