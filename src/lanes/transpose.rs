@@ -1,8 +1,8 @@
 //! Whole blocks of `LANES` lane columns (all x, all y, all z) stored into columns of vectors
-//! (x, y, z interleaved). Scalar stores of interleaved columns were about 40% of the sampling pass's
-//! time (store throughput), and LLVM's vectoriser, left to itself, rebuilds the interleaving
-//! from scalars inside large kernels. With AVX-512 a block is a few registers moved by
-//! two-source permutes; elsewhere, lane by lane.
+//! (x, y, z interleaved). The sampling pass's entry stores, made lane by lane, took about 40% of
+//! its time, and LLVM's vectoriser, left to itself, rebuilds the interleaving from scalars
+//! inside large kernels. With AVX-512 a block is a few registers moved by two-source permutes;
+//! elsewhere, lane by lane.
 //!
 //! The AVX-512 code sits in `#[target_feature]` functions, which only code compiled for AVX-512
 //! may inline; elsewhere they are calls. Use them at the end of a block, when few vector
