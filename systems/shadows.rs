@@ -85,10 +85,20 @@ pub fn trace_shadow_rays(
                             }
                             c
                         };
-                        // (Not `array::map`: its closure may stay out of the wide code.)
-                        let from = [columns(&batch.position), columns(&batch.position_error), columns(&batch.normal)];
-                        let segments = spawn_rays_to_points_lanes([&from[0], &from[1], &from[2]], &columns(target));
-                        rays = RayLanes::from_columns(&segments, 1.0 - SHADOW_EPSILON);
+                        // Cache-line aligned, as `RayLanes` is: the kernel loads these columns whole.
+                        #[repr(C, align(64))]
+                        struct Aligned<T>(T);
+                        // Origin, its error bound, normal and target. (Not `array::map`: its closure
+                        // may stay out of the wide code.)
+                        let ends = Aligned([
+                            columns(&batch.position),
+                            columns(&batch.position_error),
+                            columns(&batch.normal),
+                            columns(target),
+                        ]);
+                        let [origin, error, normal, to] = &ends.0;
+                        let segments = Aligned(spawn_rays_to_points_lanes([origin, error, normal], to));
+                        rays = RayLanes::from_columns(&segments.0, 1.0 - SHADOW_EPSILON);
                     } else {
                         for l in 0..n {
                             rays.set(l, &segment(first + l));
