@@ -43,9 +43,7 @@ mod portable {
 
     #[inline(always)]
     pub(super) fn store_vec3s(c: &[[f32; LANES]; 3], out: &mut [Vec3; LANES]) {
-        for l in 0..LANES {
-            out[l] = Vec3::new(c[0][l], c[1][l], c[2][l]);
-        }
+        *out = crate::lanes::vec3s(c);
     }
 
     #[inline(always)]
