@@ -4,6 +4,7 @@
 use bevy_ecs::resource::Resource;
 use glam::Vec3;
 
+use crate::geometry::GeometryId;
 use crate::light::LightId;
 use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 
@@ -103,6 +104,10 @@ pub struct ShadingBatch {
     pub sample: Vec<u32>,
     /// Wavelengths per point, spectral mode only.
     pub wavelengths: Vec<SampledWavelengths>,
+    /// Empty, or per point the primitive it lies on (`GeometryId::NONE` where unknown), as a
+    /// ray hit tells it. Shadow rays then pass through their own flat primitive (see
+    /// `SceneBvh::occluded_from`), which no rounding can make shadow itself.
+    pub geometry: Vec<GeometryId>,
 }
 
 impl ShadingBatch {
@@ -123,11 +128,13 @@ impl ShadingBatch {
         self.pixel.clear();
         self.sample.clear();
         self.wavelengths.clear();
+        self.geometry.clear();
     }
-    /// Sizes every column but `wavelengths` (which it empties) to `n` points, keeping whatever
-    /// values they held: for a caller about to write every slot of every column.
+    /// Sizes every column but `wavelengths` and `geometry` (which it empties) to `n` points,
+    /// keeping whatever values they held: for a caller about to write every slot of them.
     pub fn set_len(&mut self, n: usize) {
         self.wavelengths.clear();
+        self.geometry.clear();
         self.position.resize(n, Vec3::ZERO);
         self.position_error.resize(n, Vec3::ZERO);
         self.normal.resize(n, Vec3::ZERO);
@@ -158,6 +165,15 @@ impl ShadingBatch {
         self.shading_normal.push(shading);
         self.pixel.push(pixel);
         self.sample.push(sample);
+        if !self.geometry.is_empty() {
+            self.geometry.push(GeometryId::NONE);
+        }
+    }
+
+    /// The primitive point `i` lies on, if the batch says.
+    #[inline(always)]
+    pub fn geometry_of(&self, i: usize) -> GeometryId {
+        self.geometry.get(i).copied().unwrap_or(GeometryId::NONE)
     }
 }
 

@@ -61,7 +61,7 @@ pub fn trace_shadow_rays(
     if !bvh.few_flat_shapes() {
         // Rays one at a time: the lane queries would answer them so anyway.
         r.occluded.par_iter_mut().enumerate().with_min_len(RAY_CHUNK).for_each(|(e, occluded)| {
-            *occluded = bvh.occluded(&segment(e));
+            *occluded = bvh.occluded_from(&segment(e), batch.geometry_of(if k == 1 { e } else { e / k }));
         });
         return;
     }
@@ -75,6 +75,14 @@ pub fn trace_shadow_rays(
                 while b < chunk.len() {
                     let n = LANES.min(chunk.len() - b);
                     let first = c * RAY_CHUNK + b;
+                    let origins =
+                        std::array::from_fn(|l| batch.geometry_of(if k == 1 { first + l } else { (first + l) / k }));
+                    if bvh.blocks_nothing_from(&origins) {
+                        // Nothing but the surface the rays leave: no ray to build.
+                        chunk[b..b + n].fill(false);
+                        b += LANES;
+                        continue;
+                    }
                     let mut rays = RayLanes::default();
                     let points = k == 1 && n == LANES && offset == ShadowOffset::ErrorBound;
                     if points && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point) {
@@ -104,7 +112,7 @@ pub fn trace_shadow_rays(
                             rays.set(l, &segment(first + l));
                         }
                     }
-                    let occluded = bvh.occluded_lanes(&rays, n);
+                    let occluded = bvh.occluded_lanes(&rays, n, &origins);
                     // A copy of a length known at compile time is a vector store; a variable one
                     // calls memmove.
                     if n == LANES {

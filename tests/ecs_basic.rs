@@ -90,3 +90,33 @@ fn occluders_block_shadow_rays_and_the_bvh_follows_moving_geometry() {
     let report = world.resource::<RunReport>();
     assert!(!report.ran("trace_shadow_rays") && !report.ran("update_scene_bvh"), "{report}");
 }
+
+#[test]
+fn shadow_rays_pass_the_flat_surface_the_batch_says_they_leave() {
+    use kelvin::geometry::{GeometryId, Rectangle, Sphere};
+    // Hard case: points rounded to just below the floor with no error bound, so that no offset
+    // lifts their shadow rays above it; only the batch's geometry column says where they lie.
+    let below = Vec3::new(0.5, -1e-5, 0.25);
+    let occluded = |points: usize, ball: bool, on_floor: bool| {
+        let (mut world, mut schedule) = world_and_schedule();
+        world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.0, 4.0, 0.0))));
+        let floor = Transform::from_translation(Vec3::ZERO).looking_to(Vec3::NEG_Y, Vec3::Z);
+        let floor = world.spawn((Rectangle { half_size: glam::Vec2::splat(10.0) }, floor)).id();
+        if ball {
+            // Off to the side: a curved shape puts the scene off the flat-shape lane path.
+            world.spawn((Sphere { radius: 0.5 }, Transform::from_translation(Vec3::new(6.0, 2.0, 0.0))));
+        }
+        let mut batch = world.resource_mut::<ShadingBatch>();
+        for i in 0..points {
+            batch.push_with_error(below, Vec3::ZERO, Vec3::Y, Vec3::Y, i as u32, 0);
+        }
+        let id = GeometryId { entity_index: floor.index_u32(), primitive: 0 };
+        batch.geometry = vec![if on_floor { id } else { GeometryId::NONE }; points];
+        schedule.run(&mut world);
+        world.resource::<DirectLighting>().occluded.clone()
+    };
+    for (points, ball) in [(1, false), (16, false), (3, true)] {
+        assert_eq!(occluded(points, ball, false), vec![true; points], "{points} points, ball {ball}: unknown surface");
+        assert_eq!(occluded(points, ball, true), vec![false; points], "{points} points, ball {ball}: on the floor");
+    }
+}

@@ -50,6 +50,17 @@ pub struct GeometryId {
     pub primitive: u32,
 }
 
+impl GeometryId {
+    /// No primitive (a point whose surface is unknown).
+    pub const NONE: Self = Self { entity_index: u32::MAX, primitive: u32::MAX };
+
+    /// Both fields in one number, for lane loops.
+    #[inline(always)]
+    pub(crate) fn key(self) -> u64 {
+        ((self.entity_index as u64) << 32) | self.primitive as u64
+    }
+}
+
 /// The geometry of one instance: a borrowed mesh (copied into the BVH) or an analytic shape.
 #[derive(Clone, Copy, Debug)]
 pub enum GeometryRef<'a> {
@@ -354,6 +365,18 @@ impl SceneBvh {
             let (lo, hi) = self.shapes[p.shape as usize].world_bounds();
             Aabb::new(lo.into(), hi.into())
         }
+    }
+
+    /// Whether rays leaving a point on primitive `origin` ignore leaf slot `slot`: it is that
+    /// primitive, and it is flat (a triangle, disk or rectangle). A ray leaving a plane meets it
+    /// only where it starts, so only rounding could make it count; Cycles skips a ray's own
+    /// primitive likewise. A sphere can stand in the way of rays leaving it inward.
+    #[inline(always)]
+    pub(crate) fn ignores(&self, slot: usize, origin: GeometryId) -> bool {
+        let shape = self.leaf[slot].shape;
+        origin != GeometryId::NONE
+            && self.id_of(self.prim_of_slot(slot)).1 == origin
+            && (shape == NO_SHAPE || !matches!(self.shapes[shape as usize].shape, Shape::Sphere(_)))
     }
 
     /// Input index of the primitive in leaf slot `slot` (stable across refits; the tie-breaker

@@ -1,5 +1,5 @@
 //! Ray queries of [`LANES`] rays at once for scenes of a few flat shapes (a ground rectangle, a
-//! disk light): the answers of [`SceneBvh::closest_hit`] and [`SceneBvh::occluded`] bit for bit,
+//! disk light): the answers of [`SceneBvh::closest_hit`] and [`SceneBvh::occluded_from`] bit for bit,
 //! from the same f64 operations in the same order (`PlacedShape::object_row`,
 //! `flat_hit_from_rows`, `PlacedShape::flat_world_coordinate`) run as lane loops, which compile
 //! to vector code inside `lanes::widest`. Other scenes answer one ray at a time.
@@ -267,28 +267,48 @@ impl SceneBvh {
         FlatHitBlock { t: *t, p, p_error, uv, n, id, material, instance }
     }
 
-    /// [`Self::occluded`] of the first `n` of `LANES` rays, bit for bit (later lanes: false).
+    /// [`Self::occluded_from`] of the first `n` of `LANES` rays, leaving from `origins`, bit for
+    /// bit (later lanes: false).
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // index loops on purpose (see below)
-    pub fn occluded_lanes(&self, r: &RayLanes, n: usize) -> [bool; LANES] {
+    pub fn occluded_lanes(&self, r: &RayLanes, n: usize, origins: &[GeometryId; LANES]) -> [bool; LANES] {
         let mut out = [false; LANES];
         if !self.few_flat_shapes() {
             for (l, o) in out.iter_mut().enumerate().take(n) {
-                *o = self.occluded(&r.ray(l));
+                *o = self.occluded_from(&r.ray(l), origins[l]);
             }
             return out;
         }
         // Plain index loops: iterator adapters may stay out of the wide code.
-        for prim in &self.leaf {
-            let hits = flat_hits(&self.shapes[prim.shape as usize], r, &r.t_max);
+        let mut origin = [0u64; LANES];
+        for l in 0..LANES {
+            origin[l] = origins[l].key();
+        }
+        for slot in 0..self.leaf.len() {
+            // Every primitive here is flat, so none blocks rays leaving it (`Self::ignores`).
+            let id = self.id_of(self.prim_of_slot(slot)).1.key();
+            let mut others = [false; LANES];
             for l in 0..LANES {
-                out[l] |= hits.hit[l];
+                others[l] = origin[l] != id;
+            }
+            if !others.contains(&true) {
+                continue;
+            }
+            let hits = flat_hits(&self.shapes[self.leaf[slot].shape as usize], r, &r.t_max);
+            for l in 0..LANES {
+                out[l] |= hits.hit[l] & others[l];
             }
         }
         for l in 0..LANES {
             out[l] &= r.valid[l] & (l < n);
         }
         out
+    }
+
+    /// Whether no primitive can block rays leaving `origins`: the scene is one flat primitive,
+    /// and every ray leaves it. Callers may then skip building the rays.
+    pub fn blocks_nothing_from(&self, origins: &[GeometryId; LANES]) -> bool {
+        self.leaf.len() == 1 && origins.iter().all(|&o| self.ignores(0, o))
     }
 }
 
@@ -377,6 +397,7 @@ mod tests {
         for shapes in &scenes {
             let bvh = scene(shapes);
             assert!(bvh.few_flat_shapes());
+            let ids: Vec<_> = (0..bvh.leaf.len()).map(|slot| bvh.id_of(bvh.prim_of_slot(slot)).1).collect();
             let rays = rays(&mut rng);
             let (mut hits, mut blocked) = (0, 0);
             for block in rays.chunks(LANES) {
@@ -387,10 +408,17 @@ mod tests {
                 crate::lanes::widest(|| {
                     bvh.closest_hits_lanes(&RayLanes::from_rays(&lane_rays), &mut |l, hit| got[l] = hit)
                 });
-                let occluded = crate::lanes::widest(|| bvh.occluded_lanes(&lanes, block.len()));
+                let occluded =
+                    crate::lanes::widest(|| bvh.occluded_lanes(&lanes, block.len(), &[GeometryId::NONE; LANES]));
+                // Rays leaving some primitive (or none), which then blocks nothing.
+                let origins = std::array::from_fn(|_| {
+                    ids.get(rng.next_u64() as usize % (ids.len() + 1)).copied().unwrap_or(GeometryId::NONE)
+                });
+                let occluded_from = crate::lanes::widest(|| bvh.occluded_lanes(&lanes, block.len(), &origins));
                 for (l, ray) in block.iter().enumerate() {
                     assert_eq!(got[l], bvh.closest_hit(ray), "closest hit of {ray:?}");
                     assert_eq!(occluded[l], bvh.occluded(ray), "any hit of {ray:?}");
+                    assert_eq!(occluded_from[l], bvh.occluded_from(ray, origins[l]), "{ray:?} from {:?}", origins[l]);
                     (hits, blocked) = (hits + got[l].is_some() as usize, blocked + occluded[l] as usize);
                 }
                 assert!(occluded[block.len()..].iter().all(|&o| !o));
@@ -399,6 +427,30 @@ mod tests {
             assert!(hits > 50 && hits < rays.len() - 50, "{hits} hits");
             assert!(blocked >= hits);
         }
+    }
+
+    #[test]
+    fn rays_pass_the_flat_primitive_they_leave_but_not_a_sphere() {
+        let rect = Shape::Rectangle(Rectangle { half_size: Vec2::new(2.0, 1.0) });
+        let sphere = Shape::Sphere(crate::geometry::Sphere { radius: 1.0 });
+        let plane = scene(&[(rect, Transform::IDENTITY)]);
+        let id = |bvh: &SceneBvh| bvh.id_of(bvh.prim_of_slot(0)).1;
+        // Hard case: an origin rounded to just below the plane, heading up through it.
+        let up = Ray::new(Vec3::new(0.3, 0.2, -1e-6), Vec3::Z);
+        assert!(plane.occluded(&up));
+        assert!(!plane.occluded_from(&up, id(&plane)));
+        let rays = RayLanes::from_rays(&[up; LANES]);
+        assert_eq!(plane.occluded_lanes(&rays, LANES, &[GeometryId::NONE; LANES]), [true; LANES]);
+        assert_eq!(plane.occluded_lanes(&rays, LANES, &[id(&plane); LANES]), [false; LANES]);
+        assert!(plane.blocks_nothing_from(&[id(&plane); LANES]));
+        let mut one_unknown = [id(&plane); LANES];
+        one_unknown[5] = GeometryId::NONE;
+        assert!(!plane.blocks_nothing_from(&one_unknown));
+        // A ray leaving a sphere inward meets its far side.
+        let ball = scene(&[(sphere, Transform::IDENTITY)]);
+        let inward = Ray::new(Vec3::new(0.0, 0.0, 1.0), Vec3::NEG_Z);
+        assert!(ball.occluded_from(&inward, id(&ball)));
+        assert!(!ball.blocks_nothing_from(&[id(&ball); LANES]));
     }
 
     /// Records hits lane by lane, and whole blocks as their lanes.

@@ -162,11 +162,17 @@ impl Best {
 impl SceneBvh {
     /// Whether anything blocks `ray` in (0, t_max]; stops at the first blocker found.
     pub fn occluded(&self, ray: &Ray) -> bool {
+        self.occluded_from(ray, GeometryId::NONE)
+    }
+
+    /// [`Self::occluded`] for a ray leaving a point on primitive `origin` (or
+    /// [`GeometryId::NONE`]): a flat `origin` does not block it (see [`Self::ignores`]).
+    pub fn occluded_from(&self, ray: &Ray, origin: GeometryId) -> bool {
         if !ray.is_valid() || self.leaf.is_empty() {
             return false;
         }
         if self.leaf.len() <= FEW_PRIMITIVES {
-            return self.occluded_each(ray);
+            return self.occluded_each(ray, origin);
         }
         let tri_ray = OnceCell::new();
         let node_ray = NodeRay::new(ray);
@@ -175,7 +181,8 @@ impl SceneBvh {
         let mut blocked = false;
         'traversal: {
             obvhs::traverse!(self.cwbvh, node, state, node_ray.intersect(node, ray.t_max, state.oct_inv4), {
-                if self.slot_hit(state.primitive_id as usize, ray, &tri_ray, ray.t_max).is_some() {
+                let slot = state.primitive_id as usize;
+                if !self.ignores(slot, origin) && self.slot_hit(slot, ray, &tri_ray, ray.t_max).is_some() {
                     blocked = true;
                     break 'traversal;
                 }
@@ -216,7 +223,7 @@ impl SceneBvh {
 
     /// Reference any-hit: tests every primitive. For tests and benchmarks.
     pub fn occluded_brute_force(&self, ray: &Ray) -> bool {
-        ray.is_valid() && self.occluded_each(ray)
+        ray.is_valid() && self.occluded_each(ray, GeometryId::NONE)
     }
 
     /// Reference closest-hit: tests every primitive, ties to the lowest input index.
@@ -227,10 +234,11 @@ impl SceneBvh {
         self.closest_hit_each(ray)
     }
 
-    /// [`Self::occluded_brute_force`] for a valid ray.
-    fn occluded_each(&self, ray: &Ray) -> bool {
+    /// [`Self::occluded_from`] of a valid ray, testing every primitive.
+    fn occluded_each(&self, ray: &Ray, origin: GeometryId) -> bool {
         let tri_ray = OnceCell::new();
-        (0..self.leaf.len()).any(|slot| self.slot_hit(slot, ray, &tri_ray, ray.t_max).is_some())
+        let blocks = |slot| !self.ignores(slot, origin) && self.slot_hit(slot, ray, &tri_ray, ray.t_max).is_some();
+        (0..self.leaf.len()).any(blocks)
     }
 
     /// [`Self::closest_hit_brute_force`] for a valid ray.

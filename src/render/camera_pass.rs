@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::camera::CameraModel;
-use crate::geometry::{FlatHitBlock, Hit, HitSink, RAY_CHUNK, RayLanes, SceneBvh};
+use crate::geometry::{FlatHitBlock, GeometryId, Hit, HitSink, RAY_CHUNK, RayLanes, SceneBvh};
 use crate::lanes::{self, LANES};
 use crate::rng::SampleStream;
 use crate::shading::ShadingBatch;
@@ -59,7 +59,7 @@ fn write_slot(batch: &mut BatchChunk, i: usize, dir: Vec3, hit: Option<Hit>) {
     let Some(h) = hit else {
         (batch.position[i], batch.position_error[i]) = (Vec3::NAN, Vec3::ZERO);
         (batch.normal[i], batch.shading_normal[i]) = (Vec3::ZERO, Vec3::ZERO);
-        (batch.dir[i], batch.surface[i]) = (dir, SampleSurface::ESCAPED);
+        (batch.dir[i], batch.surface[i], batch.geometry[i]) = (dir, SampleSurface::ESCAPED, GeometryId::NONE);
         return;
     };
     // Normals face the viewer.
@@ -68,7 +68,7 @@ fn write_slot(batch: &mut BatchChunk, i: usize, dir: Vec3, hit: Option<Hit>) {
     let ns = if h.ns.dot(h.ng) * flip < 0.0 { h.ng * flip } else { h.ns * flip };
     (batch.position[i], batch.position_error[i]) = (h.p, h.p_error);
     (batch.normal[i], batch.shading_normal[i]) = (h.ng * flip, ns);
-    batch.dir[i] = dir;
+    (batch.dir[i], batch.geometry[i]) = (dir, h.id);
     batch.surface[i] =
         SampleSurface { uv: h.uv, material: h.material, instance: h.instance, primitive: h.id.primitive, flipped };
 }
@@ -126,6 +126,7 @@ impl HitSink for SlotWriter<'_, '_> {
         chunk.normal[r.clone()].copy_from_slice(&normal);
         chunk.shading_normal[r.clone()].copy_from_slice(&normal);
         chunk.dir[r.clone()].copy_from_slice(&lanes::vec3s(dirs));
+        chunk.geometry[r.clone()].fill(hits.id);
         chunk.surface[r].copy_from_slice(&surface);
     }
 }
@@ -140,11 +141,13 @@ struct BatchChunk<'a> {
     sample: &'a mut [u32],
     dir: &'a mut [Vec3],
     surface: &'a mut [SampleSurface],
+    geometry: &'a mut [GeometryId],
 }
 
-/// Traces the camera rays of `range` and writes every slot of `batch` (resized to
-/// `range.len`, wavelengths left empty) and of `columns`. Random numbers, rays and (in scenes of a
-/// few flat shapes) hits are computed in lanes: dimensions 0 and 1 of each sample's stream.
+/// Traces the camera rays of `range` and writes every slot of `batch` (resized to `range.len`,
+/// wavelengths left empty, geometry filled) and of `columns`. Random numbers, rays and (in
+/// scenes of a few flat shapes) hits are computed in lanes: dimensions 0 and 1 of each sample's
+/// stream.
 pub(super) fn trace_camera_rays(
     batch: &mut ShadingBatch,
     columns: &mut CameraColumns,
@@ -154,6 +157,7 @@ pub(super) fn trace_camera_rays(
 ) {
     let n = range.len;
     batch.set_len(n);
+    batch.geometry.resize(n, GeometryId::NONE);
     columns.dir.resize(n, Vec3::ZERO);
     columns.surface.resize(n, SampleSurface::ESCAPED);
     let chunks = (
@@ -165,11 +169,12 @@ pub(super) fn trace_camera_rays(
         batch.sample.par_chunks_mut(RAY_CHUNK),
         columns.dir.par_chunks_mut(RAY_CHUNK),
         columns.surface.par_chunks_mut(RAY_CHUNK),
+        batch.geometry.par_chunks_mut(RAY_CHUNK),
     );
     chunks.into_par_iter().enumerate().for_each(
-        |(c, (position, position_error, normal, shading_normal, pixel, sample, dir, surface))| {
+        |(c, (position, position_error, normal, shading_normal, pixel, sample, dir, surface, geometry))| {
             let mut chunk =
-                BatchChunk { position, position_error, normal, shading_normal, pixel, sample, dir, surface };
+                BatchChunk { position, position_error, normal, shading_normal, pixel, sample, dir, surface, geometry };
             crate::lanes::widest(
                 #[inline(always)]
                 || trace_chunk(&mut chunk, range.first + c * RAY_CHUNK, bvh, camera, range),
