@@ -5,7 +5,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use crate::geometry::ray::{Lanes3, spawn_rays_to_points_lanes};
-use crate::geometry::{RAY_CHUNK, Ray, RayLanes, SHADOW_EPSILON, SceneBvh, ShadowOffset, SurfacePoint};
+use crate::geometry::{GeometryId, RAY_CHUNK, Ray, RayLanes, SHADOW_EPSILON, SceneBvh, ShadowOffset, SurfacePoint};
 use crate::lanes::LANES;
 use crate::shading::{RunReport, Settings, ShadingBatch};
 
@@ -75,8 +75,15 @@ pub fn trace_shadow_rays(
                 while b < chunk.len() {
                     let n = LANES.min(chunk.len() - b);
                     let first = c * RAY_CHUNK + b;
-                    let origins =
-                        std::array::from_fn(|l| batch.geometry_of(if k == 1 { first + l } else { (first + l) / k }));
+                    let mut origins = [GeometryId::NONE; LANES];
+                    match batch.geometry.get(first..first + LANES) {
+                        Some(g) if k == 1 => origins.copy_from_slice(g),
+                        _ => {
+                            for (l, o) in origins.iter_mut().enumerate().take(n) {
+                                *o = batch.geometry_of((first + l) / k);
+                            }
+                        }
+                    }
                     if bvh.blocks_nothing_from(&origins) {
                         // Nothing but the surface the rays leave: no ray to build.
                         chunk[b..b + n].fill(false);

@@ -307,8 +307,9 @@ impl SceneBvh {
 
     /// Whether no primitive can block rays leaving `origins`: the scene is one flat primitive,
     /// and every ray leaves it. Callers may then skip building the rays.
+    #[inline(always)]
     pub fn blocks_nothing_from(&self, origins: &[GeometryId; LANES]) -> bool {
-        self.leaf.len() == 1 && origins.iter().all(|&o| self.ignores(0, o))
+        self.leaf.len() == 1 && self.ignores(0, origins[0]) && origins.iter().all(|&o| o == origins[0])
     }
 }
 
