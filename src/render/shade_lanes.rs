@@ -90,23 +90,39 @@ impl ShadeContext<'_> {
             &lighting.delta[span.clone()],
             &lighting.radiance[span],
         );
+        // One step per loop over the lanes: as one loop of whole entries, LLVM vectorised the
+        // first eight lanes and left the other eight scalar.
+        let (mut wo, mut ns, mut wi_l) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
+        let (mut li, mut pdf_l, mut delta_l) = ([[0.0f32; LANES]; 3], [0.0f32; LANES], [false; LANES]);
         for l in 0..LANES {
             let e = l * stride;
-            let (wo, ns, wi, pdf) = (-dir[l], shading_normal[l], wi[e], pdf[e]);
+            let (d, n, w, r) = (-dir[l], shading_normal[l], wi[e], radiance[e]);
+            for a in 0..3 {
+                (wo[a][l], ns[a][l], wi_l[a][l], li[a][l]) = (d[a], n[a], w[a], r.0[a]);
+            }
+            (pdf_l[l], delta_l[l]) = (pdf[e], delta[e]);
+        }
+        // Selects as bit masks (all ones or zero): selects on arrays of bools stayed scalar.
+        let (mut upper, mut s, mut counts) = ([0u32; LANES], [0.0f32; LANES], [0u32; LANES]);
+        for l in 0..LANES {
             // `Bsdf::f` and `Bsdf::pdf` without a specular lobe: the frame's z is `ns`.
-            let (cos_o, cos_i) = (wo.dot(ns), wi.dot(ns));
-            let upper = (cos_o > 0.0) & (cos_i > 0.0);
-            let bsdf_pdf = if upper { cosine_hemisphere_pdf(cos_i) } else { 0.0 };
+            let cos_o = (wo[0][l] * ns[0][l]) + (wo[1][l] * ns[1][l]) + (wo[2][l] * ns[2][l]);
+            let cos_i = (wi_l[0][l] * ns[0][l]) + (wi_l[1][l] * ns[1][l]) + (wi_l[2][l] * ns[2][l]);
+            let is_upper = (cos_o > 0.0) & (cos_i > 0.0);
+            upper[l] = 0u32.wrapping_sub(is_upper as u32);
+            let bsdf_pdf = if is_upper { cosine_hemisphere_pdf(cos_i) } else { 0.0 };
+            let pdf = pdf_l[l];
             let light_weight = if mis { power_heuristic(pdf, bsdf_pdf) } else { fixed_weight };
-            let w = if delta[e] { 1.0 } else { light_weight };
-            let s = cos_i.abs() * w / pdf;
+            let w = if delta_l[l] { 1.0 } else { light_weight };
+            s[l] = cos_i.abs() * w / pdf;
             // `shade` skips entries with pdf <= 0 and weight 0 (NaN goes on, as there).
-            let counts = ((pdf > 0.0) | pdf.is_nan()) & (w != 0.0);
-            let li = radiance[e];
-            for c in 0..3 {
-                let f = if upper { f_up[c][l] } else { 0.0 };
-                let added = sum[c][l] + f * li.0[c] * s;
-                sum[c][l] = if counts { added } else { sum[c][l] };
+            counts[l] = 0u32.wrapping_sub((((pdf > 0.0) | pdf.is_nan()) & (w != 0.0)) as u32);
+        }
+        for c in 0..3 {
+            for l in 0..LANES {
+                let f = f32::from_bits(f_up[c][l].to_bits() & upper[l]);
+                let added = sum[c][l] + f * li[c][l] * s[l];
+                sum[c][l] = f32::from_bits((added.to_bits() & counts[l]) | (sum[c][l].to_bits() & !counts[l]));
             }
         }
     }
