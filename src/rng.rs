@@ -55,12 +55,15 @@ impl SampleStream {
         for l in 0..LANES {
             key[l] = mix64(seed ^ mix64(((pixel[l] as u64) << 32) | sample[l] as u64));
         }
+        // All D rows as one flat loop of whole mixes: as a loop per row, LLVM vectorised across
+        // the rows (two lanes at a time) rather than along them.
+        let mut z = [[0u64; LANES]; D];
+        for (d, row) in z.iter_mut().enumerate() {
+            *row = key.map(|k| k.wrapping_add((d as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)));
+        }
         let mut out = [[0.0; LANES]; D];
-        for (d, row) in out.iter_mut().enumerate() {
-            let step = (d as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-            for l in 0..LANES {
-                row[l] = (mix64(key[l].wrapping_add(step)) >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
-            }
+        for (o, z) in out.as_flattened_mut().iter_mut().zip(z.as_flattened()) {
+            *o = (mix64(*z) >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
         }
         out
     }
