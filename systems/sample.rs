@@ -439,8 +439,17 @@ impl Sampling<'_> {
             // (the streams are counter based: no other number changes).
             let point_light = id.kind == LightKind::Point;
             let casts_shadows = point_light && self.table.casts_shadows(id);
-            for l in 0..n {
-                if finite(l) {
+            let mut finite_lanes = 0;
+            for l in 0..LANES {
+                finite_lanes += (p[0][l].is_finite() & p[1][l].is_finite() & p[2][l].is_finite()) as usize;
+            }
+            if n == LANES && finite_lanes == LANES {
+                // Every lane has a point (a block that sees only surfaces): whole lanes of one
+                // value, where the loop below stores lane by lane.
+                (light, pmf, chosen) = ([id; LANES], [q; LANES], [true; LANES]);
+                (rows, casts, points) = ([id.row; LANES], [casts_shadows; LANES], LANES * point_light as usize);
+            } else {
+                for l in (0..n).filter(|&l| finite(l)) {
                     (light[l], pmf[l], chosen[l]) = (id, q, true);
                     (rows[l], casts[l], points) = (id.row, casts_shadows, points + point_light as usize);
                 }
