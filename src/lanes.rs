@@ -35,6 +35,22 @@ pub fn vec3s(c: &[[f32; LANES]; 3]) -> [Vec3; LANES] {
     out
 }
 
+/// The lane columns (all x, all y, all z) of `LANES` vectors, [`vec3s`] inverted: read from the
+/// block as one run of floats, which LLVM loads as whole registers and shuffles, where reading
+/// `v[l].x` lane by lane made scalar loads and stores that stalled the vector loads after them.
+#[inline(always)]
+pub fn columns(v: &[Vec3; LANES]) -> [[f32; LANES]; 3] {
+    // SAFETY: `Vec3` is `#[repr(C)]` of three f32 (no padding), so the block is 3 * LANES f32.
+    let flat: &[f32; 3 * LANES] = unsafe { &*(v as *const [Vec3; LANES]).cast() };
+    let mut c = [[0.0f32; LANES]; 3];
+    for l in 0..LANES {
+        for a in 0..3 {
+            c[a][l] = flat[3 * l + a];
+        }
+    }
+    c
+}
+
 /// Runs `f` compiled for AVX-512 or AVX2 when the CPU has them (else as it is). Only the code
 /// inlined into the wrapper is compiled for the wider set, and LLVM does not inline a large
 /// closure on its own: mark `f` `#[inline(always)]` (attributes on closures are stable), and the
@@ -86,5 +102,14 @@ mod tests {
         });
         assert_eq!(calls, 1);
         assert_eq!(v, (0..LANES).map(|i| (i as f32).sqrt()).sum::<f32>());
+    }
+
+    #[test]
+    fn columns_undo_vec3s() {
+        let c: [[f32; LANES]; 3] = std::array::from_fn(|a| std::array::from_fn(|l| (100 * a + l) as f32 - 0.5));
+        let v = vec3s(&c);
+        assert_eq!(v[5], Vec3::new(4.5, 104.5, 204.5));
+        assert_eq!(columns(&v), c);
+        assert_eq!(widest(|| columns(&v)), c);
     }
 }

@@ -418,9 +418,7 @@ impl Sampling<'_> {
             for l in 0..LANES {
                 (point[l], pixel[l], stream[l]) = (i + l, pixels[l], samples[l] * self.spp);
             }
-            for (l, x) in self.batch.position[i..i + LANES].iter().enumerate() {
-                (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
-            }
+            p = lanes::columns(self.batch.position[i..].first_chunk().expect("a whole block"));
         } else {
             for l in 0..n {
                 let (i, _, s) = self.point_and_stream(first + e + l);
