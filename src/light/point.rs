@@ -229,12 +229,19 @@ impl PointColumns {
     #[inline(always)]
     pub fn sample_li_rgb_lanes(&self, rows: &[u32; LANES], p: &[[f32; LANES]; 3]) -> PointLanes {
         let (mut target, mut rgb) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+        // The operations of `LightSampleContext::toward` and `Self::sample_li`, in order, one step
+        // per loop over all lanes (so that LLVM vectorises across lanes).
+        let mut d = [[0.0f32; LANES]; 3];
         if rows.iter().all(|&r| r == rows[0]) {
             // One light for every lane (a one-light scene, or neighbours that chose alike): whole
-            // lanes of one value, without the per-lane stores a gather makes.
+            // lanes of one value, without the per-lane stores a gather makes, and the direction
+            // from the value itself (reading it back from the lanes stalled).
             let (x, c) = (self.position[rows[0] as usize], self.rgb[rows[0] as usize]);
             for a in 0..3 {
                 (target[a], rgb[a]) = ([x[a]; LANES], [c[a]; LANES]);
+                for l in 0..LANES {
+                    d[a][l] = x[a] - p[a][l];
+                }
             }
         } else {
             for l in 0..LANES {
@@ -242,13 +249,10 @@ impl PointColumns {
                 (target[0][l], target[1][l], target[2][l]) = (x.x, x.y, x.z);
                 (rgb[0][l], rgb[1][l], rgb[2][l]) = (c.x, c.y, c.z);
             }
-        }
-        // The operations of `LightSampleContext::toward` and `Self::sample_li`, in order, one step
-        // per loop over all lanes (so that LLVM vectorises across lanes).
-        let mut d = [[0.0f32; LANES]; 3];
-        for a in 0..3 {
-            for l in 0..LANES {
-                d[a][l] = target[a][l] - p[a][l];
+            for a in 0..3 {
+                for l in 0..LANES {
+                    d[a][l] = target[a][l] - p[a][l];
+                }
             }
         }
         let (mut r, mut inv_r2, mut valid) = ([0.0f32; LANES], [0.0f32; LANES], [false; LANES]);
