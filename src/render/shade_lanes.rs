@@ -8,6 +8,7 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
 
+use super::camera_pass::SampleSurface;
 use super::renderer::{ShadeContext, Strategy, power_heuristic};
 use crate::lanes::LANES;
 use crate::sampling::cosine_hemisphere_pdf;
@@ -21,26 +22,26 @@ impl ShadeContext<'_> {
             return false;
         }
         // Base colour / pi (the Lambertian f above the surface) per lane. Neighbouring samples
-        // usually share a surface, so its checks run once per run of equal (material, instance).
+        // usually share a surface, so its checks run once per run of equal (material, instance),
+        // and a block of one surface fills whole lanes.
         let mut f_up = [[0.0f32; LANES]; 3];
-        let (mut surface_of_base, mut base) = ((u32::MAX, u32::MAX), [0.0f32; 3]);
-        for (l, surface) in self.columns.surface[first..first + LANES].iter().enumerate() {
-            if (surface.material, surface.instance) != surface_of_base {
-                if surface.escaped() {
-                    return false;
-                }
-                let bsdf = match self.uniform_bsdfs.get(surface.material as usize) {
-                    Some(Some(b)) if !b.has_specular() => b,
-                    _ => return false,
-                };
-                if self.lights_of_instance.get(surface.instance as usize).is_some_and(|rows| !rows.is_empty()) {
-                    return false;
-                }
-                (surface_of_base, base) =
-                    ((surface.material, surface.instance), [bsdf.base.0[0], bsdf.base.0[1], bsdf.base.0[2]]);
-            }
+        let surfaces = &self.columns.surface[first..first + LANES];
+        let key = |s: &SampleSurface| (s.material, s.instance);
+        if surfaces.iter().all(|s| key(s) == key(&surfaces[0])) {
+            let Some(base) = self.lambertian_base(&surfaces[0]) else { return false };
             for c in 0..3 {
-                f_up[c][l] = base[c] * FRAC_1_PI;
+                f_up[c] = [base[c] * FRAC_1_PI; LANES];
+            }
+        } else {
+            let (mut surface_of_base, mut base) = ((u32::MAX, u32::MAX), [0.0f32; 3]);
+            for (l, surface) in surfaces.iter().enumerate() {
+                if key(surface) != surface_of_base {
+                    let Some(b) = self.lambertian_base(surface) else { return false };
+                    (surface_of_base, base) = (key(surface), b);
+                }
+                for c in 0..3 {
+                    f_up[c][l] = base[c] * FRAC_1_PI;
+                }
             }
         }
         // Point j's entries must be `e0 + (j - first) k ..` for a k shared by the block.
@@ -62,6 +63,23 @@ impl ShadeContext<'_> {
             *o = Vec3::new(sum[0][l], sum[1][l], sum[2][l]);
         }
         true
+    }
+
+    /// The base colour of a camera sample's surface if it is of the common case: hit, not
+    /// emitting, of an untextured material without a specular lobe.
+    #[inline(always)]
+    fn lambertian_base(&self, surface: &SampleSurface) -> Option<[f32; 3]> {
+        if surface.escaped() {
+            return None;
+        }
+        let bsdf = match self.uniform_bsdfs.get(surface.material as usize) {
+            Some(Some(b)) if !b.has_specular() => b,
+            _ => return None,
+        };
+        if self.lights_of_instance.get(surface.instance as usize).is_some_and(|rows| !rows.is_empty()) {
+            return None;
+        }
+        Some([bsdf.base.0[0], bsdf.base.0[1], bsdf.base.0[2]])
     }
 
     /// Adds to `sum` the light of entry `e + l stride` at camera sample `first + l` for every lane
