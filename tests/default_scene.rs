@@ -26,6 +26,9 @@ fn default_scene_has_area_spot_blackbody_point_and_sky_lights_and_renders() {
         assert!(kinds.contains(&k), "{k:?} missing from {kinds:?}");
     }
     assert!(film.pixels().iter().all(|p| p.is_finite()) && stats.shadow_rays > 0);
+    // MIS traces one BSDF ray per camera sample that hit a surface (most of them, in a room).
+    assert_eq!(stats.camera_samples, 24 * 24 * 2);
+    assert!(stats.bsdf_rays > stats.camera_samples / 2 && stats.bsdf_rays <= stats.camera_samples, "{stats:?}");
 }
 
 #[test]

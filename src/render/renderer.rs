@@ -182,7 +182,6 @@ fn render_on_pool(
     let total = opts.width as usize * opts.height as usize * opts.spp as usize;
     let mut columns = CameraColumns::default();
     let mut contributions: Vec<Vec3> = Vec::new();
-    let mut traced: Vec<bool> = Vec::new();
     let mut first = 0usize;
     while first < total {
         let len = BATCH_SAMPLES.min(total - first);
@@ -239,38 +238,47 @@ fn render_on_pool(
             (to_rgb(le, lambda), false)
         };
         // Where the lane kernel may apply (`shade_lanes.rs`), blocks of the common case go
-        // through it; elsewhere samples are shaded one at a time.
-        if !spectral && !bsdf_sampling && !super::shade_lanes::turned_off() {
-            // Every contribution is written below, so that column is only resized (no serial fill
-            // in steady state); lane blocks trace no rays, so `traced` starts false.
-            contributions.resize(len, Vec3::ZERO);
-            traced.clear();
-            traced.resize(len, false);
-            let chunks = (contributions.par_chunks_mut(RAY_CHUNK), traced.par_chunks_mut(RAY_CHUNK));
-            chunks.into_par_iter().enumerate().for_each(|(c, (out, traced))| {
-                crate::lanes::widest(
-                    #[inline(always)]
-                    || {
-                        let (first, mut b) = (c * RAY_CHUNK, 0);
-                        while b < out.len() {
-                            let end = (b + LANES).min(out.len());
-                            if !shade.shade_lanes(first + b, &mut out[b..end]) {
-                                for i in b..end {
-                                    (out[i], traced[i]) = shade_one(first + i);
+        // through it; elsewhere samples are shaded one at a time. Each pass counts its BSDF
+        // rays as it goes (a pass of its own per batch cost a parallel region).
+        // Every contribution is written, so that column is only resized (no serial fill in
+        // steady state).
+        contributions.resize(len, Vec3::ZERO);
+        let bsdf_rays: usize = if !spectral && !bsdf_sampling && !super::shade_lanes::turned_off() {
+            let chunks = contributions.par_chunks_mut(RAY_CHUNK).enumerate();
+            chunks
+                .map(|(c, out)| {
+                    crate::lanes::widest(
+                        #[inline(always)]
+                        || {
+                            let (first, mut b, mut traced) = (c * RAY_CHUNK, 0, 0);
+                            while b < out.len() {
+                                let end = (b + LANES).min(out.len());
+                                if !shade.shade_lanes(first + b, &mut out[b..end]) {
+                                    for i in b..end {
+                                        let (rgb, t) = shade_one(first + i);
+                                        (out[i], traced) = (rgb, traced + t as usize);
+                                    }
                                 }
+                                b = end;
                             }
-                            b = end;
-                        }
-                    },
-                )
-            });
+                            traced
+                        },
+                    )
+                })
+                .sum()
         } else {
-            let shaded = (0..len).into_par_iter().with_min_len(RAY_CHUNK).map(shade_one);
-            shaded.unzip_into_vecs(&mut contributions, &mut traced);
-        }
+            let samples = contributions.par_iter_mut().enumerate().with_min_len(RAY_CHUNK);
+            samples
+                .map(|(k, out)| {
+                    let (rgb, t) = shade_one(k);
+                    *out = rgb;
+                    t as usize
+                })
+                .sum()
+        };
         // Sample k is sample k % spp of pixel k / spp (see `SampleRange`).
         film.par_add_samples(first, opts.spp as usize, &contributions);
-        stats.bsdf_rays += traced.par_iter().filter(|&&t| t).count() as u64;
+        stats.bsdf_rays += bsdf_rays as u64;
         stats.camera_samples += len as u64;
         first += len;
         progress(first as f32 / total as f32);
