@@ -10,7 +10,7 @@ use glam::Vec3;
 
 use super::camera_pass::SampleSurface;
 use super::renderer::{ShadeContext, Strategy, power_heuristic};
-use crate::lanes::LANES;
+use crate::lanes::{self, LANES};
 use crate::sampling::cosine_hemisphere_pdf;
 
 impl ShadeContext<'_> {
@@ -110,15 +110,26 @@ impl ShadeContext<'_> {
         );
         // One step per loop over the lanes: as one loop of whole entries, LLVM vectorised the
         // first eight lanes and left the other eight scalar.
-        let (mut wo, mut ns, mut wi_l) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
-        let (mut li, mut pdf_l, mut delta_l) = ([[0.0f32; LANES]; 3], [0.0f32; LANES], [false; LANES]);
+        let (mut wo, mut wi_l, mut li) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
+        let (mut pdf_l, mut delta_l) = ([0.0f32; LANES], [false; LANES]);
         for l in 0..LANES {
             let e = l * stride;
-            let (d, n, w, r) = (-dir[l], shading_normal[l], wi[e], radiance[e]);
+            let (d, r) = (-dir[l], radiance[e]);
             for a in 0..3 {
-                (wo[a][l], ns[a][l], wi_l[a][l], li[a][l]) = (d[a], n[a], w[a], r.0[a]);
+                (wo[a][l], li[a][l]) = (d[a], r.0[a]);
             }
             (pdf_l[l], delta_l[l]) = (pdf[e], delta[e]);
+        }
+        // Runs of whole blocks, read as such (see `lanes::columns`; the directions measured
+        // faster read lane by lane).
+        let ns = lanes::columns(shading_normal.first_chunk().expect("a whole block"));
+        if stride == 1 {
+            wi_l = lanes::columns(wi.first_chunk().expect("a whole block"));
+        } else {
+            for l in 0..LANES {
+                let w = wi[l * stride];
+                (wi_l[0][l], wi_l[1][l], wi_l[2][l]) = (w.x, w.y, w.z);
+            }
         }
         // Selects as bit masks (all ones or zero): selects on arrays of bools stayed scalar.
         let (mut upper, mut s, mut counts) = ([0u32; LANES], [0.0f32; LANES], [0u32; LANES]);
