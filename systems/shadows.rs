@@ -4,9 +4,9 @@ use bevy_ecs::prelude::*;
 
 use glam::Vec3;
 
-use crate::geometry::ray::{Lanes3, spawn_rays_to_points_lanes};
+use crate::geometry::ray::spawn_rays_to_points_lanes;
 use crate::geometry::{GeometryId, RAY_CHUNK, Ray, RayLanes, SHADOW_EPSILON, SceneBvh, ShadowOffset, SurfacePoint};
-use crate::lanes::LANES;
+use crate::lanes::{self, LANES};
 use crate::shading::{RunReport, Settings, ShadingBatch};
 
 use super::{ShadowRays, ShadowTarget, Work};
@@ -93,13 +93,7 @@ pub fn trace_shadow_rays(
                     let mut rays = RayLanes::default();
                     let points = k == 1 && n == LANES && offset == ShadowOffset::ErrorBound;
                     if points && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point) {
-                        let columns = |v: &[Vec3]| {
-                            let mut c: Lanes3 = [[0.0; LANES]; 3];
-                            for (l, x) in v[first..first + LANES].iter().enumerate() {
-                                (c[0][l], c[1][l], c[2][l]) = (x.x, x.y, x.z);
-                            }
-                            c
-                        };
+                        let columns = |v: &[Vec3]| lanes::columns(v[first..].first_chunk().expect("a whole block"));
                         // Cache-line aligned, as `RayLanes` is: the kernel loads these columns whole.
                         #[repr(C, align(64))]
                         struct Aligned<T>(T);
