@@ -438,8 +438,8 @@ impl Sampling<'_> {
             let point_light = id.kind == LightKind::Point;
             let casts_shadows = point_light && self.table.casts_shadows(id);
             let mut finite_lanes = 0;
-            for l in 0..LANES {
-                finite_lanes += (p[0][l].is_finite() & p[1][l].is_finite() & p[2][l].is_finite()) as usize;
+            for ((x, y), z) in p[0].iter().zip(&p[1]).zip(&p[2]) {
+                finite_lanes += (x.is_finite() & y.is_finite() & z.is_finite()) as usize;
             }
             if n == LANES && finite_lanes == LANES {
                 // Every lane has a point (a block that sees only surfaces): whole lanes of one

@@ -254,9 +254,9 @@ fn render_on_pool(
                             while b < out.len() {
                                 let end = (b + LANES).min(out.len());
                                 if !shade.shade_lanes(first + b, &mut out[b..end]) {
-                                    for i in b..end {
-                                        let (rgb, t) = shade_one(first + i);
-                                        (out[i], traced) = (rgb, traced + t as usize);
+                                    for (i, out) in out[b..end].iter_mut().enumerate() {
+                                        let (rgb, t) = shade_one(first + b + i);
+                                        (*out, traced) = (rgb, traced + t as usize);
                                     }
                                 }
                                 b = end;
