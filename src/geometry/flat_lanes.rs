@@ -1,6 +1,6 @@
 //! Ray queries of [`LANES`] rays at once for scenes of a few flat shapes (a ground rectangle, a
-//! disk light): the answers of [`SceneBvh::closest_hit`] and [`SceneBvh::occluded_from`] bit for bit,
-//! from the same f64 operations in the same order (`PlacedShape::object_row`,
+//! disk light): the answers of [`SceneBvh::closest_hit`] and [`SceneBvh::occluded_from`] bit for
+//! bit, from the same f64 operations in the same order (`PlacedShape::object_row`,
 //! `flat_hit_from_rows`, `PlacedShape::flat_world_coordinate`) run as lane loops, which compile
 //! to vector code inside `lanes::widest`. Other scenes answer one ray at a time.
 

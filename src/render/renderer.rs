@@ -238,10 +238,10 @@ fn render_on_pool(
             (to_rgb(le, lambda), false)
         };
         // Where the lane kernel may apply (`shade_lanes.rs`), blocks of the common case go
-        // through it; elsewhere samples are shaded one at a time. Each pass counts its BSDF
-        // rays as it goes (a pass of its own per batch cost a parallel region).
-        // Every contribution is written, so that column is only resized (no serial fill in
-        // steady state).
+        // through it; elsewhere samples are shaded one at a time. Either way the tasks count
+        // their BSDF rays as they go (a pass of its own cost a parallel region per batch), and
+        // write every contribution, so that column is only resized (no serial fill in steady
+        // state).
         contributions.resize(len, Vec3::ZERO);
         let bsdf_rays: usize = if !spectral && !bsdf_sampling && !super::shade_lanes::turned_off() {
             let chunks = contributions.par_chunks_mut(RAY_CHUNK).enumerate();

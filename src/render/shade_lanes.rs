@@ -83,8 +83,8 @@ impl ShadeContext<'_> {
     }
 
     /// Adds to `sum` the light of entry `e + l stride` at camera sample `first + l` for every lane
-    /// l, as `ShadeContext::shade` would. One loop over the lanes without branches (selects, `&`,
-    /// both sides computed), so that it vectorises.
+    /// l, as `ShadeContext::shade` would. Loops over the lanes without branches (selects, `&`,
+    /// both sides computed), so that they vectorise.
     #[inline(always)]
     fn add_entry_lanes(
         &self,
