@@ -47,10 +47,11 @@ pub fn trace_shadow_rays(
     let r = &mut *rays;
     let k = r.entries_per_point.max(1);
     let (kind, target, target_normal) = (&r.kind, &r.target, &r.target_normal);
+    // One entry per point is the common case; it spares a 64-bit division per entry.
+    let point_of = |e: usize| if k == 1 { e } else { e / k };
     let from = |i: usize| SurfacePoint { p: batch.position[i], p_error: batch.position_error[i], n: batch.normal[i] };
     let segment = |e: usize| {
-        // One entry per point is the common case; it spares a 64-bit division per entry.
-        let from = from(if k == 1 { e } else { e / k });
+        let from = from(point_of(e));
         match kind[e] {
             ShadowTarget::None => NO_RAY,
             ShadowTarget::Infinity => offset.spawn_ray(&from, (target[e] - from.p).normalize()),
@@ -61,7 +62,7 @@ pub fn trace_shadow_rays(
     if !bvh.few_flat_shapes() {
         // Rays one at a time: the lane queries would answer them so anyway.
         r.occluded.par_iter_mut().enumerate().with_min_len(RAY_CHUNK).for_each(|(e, occluded)| {
-            *occluded = bvh.occluded_from(&segment(e), batch.geometry_of(if k == 1 { e } else { e / k }));
+            *occluded = bvh.occluded_from(&segment(e), batch.geometry_of(point_of(e)));
         });
         return;
     }
@@ -80,7 +81,7 @@ pub fn trace_shadow_rays(
                         Some(g) if k == 1 => origins.copy_from_slice(g),
                         _ => {
                             for (l, o) in origins.iter_mut().enumerate().take(n) {
-                                *o = batch.geometry_of((first + l) / k);
+                                *o = batch.geometry_of(point_of(first + l));
                             }
                         }
                     }

@@ -375,8 +375,14 @@ impl SceneBvh {
     pub(crate) fn ignores(&self, slot: usize, origin: GeometryId) -> bool {
         let shape = self.leaf[slot].shape;
         origin != GeometryId::NONE
-            && self.id_of(self.prim_of_slot(slot)).1 == origin
+            && self.geometry_of_slot(slot) == origin
             && (shape == NO_SHAPE || !matches!(self.shapes[shape as usize].shape, Shape::Sphere(_)))
+    }
+
+    /// Which entity and primitive leaf slot `slot` holds.
+    #[inline(always)]
+    pub(crate) fn geometry_of_slot(&self, slot: usize) -> GeometryId {
+        self.id_of(self.prim_of_slot(slot)).1
     }
 
     /// Input index of the primitive in leaf slot `slot` (stable across refits; the tie-breaker

@@ -286,7 +286,7 @@ impl SceneBvh {
         }
         for slot in 0..self.leaf.len() {
             // Every primitive here is flat, so none blocks rays leaving it (`Self::ignores`).
-            let id = self.id_of(self.prim_of_slot(slot)).1.key();
+            let id = self.geometry_of_slot(slot).key();
             let mut others = [false; LANES];
             for l in 0..LANES {
                 others[l] = origin[l] != id;
@@ -398,7 +398,7 @@ mod tests {
         for shapes in &scenes {
             let bvh = scene(shapes);
             assert!(bvh.few_flat_shapes());
-            let ids: Vec<_> = (0..bvh.leaf.len()).map(|slot| bvh.id_of(bvh.prim_of_slot(slot)).1).collect();
+            let ids: Vec<_> = (0..bvh.leaf.len()).map(|slot| bvh.geometry_of_slot(slot)).collect();
             let rays = rays(&mut rng);
             let (mut hits, mut blocked) = (0, 0);
             for block in rays.chunks(LANES) {
@@ -435,7 +435,7 @@ mod tests {
         let rect = Shape::Rectangle(Rectangle { half_size: Vec2::new(2.0, 1.0) });
         let sphere = Shape::Sphere(crate::geometry::Sphere { radius: 1.0 });
         let plane = scene(&[(rect, Transform::IDENTITY)]);
-        let id = |bvh: &SceneBvh| bvh.id_of(bvh.prim_of_slot(0)).1;
+        let id = |bvh: &SceneBvh| bvh.geometry_of_slot(0);
         // Hard case: an origin rounded to just below the plane, heading up through it.
         let up = Ray::new(Vec3::new(0.3, 0.2, -1e-6), Vec3::Z);
         assert!(plane.occluded(&up));
