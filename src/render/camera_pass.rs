@@ -24,21 +24,60 @@ pub(super) struct SampleSurface {
 }
 
 impl SampleSurface {
-    const ESCAPED: Self = Self { uv: Vec2::ZERO, material: 0, instance: u32::MAX, primitive: 0, flipped: false };
-
-    /// Whether the camera ray hit nothing.
-    #[inline(always)]
-    pub(super) fn escaped(&self) -> bool {
-        self.instance == Self::ESCAPED.instance
-    }
+    pub(super) const ESCAPED: Self =
+        Self { uv: Vec2::ZERO, material: 0, instance: u32::MAX, primitive: 0, flipped: false };
 }
 
-/// The renderer's per-sample columns, indexed like the `ShadingBatch`.
+/// The renderer's per-sample columns, indexed like the `ShadingBatch`: one column per field and
+/// axis, so that the camera pass stores and the shading pass loads whole lanes (a column of
+/// `SampleSurface` records was built lane by lane and interleaved).
 #[derive(Default)]
 pub(super) struct CameraColumns {
-    /// Unit direction of the camera ray.
-    pub(super) dir: Vec<Vec3>,
-    pub(super) surface: Vec<SampleSurface>,
+    /// Unit direction of the camera ray, x, y and z.
+    pub(super) dir: [Vec<f32>; 3],
+    pub(super) uv: [Vec<f32>; 2],
+    pub(super) material: Vec<u32>,
+    /// BVH instance that was hit; `SampleSurface::ESCAPED`'s for rays that hit nothing.
+    pub(super) instance: Vec<u32>,
+    pub(super) primitive: Vec<u32>,
+    /// See [`SampleSurface::flipped`].
+    pub(super) flipped: Vec<bool>,
+}
+
+impl CameraColumns {
+    fn resize(&mut self, n: usize) {
+        for column in self.dir.iter_mut().chain(&mut self.uv) {
+            column.resize(n, 0.0);
+        }
+        for column in [&mut self.material, &mut self.instance, &mut self.primitive] {
+            column.resize(n, 0);
+        }
+        self.flipped.resize(n, false);
+    }
+
+    /// The direction of sample `k`'s camera ray.
+    #[inline(always)]
+    pub(super) fn dir(&self, k: usize) -> Vec3 {
+        Vec3::new(self.dir[0][k], self.dir[1][k], self.dir[2][k])
+    }
+
+    /// Whether sample `k`'s camera ray hit nothing.
+    #[inline(always)]
+    pub(super) fn escaped(&self, k: usize) -> bool {
+        self.instance[k] == SampleSurface::ESCAPED.instance
+    }
+
+    /// Sample `k`'s surface.
+    #[inline(always)]
+    pub(super) fn surface(&self, k: usize) -> SampleSurface {
+        SampleSurface {
+            uv: Vec2::new(self.uv[0][k], self.uv[1][k]),
+            material: self.material[k],
+            instance: self.instance[k],
+            primitive: self.primitive[k],
+            flipped: self.flipped[k],
+        }
+    }
 }
 
 /// Which samples a batch holds and how they map to pixels: sample index k is sample k % spp of
@@ -59,7 +98,8 @@ fn write_slot(batch: &mut BatchChunk, i: usize, dir: Vec3, hit: Option<Hit>) {
     let Some(h) = hit else {
         (batch.position[i], batch.position_error[i]) = (Vec3::NAN, Vec3::ZERO);
         (batch.normal[i], batch.shading_normal[i]) = (Vec3::ZERO, Vec3::ZERO);
-        (batch.dir[i], batch.surface[i], batch.geometry[i]) = (dir, SampleSurface::ESCAPED, GeometryId::NONE);
+        batch.geometry[i] = GeometryId::NONE;
+        batch.set_surface(i, dir, SampleSurface::ESCAPED);
         return;
     };
     // Normals face the viewer.
@@ -68,9 +108,10 @@ fn write_slot(batch: &mut BatchChunk, i: usize, dir: Vec3, hit: Option<Hit>) {
     let ns = if h.ns.dot(h.ng) * flip < 0.0 { h.ng * flip } else { h.ns * flip };
     (batch.position[i], batch.position_error[i]) = (h.p, h.p_error);
     (batch.normal[i], batch.shading_normal[i]) = (h.ng * flip, ns);
-    (batch.dir[i], batch.geometry[i]) = (dir, h.id);
-    batch.surface[i] =
+    batch.geometry[i] = h.id;
+    let surface =
         SampleSurface { uv: h.uv, material: h.material, instance: h.instance, primitive: h.id.primitive, flipped };
+    batch.set_surface(i, dir, surface);
 }
 
 /// Writes the closest hits of the block of camera rays from slot `b` of a chunk.
@@ -106,29 +147,36 @@ impl HitSink for SlotWriter<'_, '_> {
         for l in 0..LANES {
             flipped[l] = n.x * dirs[0][l] + n.y * dirs[1][l] + n.z * dirs[2][l] > 0.0;
         }
+        // Flips as sign bits: selects on arrays of bools became scalar stores.
         let mut normal = [[0.0f32; LANES]; 3];
         for (a, column) in normal.iter_mut().enumerate() {
             for l in 0..LANES {
-                column[l] = if flipped[l] { -n[a] } else { n[a] };
+                column[l] = f32::from_bits(n[a].to_bits() ^ ((flipped[l] as u32) << 31));
             }
         }
-        let normal = lanes::vec3s(&normal);
-        let mut surface = [SampleSurface::ESCAPED; LANES];
-        for l in 0..LANES {
-            let uv = Vec2::new(hits.uv[0][l], hits.uv[1][l]);
-            let (material, instance, primitive) = (hits.material, hits.instance, hits.id.primitive);
-            surface[l] = SampleSurface { uv, material, instance, primitive, flipped: flipped[l] };
+        let (b, chunk) = (self.b, &mut *self.chunk);
+        lanes::store_vec3s(&hits.p, block(chunk.position, b));
+        lanes::store_vec3s(&hits.p_error, block(chunk.position_error, b));
+        lanes::store_vec3s(&normal, block(chunk.normal, b));
+        lanes::store_vec3s(&normal, block(chunk.shading_normal, b));
+        *block(chunk.geometry, b) = [hits.id; LANES];
+        for a in 0..3 {
+            *block(chunk.dir[a], b) = dirs[a];
         }
-        let r = self.b..self.b + LANES;
-        let chunk = &mut *self.chunk;
-        chunk.position[r.clone()].copy_from_slice(&lanes::vec3s(&hits.p));
-        chunk.position_error[r.clone()].copy_from_slice(&lanes::vec3s(&hits.p_error));
-        chunk.normal[r.clone()].copy_from_slice(&normal);
-        chunk.shading_normal[r.clone()].copy_from_slice(&normal);
-        chunk.dir[r.clone()].copy_from_slice(&lanes::vec3s(dirs));
-        chunk.geometry[r.clone()].fill(hits.id);
-        chunk.surface[r].copy_from_slice(&surface);
+        for c in 0..2 {
+            *block(chunk.uv[c], b) = hits.uv[c];
+        }
+        *block(chunk.material, b) = [hits.material; LANES];
+        *block(chunk.instance, b) = [hits.instance; LANES];
+        *block(chunk.primitive, b) = [hits.id.primitive; LANES];
+        *block(chunk.flipped, b) = flipped;
     }
+}
+
+/// The `LANES` slots of `column` from `b`, as an array: stores of a length known at compile time.
+#[inline(always)]
+fn block<T>(column: &mut [T], b: usize) -> &mut [T; LANES] {
+    column[b..].first_chunk_mut().expect("a whole block")
 }
 
 /// One `RAY_CHUNK` of every column the camera pass writes.
@@ -139,9 +187,27 @@ struct BatchChunk<'a> {
     shading_normal: &'a mut [Vec3],
     pixel: &'a mut [u32],
     sample: &'a mut [u32],
-    dir: &'a mut [Vec3],
-    surface: &'a mut [SampleSurface],
     geometry: &'a mut [GeometryId],
+    dir: [&'a mut [f32]; 3],
+    uv: [&'a mut [f32]; 2],
+    material: &'a mut [u32],
+    instance: &'a mut [u32],
+    primitive: &'a mut [u32],
+    flipped: &'a mut [bool],
+}
+
+impl BatchChunk<'_> {
+    /// Writes slot `i` of the `CameraColumns`.
+    #[inline(always)]
+    fn set_surface(&mut self, i: usize, dir: Vec3, surface: SampleSurface) {
+        for a in 0..3 {
+            self.dir[a][i] = dir[a];
+        }
+        (self.uv[0][i], self.uv[1][i]) = surface.uv.into();
+        (self.material[i], self.instance[i], self.primitive[i]) =
+            (surface.material, surface.instance, surface.primitive);
+        self.flipped[i] = surface.flipped;
+    }
 }
 
 /// Traces the camera rays of `range` and writes every slot of `batch` (resized to `range.len`,
@@ -158,29 +224,53 @@ pub(super) fn trace_camera_rays(
     let n = range.len;
     batch.set_len(n);
     batch.geometry.resize(n, GeometryId::NONE);
-    columns.dir.resize(n, Vec3::ZERO);
-    columns.surface.resize(n, SampleSurface::ESCAPED);
+    columns.resize(n);
+    let CameraColumns { dir: [dx, dy, dz], uv: [u, v], material, instance, primitive, flipped } = columns;
     let chunks = (
-        batch.position.par_chunks_mut(RAY_CHUNK),
-        batch.position_error.par_chunks_mut(RAY_CHUNK),
-        batch.normal.par_chunks_mut(RAY_CHUNK),
-        batch.shading_normal.par_chunks_mut(RAY_CHUNK),
-        batch.pixel.par_chunks_mut(RAY_CHUNK),
-        batch.sample.par_chunks_mut(RAY_CHUNK),
-        columns.dir.par_chunks_mut(RAY_CHUNK),
-        columns.surface.par_chunks_mut(RAY_CHUNK),
-        batch.geometry.par_chunks_mut(RAY_CHUNK),
+        (
+            batch.position.par_chunks_mut(RAY_CHUNK),
+            batch.position_error.par_chunks_mut(RAY_CHUNK),
+            batch.normal.par_chunks_mut(RAY_CHUNK),
+            batch.shading_normal.par_chunks_mut(RAY_CHUNK),
+            batch.pixel.par_chunks_mut(RAY_CHUNK),
+            batch.sample.par_chunks_mut(RAY_CHUNK),
+            batch.geometry.par_chunks_mut(RAY_CHUNK),
+        ),
+        (
+            dx.par_chunks_mut(RAY_CHUNK),
+            dy.par_chunks_mut(RAY_CHUNK),
+            dz.par_chunks_mut(RAY_CHUNK),
+            u.par_chunks_mut(RAY_CHUNK),
+            v.par_chunks_mut(RAY_CHUNK),
+            material.par_chunks_mut(RAY_CHUNK),
+            instance.par_chunks_mut(RAY_CHUNK),
+            primitive.par_chunks_mut(RAY_CHUNK),
+            flipped.par_chunks_mut(RAY_CHUNK),
+        ),
     );
-    chunks.into_par_iter().enumerate().for_each(
-        |(c, (position, position_error, normal, shading_normal, pixel, sample, dir, surface, geometry))| {
-            let mut chunk =
-                BatchChunk { position, position_error, normal, shading_normal, pixel, sample, dir, surface, geometry };
-            crate::lanes::widest(
-                #[inline(always)]
-                || trace_chunk(&mut chunk, range.first + c * RAY_CHUNK, bvh, camera, range),
-            )
-        },
-    );
+    chunks.into_par_iter().enumerate().for_each(|(c, (batch, columns))| {
+        let (position, position_error, normal, shading_normal, pixel, sample, geometry) = batch;
+        let (dx, dy, dz, u, v, material, instance, primitive, flipped) = columns;
+        let mut chunk = BatchChunk {
+            position,
+            position_error,
+            normal,
+            shading_normal,
+            pixel,
+            sample,
+            geometry,
+            dir: [dx, dy, dz],
+            uv: [u, v],
+            material,
+            instance,
+            primitive,
+            flipped,
+        };
+        crate::lanes::widest(
+            #[inline(always)]
+            || trace_chunk(&mut chunk, range.first + c * RAY_CHUNK, bvh, camera, range),
+        )
+    });
 }
 
 /// [`trace_camera_rays`] for one chunk whose first sample has index `first`.

@@ -227,14 +227,14 @@ fn render_on_pool(
         let bsdf_sampling = opts.strategy != Strategy::LightOnly && shade.table.has_non_delta_lights();
         let shade_one = |k: usize| {
             let lambda = shade.batch.wavelengths.get(k);
-            if !columns.surface[k].escaped() {
+            if !columns.escaped(k) {
                 return shade.shade(k, lambda, &escape_ids, bsdf_sampling);
             }
             // Escaped camera rays see the infinite lights directly.
             let query = lambda.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
             let le = escape_ids
                 .iter()
-                .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, columns.dir[k], query)));
+                .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, columns.dir(k), query)));
             (to_rgb(le, lambda), false)
         };
         // Where the lane kernel may apply (`shade_lanes.rs`), blocks of the common case go
@@ -350,10 +350,10 @@ impl ShadeContext<'_> {
         escape_ids: &[crate::light::LightId],
         bsdf_sampling: bool,
     ) -> (Vec3, bool) {
-        let surface = &self.columns.surface[j];
+        let surface = &self.columns.surface(j);
         let (p, n) = (self.batch.position[j], self.batch.normal[j]);
         let query = wavelengths.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
-        let wo = -self.columns.dir[j];
+        let wo = -self.columns.dir(j);
         let ns = self.batch.shading_normal[j];
         let material = self.materials.get(surface.material as usize).unwrap_or(&DEFAULT_MATERIAL);
         let bsdf = match (query, self.uniform_bsdfs.get(surface.material as usize)) {

@@ -25,19 +25,19 @@ impl ShadeContext<'_> {
         // usually share a surface, so its checks run once per run of equal (material, instance),
         // and a block of one surface fills whole lanes.
         let mut f_up = [[0.0f32; LANES]; 3];
-        let surfaces = &self.columns.surface[first..first + LANES];
-        let key = |s: &SampleSurface| (s.material, s.instance);
-        if surfaces.iter().all(|s| key(s) == key(&surfaces[0])) {
-            let Some(base) = self.lambertian_base(&surfaces[0]) else { return false };
+        let block = |column: &[u32]| -> [u32; LANES] { *column[first..].first_chunk().expect("a whole block") };
+        let (material, instance) = (block(&self.columns.material), block(&self.columns.instance));
+        if material.iter().zip(&instance).all(|(&m, &i)| (m, i) == (material[0], instance[0])) {
+            let Some(base) = self.lambertian_base(material[0], instance[0]) else { return false };
             for c in 0..3 {
                 f_up[c] = [base[c] * FRAC_1_PI; LANES];
             }
         } else {
             let (mut surface_of_base, mut base) = ((u32::MAX, u32::MAX), [0.0f32; 3]);
-            for (l, surface) in surfaces.iter().enumerate() {
-                if key(surface) != surface_of_base {
-                    let Some(b) = self.lambertian_base(surface) else { return false };
-                    (surface_of_base, base) = (key(surface), b);
+            for l in 0..LANES {
+                if (material[l], instance[l]) != surface_of_base {
+                    let Some(b) = self.lambertian_base(material[l], instance[l]) else { return false };
+                    (surface_of_base, base) = ((material[l], instance[l]), b);
                 }
                 for c in 0..3 {
                     f_up[c][l] = base[c] * FRAC_1_PI;
@@ -65,18 +65,18 @@ impl ShadeContext<'_> {
         true
     }
 
-    /// The base colour of a camera sample's surface if it is of the common case: hit, not
-    /// emitting, of an untextured material without a specular lobe.
+    /// The base colour of a camera sample's surface (its `material` and `instance` columns) if it
+    /// is of the common case: hit, not emitting, of an untextured material without a specular lobe.
     #[inline(always)]
-    fn lambertian_base(&self, surface: &SampleSurface) -> Option<[f32; 3]> {
-        if surface.escaped() {
+    fn lambertian_base(&self, material: u32, instance: u32) -> Option<[f32; 3]> {
+        if instance == SampleSurface::ESCAPED.instance {
             return None;
         }
-        let bsdf = match self.uniform_bsdfs.get(surface.material as usize) {
+        let bsdf = match self.uniform_bsdfs.get(material as usize) {
             Some(Some(b)) if !b.has_specular() => b,
             _ => return None,
         };
-        if self.lights_of_instance.get(surface.instance as usize).is_some_and(|rows| !rows.is_empty()) {
+        if self.lights_of_instance.get(instance as usize).is_some_and(|rows| !rows.is_empty()) {
             return None;
         }
         Some([bsdf.base.0[0], bsdf.base.0[1], bsdf.base.0[2]])
@@ -98,8 +98,9 @@ impl ShadeContext<'_> {
         let mis = self.strategy == Strategy::Mis;
         // The other strategies weigh every light sample alike, whatever its pdfs.
         let fixed_weight = self.strategy.light_weight(1.0, 1.0);
-        let (dir, shading_normal) =
-            (&self.columns.dir[first..first + LANES], &self.batch.shading_normal[first..first + LANES]);
+        let dir =
+            self.columns.dir.each_ref().map(|c| -> &[f32; LANES] { c[first..].first_chunk().expect("a whole block") });
+        let shading_normal = &self.batch.shading_normal[first..first + LANES];
         // Slices of a length known at compile time for a literal stride: no bounds checks in the loop.
         let span = e..e + (LANES - 1) * stride + 1;
         let (wi, pdf, delta, radiance) = (
@@ -114,14 +115,13 @@ impl ShadeContext<'_> {
         let (mut pdf_l, mut delta_l) = ([0.0f32; LANES], [false; LANES]);
         for l in 0..LANES {
             let e = l * stride;
-            let (d, r) = (-dir[l], radiance[e]);
+            let r = radiance[e];
             for a in 0..3 {
-                (wo[a][l], li[a][l]) = (d[a], r.0[a]);
+                (wo[a][l], li[a][l]) = (-dir[a][l], r.0[a]);
             }
             (pdf_l[l], delta_l[l]) = (pdf[e], delta[e]);
         }
-        // Runs of whole blocks, read as such (see `lanes::columns`; the directions measured
-        // faster read lane by lane).
+        // Runs of whole blocks, read as such (see `lanes::columns`).
         let ns = lanes::columns(shading_normal.first_chunk().expect("a whole block"));
         if stride == 1 {
             wi_l = lanes::columns(wi.first_chunk().expect("a whole block"));
