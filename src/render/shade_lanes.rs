@@ -25,9 +25,9 @@ impl ShadeContext<'_> {
         // usually share a surface, so its checks run once per run of equal (material, instance),
         // and a block of one surface fills whole lanes.
         let mut f_up = [[0.0f32; LANES]; 3];
-        let block = |column: &[u32]| -> [u32; LANES] { *column[first..].first_chunk().expect("a whole block") };
-        let (material, instance) = (block(&self.columns.material), block(&self.columns.instance));
-        if material.iter().zip(&instance).all(|(&m, &i)| (m, i) == (material[0], instance[0])) {
+        let (material, instance) =
+            (&self.columns.material[first..first + LANES], &self.columns.instance[first..first + LANES]);
+        if material.iter().all(|&m| m == material[0]) && instance.iter().all(|&i| i == instance[0]) {
             let Some(base) = self.lambertian_base(material[0], instance[0]) else { return false };
             for c in 0..3 {
                 f_up[c] = [base[c] * FRAC_1_PI; LANES];
