@@ -160,11 +160,8 @@ impl HitSink for SlotWriter<'_, '_> {
         lanes::store_vec3s(&normal, block(chunk.normal, b));
         lanes::store_vec3s(&normal, block(chunk.shading_normal, b));
         *block(chunk.geometry, b) = [hits.id; LANES];
-        for a in 0..3 {
-            *block(chunk.dir[a], b) = dirs[a];
-        }
-        for c in 0..2 {
-            *block(chunk.uv[c], b) = hits.uv[c];
+        for (column, values) in chunk.dir.iter_mut().zip(dirs).chain(chunk.uv.iter_mut().zip(&hits.uv)) {
+            *block(column, b) = *values;
         }
         *block(chunk.material, b) = [hits.material; LANES];
         *block(chunk.instance, b) = [hits.instance; LANES];
