@@ -37,7 +37,7 @@ pub(super) struct CameraColumns {
     pub(super) dir: [Vec<f32>; 3],
     pub(super) uv: [Vec<f32>; 2],
     pub(super) material: Vec<u32>,
-    /// BVH instance that was hit; `SampleSurface::ESCAPED`'s for rays that hit nothing.
+    /// BVH instance that was hit; `u32::MAX` (as `SampleSurface::ESCAPED`) for rays that hit nothing.
     pub(super) instance: Vec<u32>,
     pub(super) primitive: Vec<u32>,
     /// See [`SampleSurface::flipped`].

@@ -350,7 +350,7 @@ impl ShadeContext<'_> {
         escape_ids: &[crate::light::LightId],
         bsdf_sampling: bool,
     ) -> (Vec3, bool) {
-        let surface = &self.columns.surface(j);
+        let surface = self.columns.surface(j);
         let (p, n) = (self.batch.position[j], self.batch.normal[j]);
         let query = wavelengths.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
         let wo = -self.columns.dir(j);
@@ -362,7 +362,7 @@ impl ShadeContext<'_> {
         };
         // Light the camera sees on emitters directly (their sidedness needs the unflipped normal).
         let ng = if surface.flipped { -n } else { n };
-        let mut l = self.emitted_at(surface, p, ng, wo, query).map_or(SampledSpectrum::default(), |(_, le)| le);
+        let mut l = self.emitted_at(&surface, p, ng, wo, query).map_or(SampledSpectrum::default(), |(_, le)| le);
         for e in self.lighting.entries(j) {
             let (li, wi, pdf) = (self.lighting.radiance[e], self.lighting.wi[e], self.lighting.pdf[e]);
             if pdf <= 0.0 {
