@@ -22,6 +22,19 @@ pub use transpose::{store_rgb_spectra, store_vec3s};
 /// Values per lane array: one AVX-512 register of f32.
 pub const LANES: usize = 16;
 
+/// The `LANES` values of `column` from `first`, as an array: loads of a length known at compile
+/// time (no bounds checks in lane loops). Panics if fewer remain.
+#[inline(always)]
+pub fn block<T>(column: &[T], first: usize) -> &[T; LANES] {
+    column[first..].first_chunk().expect("a whole block")
+}
+
+/// [`block`] for writing: stores of a length known at compile time.
+#[inline(always)]
+pub fn block_mut<T>(column: &mut [T], first: usize) -> &mut [T; LANES] {
+    column[first..].first_chunk_mut().expect("a whole block")
+}
+
 /// Lane columns (x, y, z) as `LANES` vectors: a loop of this one step becomes a few vector
 /// shuffles, where a loop that also computes the values stays scalar. How well LLVM does it
 /// depends on the kernel: the camera pass measured fastest with this, the sampling pass with

@@ -385,19 +385,15 @@ impl Sampling<'_> {
             ray_kind[l] = if aim[l] != 0 { ShadowTarget::Point } else { ShadowTarget::None };
             traced += (aim[l] & 1) as usize;
         }
-        #[inline(always)]
-        fn block<T>(column: &mut [T], e: usize) -> &mut [T; LANES] {
-            column[e..].first_chunk_mut().expect("a whole block")
-        }
-        lanes::store_rgb_spectra(&rgb, block(cols.radiance, e));
-        lanes::store_vec3s(&wi, block(cols.wi, e));
-        lanes::store_vec3s(&target, block(cols.target, e));
-        *block(cols.pdf, e) = pdf;
-        *block(cols.light, e) = *light;
-        *block(cols.delta, e) = lit.valid;
-        *block(cols.occluded, e) = [false; LANES];
-        *block(cols.ray_kind, e) = ray_kind;
-        *block(cols.target_normal, e) = [Vec3::ZERO; LANES];
+        lanes::store_rgb_spectra(&rgb, lanes::block_mut(cols.radiance, e));
+        lanes::store_vec3s(&wi, lanes::block_mut(cols.wi, e));
+        lanes::store_vec3s(&target, lanes::block_mut(cols.target, e));
+        *lanes::block_mut(cols.pdf, e) = pdf;
+        *lanes::block_mut(cols.light, e) = *light;
+        *lanes::block_mut(cols.delta, e) = lit.valid;
+        *lanes::block_mut(cols.occluded, e) = [false; LANES];
+        *lanes::block_mut(cols.ray_kind, e) = ray_kind;
+        *lanes::block_mut(cols.target_normal, e) = [Vec3::ZERO; LANES];
         traced
     }
 
@@ -418,7 +414,7 @@ impl Sampling<'_> {
             for l in 0..LANES {
                 (point[l], pixel[l], stream[l]) = (i + l, pixels[l], samples[l] * self.spp);
             }
-            p = lanes::columns(self.batch.position[i..].first_chunk().expect("a whole block"));
+            p = lanes::columns(lanes::block(&self.batch.position, i));
         } else {
             for l in 0..n {
                 let (i, _, s) = self.point_and_stream(first + e + l);

@@ -94,7 +94,7 @@ pub fn trace_shadow_rays(
                     let mut rays = RayLanes::default();
                     let points = k == 1 && n == LANES && offset == ShadowOffset::ErrorBound;
                     if points && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point) {
-                        let columns = |v: &[Vec3]| lanes::columns(v[first..].first_chunk().expect("a whole block"));
+                        let columns = |v: &[Vec3]| lanes::columns(lanes::block(v, first));
                         // Cache-line aligned, as `RayLanes` is: the kernel loads these columns whole.
                         #[repr(C, align(64))]
                         struct Aligned<T>(T);

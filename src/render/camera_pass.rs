@@ -155,25 +155,19 @@ impl HitSink for SlotWriter<'_, '_> {
             }
         }
         let (b, chunk) = (self.b, &mut *self.chunk);
-        lanes::store_vec3s(&hits.p, block(chunk.position, b));
-        lanes::store_vec3s(&hits.p_error, block(chunk.position_error, b));
-        lanes::store_vec3s(&normal, block(chunk.normal, b));
-        lanes::store_vec3s(&normal, block(chunk.shading_normal, b));
-        *block(chunk.geometry, b) = [hits.id; LANES];
+        lanes::store_vec3s(&hits.p, lanes::block_mut(chunk.position, b));
+        lanes::store_vec3s(&hits.p_error, lanes::block_mut(chunk.position_error, b));
+        lanes::store_vec3s(&normal, lanes::block_mut(chunk.normal, b));
+        lanes::store_vec3s(&normal, lanes::block_mut(chunk.shading_normal, b));
+        *lanes::block_mut(chunk.geometry, b) = [hits.id; LANES];
         for (column, values) in chunk.dir.iter_mut().zip(dirs).chain(chunk.uv.iter_mut().zip(&hits.uv)) {
-            *block(column, b) = *values;
+            *lanes::block_mut(column, b) = *values;
         }
-        *block(chunk.material, b) = [hits.material; LANES];
-        *block(chunk.instance, b) = [hits.instance; LANES];
-        *block(chunk.primitive, b) = [hits.id.primitive; LANES];
-        *block(chunk.flipped, b) = flipped;
+        *lanes::block_mut(chunk.material, b) = [hits.material; LANES];
+        *lanes::block_mut(chunk.instance, b) = [hits.instance; LANES];
+        *lanes::block_mut(chunk.primitive, b) = [hits.id.primitive; LANES];
+        *lanes::block_mut(chunk.flipped, b) = flipped;
     }
-}
-
-/// The `LANES` slots of `column` from `b`, as an array: stores of a length known at compile time.
-#[inline(always)]
-fn block<T>(column: &mut [T], b: usize) -> &mut [T; LANES] {
-    column[b..].first_chunk_mut().expect("a whole block")
 }
 
 /// One `RAY_CHUNK` of every column the camera pass writes.

@@ -98,8 +98,7 @@ impl ShadeContext<'_> {
         let mis = self.strategy == Strategy::Mis;
         // The other strategies weigh every light sample alike, whatever its pdfs.
         let fixed_weight = self.strategy.light_weight(1.0, 1.0);
-        let dir =
-            self.columns.dir.each_ref().map(|c| -> &[f32; LANES] { c[first..].first_chunk().expect("a whole block") });
+        let dir = self.columns.dir.each_ref().map(|c| lanes::block(c, first));
         let shading_normal = &self.batch.shading_normal[first..first + LANES];
         // Slices of a length known at compile time for a literal stride: no bounds checks in the loop.
         let span = e..e + (LANES - 1) * stride + 1;
@@ -122,9 +121,9 @@ impl ShadeContext<'_> {
             (pdf_l[l], delta_l[l]) = (pdf[e], delta[e]);
         }
         // Runs of whole blocks, read as such (see `lanes::columns`).
-        let ns = lanes::columns(shading_normal.first_chunk().expect("a whole block"));
+        let ns = lanes::columns(lanes::block(shading_normal, 0));
         if stride == 1 {
-            wi_l = lanes::columns(wi.first_chunk().expect("a whole block"));
+            wi_l = lanes::columns(lanes::block(wi, 0));
         } else {
             for l in 0..LANES {
                 let w = wi[l * stride];
