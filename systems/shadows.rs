@@ -69,6 +69,12 @@ pub fn trace_shadow_rays(
     // Segments traced LANES at a time. Blocks of point-light segments, one entry per point, are
     // built from columns by a lane kernel; others one segment at a time.
     r.occluded.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
+        let whole = c * RAY_CHUNK..c * RAY_CHUNK + chunk.len();
+        if k == 1 && batch.geometry.get(whole).is_some_and(|g| bvh.blocks_nothing_from(g)) {
+            // Every ray of the chunk leaves the scene's one flat primitive: nothing to build.
+            chunk.fill(false);
+            return;
+        }
         crate::lanes::widest(
             #[inline(always)]
             || {

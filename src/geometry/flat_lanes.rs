@@ -308,8 +308,14 @@ impl SceneBvh {
     /// Whether no primitive can block rays leaving `origins`: the scene is one flat primitive,
     /// and every ray leaves it. Callers may then skip building the rays.
     #[inline(always)]
-    pub fn blocks_nothing_from(&self, origins: &[GeometryId; LANES]) -> bool {
-        self.leaf.len() == 1 && self.ignores(0, origins[0]) && origins.iter().all(|&o| o == origins[0])
+    pub fn blocks_nothing_from(&self, origins: &[GeometryId]) -> bool {
+        let Some(&first) = origins.first() else { return true };
+        if self.leaf.len() != 1 || !self.ignores(0, first) {
+            return false;
+        }
+        // A fold without early exit, so that it vectorises over long slices.
+        let key = first.key();
+        origins.iter().fold(true, |all, o| all & (o.key() == key))
     }
 }
 
@@ -447,6 +453,11 @@ mod tests {
         let mut one_unknown = [id(&plane); LANES];
         one_unknown[5] = GeometryId::NONE;
         assert!(!plane.blocks_nothing_from(&one_unknown));
+        // A whole chunk of origins, the last one unknown.
+        let mut chunk = vec![id(&plane); 1000];
+        assert!(plane.blocks_nothing_from(&chunk));
+        chunk[999] = GeometryId::NONE;
+        assert!(!plane.blocks_nothing_from(&chunk));
         // A ray leaving a sphere inward meets its far side.
         let ball = scene(&[(sphere, Transform::IDENTITY)]);
         let inward = Ray::new(Vec3::new(0.0, 0.0, 1.0), Vec3::NEG_Z);
