@@ -5,11 +5,21 @@
 use crate::lanes::LANES;
 
 /// A stream of uniform numbers for one (seed, pixel, sample); `dim` advances per draw.
+///
+/// Number `d` is 24 bits of `mix64(key + ((sample << 32) | d / 2) * GOLDEN)`: the high bits for
+/// even `d`, the next 24 for odd `d`. The key hashes (seed, pixel) twice, so that seeds or pixels a
+/// few bits apart give unrelated streams; within a pixel the counter is spread by the golden-ratio
+/// multiply before the mix, as SplitMix64 spreads its state. A pixel's samples share one key, and
+/// two numbers share one mix (lane kernels draw a block of one pixel's samples for two mixes).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SampleStream {
     key: u64,
+    sample: u32,
     dim: u32,
 }
+
+/// The golden-ratio increment of SplitMix64.
+const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
 
 /// A 64-bit mix (splitmix64 finaliser, Steele et al. 2014).
 #[inline(always)]
@@ -19,26 +29,56 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// The key of every stream of `pixel` under `seed`.
+#[inline(always)]
+fn pixel_key(seed: u64, pixel: u32) -> u64 {
+    mix64(seed ^ mix64(pixel as u64))
+}
+
+/// `(sample << 32) * GOLDEN` (mod 2^64): only the low half of the constant reaches the product, so a
+/// 32-bit multiply forms it.
+#[inline(always)]
+fn sample_offset(sample: u32) -> u64 {
+    (sample.wrapping_mul(GOLDEN as u32) as u64) << 32
+}
+
+/// Number `dim` from the mix of its pair: a uniform value in [0, 1) on the 2^-24 grid (exact in f32).
+#[inline(always)]
+fn field(bits: u64, dim: u32) -> f32 {
+    let shift = if dim % 2 == 0 { 40 } else { 16 };
+    ((bits >> shift) & 0xff_ffff) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
 impl SampleStream {
     /// The stream of `pixel`'s `sample`-th sample under `seed`.
     pub fn new(seed: u64, pixel: u32, sample: u32) -> Self {
-        let key = mix64(seed ^ mix64(((pixel as u64) << 32) | sample as u64));
-        Self { key, dim: 0 }
+        Self { key: pixel_key(seed, pixel), sample, dim: 0 }
+    }
+
+    /// The mix that numbers `dim` and `dim ^ 1` come from.
+    #[inline]
+    fn pair_bits(&self, dim: u32) -> u64 {
+        let pair = (dim / 2) as u64;
+        mix64(self.key.wrapping_add(sample_offset(self.sample)).wrapping_add(pair.wrapping_mul(GOLDEN)))
     }
 
     /// The next uniform number in [0, 1).
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        let bits = mix64(self.key.wrapping_add((self.dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)));
+        let u = field(self.pair_bits(self.dim), self.dim);
         self.dim += 1;
-        // 24 high bits -> [0, 1) exactly representable.
-        (bits >> 40) as f32 * (1.0 / (1u32 << 24) as f32)
+        u
     }
 
-    /// Two uniform numbers.
+    /// Two uniform numbers (one mix when they are a pair).
     #[inline]
     pub fn next_2d(&mut self) -> glam::Vec2 {
-        glam::Vec2::new(self.next_f32(), self.next_f32())
+        if self.dim % 2 == 1 {
+            return glam::Vec2::new(self.next_f32(), self.next_f32());
+        }
+        let bits = self.pair_bits(self.dim);
+        self.dim += 2;
+        glam::Vec2::new(field(bits, 0), field(bits, 1))
     }
 
     /// Skips to dimension `dim` (so each consumer of a sample uses fixed dimensions).
@@ -51,19 +91,34 @@ impl SampleStream {
     /// `[d][l]` is number `d` of `SampleStream::new(seed, pixel[l], sample[l])`, bit for bit.
     #[inline(always)]
     pub fn lanes<const D: usize>(seed: u64, pixel: &[u32; LANES], sample: &[u32; LANES]) -> [[f32; LANES]; D] {
-        let mut key = [0u64; LANES];
+        Self::lanes_from_keys(pixel.map(|p| pixel_key(seed, p)), sample)
+    }
+
+    /// [`Self::lanes`] of samples of one pixel: its key is hashed once (for blocks of one pixel's
+    /// samples, as any spp of 16 or more gives).
+    #[inline(always)]
+    pub fn pixel_lanes<const D: usize>(seed: u64, pixel: u32, sample: &[u32; LANES]) -> [[f32; LANES]; D] {
+        Self::lanes_from_keys([pixel_key(seed, pixel); LANES], sample)
+    }
+
+    #[inline(always)]
+    fn lanes_from_keys<const D: usize>(key: [u64; LANES], sample: &[u32; LANES]) -> [[f32; LANES]; D] {
+        let mut base = [0u64; LANES];
         for l in 0..LANES {
-            key[l] = mix64(seed ^ mix64(((pixel[l] as u64) << 32) | sample[l] as u64));
-        }
-        // All D rows as one flat loop of whole mixes: as a loop per row, LLVM vectorised across
-        // the rows (two lanes at a time) rather than along them.
-        let mut z = [[0u64; LANES]; D];
-        for (d, row) in z.iter_mut().enumerate() {
-            *row = key.map(|k| k.wrapping_add((d as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)));
+            base[l] = key[l].wrapping_add(sample_offset(sample[l]));
         }
         let mut out = [[0.0; LANES]; D];
-        for (o, z) in out.as_flattened_mut().iter_mut().zip(z.as_flattened()) {
-            *o = (mix64(*z) >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
+        for pair in 0..D.div_ceil(2) {
+            let step = (pair as u64).wrapping_mul(GOLDEN);
+            let mut bits = [0u64; LANES];
+            for l in 0..LANES {
+                bits[l] = mix64(base[l].wrapping_add(step));
+            }
+            for d in 2 * pair..(2 * pair + 2).min(D) {
+                for l in 0..LANES {
+                    out[d][l] = field(bits[l], d as u32);
+                }
+            }
         }
         out
     }
@@ -83,7 +138,7 @@ impl SplitMix64 {
     /// The next 64 random bits: the state advances by the golden-ratio increment, then is mixed.
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        self.0 = self.0.wrapping_add(GOLDEN);
         mix64(self.0)
     }
 
@@ -132,11 +187,18 @@ mod tests {
             let pixel: [u32; LANES] = std::array::from_fn(|_| rng.next_u64() as u32);
             let sample: [u32; LANES] = std::array::from_fn(|l| if l == 0 { u32::MAX } else { rng.next_u64() as u32 });
             let lanes = SampleStream::lanes::<3>(seed, &pixel, &sample);
+            let one_pixel = SampleStream::pixel_lanes::<3>(seed, pixel[0], &sample);
             for l in 0..LANES {
-                let mut scalar = SampleStream::new(seed, pixel[l], sample[l]);
-                for (d, dim) in lanes.iter().enumerate() {
-                    assert_eq!(dim[l].to_bits(), scalar.next_f32().to_bits(), "seed {seed} lane {l} dim {d}");
+                let (mut scalar, mut first) =
+                    (SampleStream::new(seed, pixel[l], sample[l]), SampleStream::new(seed, pixel[0], sample[l]));
+                for d in 0..3 {
+                    assert_eq!(lanes[d][l].to_bits(), scalar.next_f32().to_bits(), "seed {seed} lane {l} dim {d}");
+                    assert_eq!(one_pixel[d][l].to_bits(), first.next_f32().to_bits(), "seed {seed} lane {l} dim {d}");
                 }
+                // Pairs drawn at once, from an even and from an odd dimension.
+                let (mut even, mut odd) = (SampleStream::new(seed, pixel[l], sample[l]), scalar.at_dimension(1));
+                assert_eq!(even.next_2d(), glam::Vec2::new(lanes[0][l], lanes[1][l]));
+                assert_eq!(odd.next_2d(), glam::Vec2::new(lanes[1][l], lanes[2][l]));
             }
         }
     }

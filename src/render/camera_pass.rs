@@ -279,7 +279,9 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
         let end = (b + LANES).min(len);
         let (mut pixel, mut sample) = ([0u32; LANES], [0u32; LANES]);
         let (mut x, mut y) = ([0u32; LANES], [0u32; LANES]);
-        if end - b == LANES && next_sample as usize + LANES <= spp as usize {
+        let one_pixel = end - b == LANES && next_sample as usize + LANES <= spp as usize;
+        let first_pixel = next_pixel;
+        if one_pixel {
             // A whole block of one pixel's samples (any spp of 16 or more): whole lanes of one
             // value, where the loop below would store lane by lane and stall the vector loads.
             (pixel, x, y) = ([next_pixel; LANES], [next_x; LANES], [next_y; LANES]);
@@ -313,7 +315,12 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
             chunk.pixel[b..end].copy_from_slice(&pixel[..end - b]);
             chunk.sample[b..end].copy_from_slice(&sample[..end - b]);
         }
-        let [u, v] = SampleStream::lanes::<2>(seed, &pixel, &sample);
+        // (Reading `pixel` back to find it is one pixel stalled on its stores.)
+        let [u, v] = if one_pixel {
+            SampleStream::pixel_lanes::<2>(seed, first_pixel, &sample)
+        } else {
+            SampleStream::lanes::<2>(seed, &pixel, &sample)
+        };
         let dirs = camera.dirs_lanes([&x, &y], &u, &v);
         let rays = RayLanes::from_columns(&[origin, dirs], f32::INFINITY);
         let mut writer = SlotWriter { chunk: &mut *chunk, b, n: end - b, dirs: &dirs };
