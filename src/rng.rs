@@ -45,7 +45,7 @@ fn sample_offset(sample: u32) -> u64 {
 /// Number `dim` from the mix of its pair: a uniform value in [0, 1) on the 2^-24 grid (exact in f32).
 #[inline(always)]
 fn field(bits: u64, dim: u32) -> f32 {
-    let shift = if dim % 2 == 0 { 40 } else { 16 };
+    let shift = if dim.is_multiple_of(2) { 40 } else { 16 };
     ((bits >> shift) & 0xff_ffff) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
@@ -73,7 +73,7 @@ impl SampleStream {
     /// Two uniform numbers (one mix when they are a pair).
     #[inline]
     pub fn next_2d(&mut self) -> glam::Vec2 {
-        if self.dim % 2 == 1 {
+        if !self.dim.is_multiple_of(2) {
             return glam::Vec2::new(self.next_f32(), self.next_f32());
         }
         let bits = self.pair_bits(self.dim);
@@ -114,9 +114,9 @@ impl SampleStream {
             for l in 0..LANES {
                 bits[l] = mix64(base[l].wrapping_add(step));
             }
-            for d in 2 * pair..(2 * pair + 2).min(D) {
-                for l in 0..LANES {
-                    out[d][l] = field(bits[l], d as u32);
+            for (d, row) in out.iter_mut().enumerate().skip(2 * pair).take(2) {
+                for (o, &b) in row.iter_mut().zip(&bits) {
+                    *o = field(b, d as u32);
                 }
             }
         }
