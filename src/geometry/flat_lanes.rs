@@ -44,16 +44,16 @@ impl RayLanes {
     /// Rays from lane columns of origins and directions, all with the same `t_max`.
     #[inline(always)]
     pub fn from_columns([origin, dir]: &[Lanes3; 2], t_max: f32) -> Self {
-        let mut r = Self::default();
-        for l in 0..LANES {
-            for a in 0..3 {
-                (r.o[a][l], r.d[a][l]) = (origin[a][l] as f64, dir[a][l] as f64);
-            }
-            let valid = (0..3).all(|a| origin[a][l].is_finite() && dir[a][l].is_finite());
+        let mut valid = [false; LANES];
+        for (l, valid) in valid.iter_mut().enumerate() {
+            let finite = (0..3).all(|a| origin[a][l].is_finite() && dir[a][l].is_finite());
             let nonzero = dir[0][l] != 0.0 || dir[1][l] != 0.0 || dir[2][l] != 0.0;
-            (r.t_max[l], r.valid[l]) = (t_max, valid && nonzero && t_max > 0.0);
+            *valid = finite && nonzero && t_max > 0.0;
         }
-        r
+        // Built whole, not over `default()`: t_max written lane by lane came out as two half
+        // stores, and the full-width load of it in `closest_hits_lanes` stalled on them.
+        let widen = |c: &Lanes3| c.map(|row| row.map(f64::from));
+        Self { o: widen(origin), d: widen(dir), t_max: [t_max; LANES], valid }
     }
 
     /// Puts `ray` in lane `l`, reading its fields one by one (copying whole `Ray`s between
