@@ -201,7 +201,7 @@ impl Shape {
                 Vec2::new((phi / TAU) as f32, ((r - rho) / (r - ri)) as f32)
             }
             Shape::Rectangle(rect) => {
-                // Reciprocals, which lane loops hoist: two divisions per hit cost ~5% of the camera pass.
+                // Reciprocals, which lane loops hoist: two divisions per hit cost ~5% of a plane render.
                 let inv = rect.half_size.as_dvec2().recip();
                 Vec2::new((0.5 * (x * inv.x + 1.0)) as f32, (0.5 * (y * inv.y + 1.0)) as f32)
             }
