@@ -374,10 +374,27 @@ impl PlacedShape {
     /// sums that `transform_point3` and `transform_vector3` form.
     #[inline(always)]
     pub(super) fn object_row(&self, i: usize, o: [f64; 3], d: [f64; 3]) -> (f64, f64) {
+        (self.object_point_row(i, o), self.object_dir_row(i, d))
+    }
+
+    /// The origin half of [`Self::object_row`] (rays from one origin form it once).
+    #[inline(always)]
+    pub(super) fn object_point_row(&self, i: usize, o: [f64; 3]) -> f64 {
         let m = &self.to_object.matrix3;
-        let (ox, oy, oz) = (m.x_axis[i] * o[0], m.y_axis[i] * o[1], m.z_axis[i] * o[2]);
-        let (dx, dy, dz) = (m.x_axis[i] * d[0], m.y_axis[i] * d[1], m.z_axis[i] * d[2]);
-        (ox + oy + oz + self.to_object.translation[i], dx + dy + dz)
+        m.x_axis[i] * o[0] + m.y_axis[i] * o[1] + m.z_axis[i] * o[2] + self.to_object.translation[i]
+    }
+
+    /// The direction half of [`Self::object_row`].
+    #[inline(always)]
+    pub(super) fn object_dir_row(&self, i: usize, d: [f64; 3]) -> f64 {
+        dot_row(self.object_dir_coefficients(i), d)
+    }
+
+    /// Row `i` of the world-to-object matrix, for lane loops that hoist it.
+    #[inline(always)]
+    pub(super) fn object_dir_coefficients(&self, i: usize) -> [f64; 3] {
+        let m = &self.to_object.matrix3;
+        [m.x_axis[i], m.y_axis[i], m.z_axis[i]]
     }
 
     /// A point uniformly distributed over the surface (density 1 / area per m^2), with its error
@@ -415,6 +432,12 @@ impl PlacedShape {
         let terms = abs_m.x_axis[a] * x.abs() + abs_m.y_axis[a] * y.abs() + self.abs_translation[a];
         (p as f32, f64_coordinate_error(p, terms))
     }
+}
+
+/// The sum [`PlacedShape::object_dir_row`] forms from the matrix row `m`.
+#[inline(always)]
+pub(super) fn dot_row(m: [f64; 3], d: [f64; 3]) -> f64 {
+    m[0] * d[0] + m[1] * d[1] + m[2] * d[2]
 }
 
 /// The rest of [`PlacedShape::flat_hit`] from the object-space ray's rows (origin, direction)

@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::camera::CameraModel;
-use crate::geometry::{FlatHitBlock, GeometryId, Hit, HitSink, RAY_CHUNK, RayLanes, SceneBvh};
+use crate::geometry::{FlatHitBlock, GeometryId, Hit, HitSink, RAY_CHUNK, SceneBvh};
 use crate::lanes::{self, LANES};
 use crate::rng::SampleStream;
 use crate::shading::ShadingBatch;
@@ -272,8 +272,7 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
     let (mut next_pixel, mut next_sample) = ((first / spp as usize) as u32, (first % spp as usize) as u32);
     let (mut next_x, mut next_y) = (next_pixel % width, next_pixel / width);
     let len = chunk.pixel.len();
-    let o = camera.origin();
-    let origin = [[o.x; LANES], [o.y; LANES], [o.z; LANES]];
+    let origin = camera.origin();
     let mut b = 0;
     while b < len {
         let end = (b + LANES).min(len);
@@ -322,9 +321,8 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
             SampleStream::lanes::<2>(seed, &pixel, &sample)
         };
         let dirs = camera.dirs_lanes([&x, &y], &u, &v);
-        let rays = RayLanes::from_columns(&[origin, dirs], f32::INFINITY);
         let mut writer = SlotWriter { chunk: &mut *chunk, b, n: end - b, dirs: &dirs };
-        bvh.closest_hits_lanes(&rays, &mut writer);
+        bvh.closest_hits_from(origin, &dirs, f32::INFINITY, &mut writer);
         b = end;
     }
 }
