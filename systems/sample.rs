@@ -52,6 +52,8 @@ pub struct ShadowRays {
     pub occluded: Vec<bool>,
     /// Number of entries with a ray.
     rays: usize,
+    /// Number of rays found blocked (set by the trace step).
+    pub(super) blocked: usize,
 }
 
 impl ShadowRays {
@@ -63,13 +65,17 @@ impl ShadowRays {
     pub fn is_empty(&self) -> bool {
         self.rays == 0
     }
+    /// Number of rays the trace step found blocked (the `true` entries of `occluded`).
+    pub fn blocked(&self) -> usize {
+        self.blocked
+    }
     /// Empties every column, keeping capacity.
     pub fn clear(&mut self) {
         self.kind.clear();
         self.target.clear();
         self.target_normal.clear();
         self.occluded.clear();
-        self.rays = 0;
+        (self.rays, self.blocked) = (0, 0);
     }
     /// Sizes the columns for `entries` entries of `entries_per_point` each; the kinds, targets
     /// and count are then written by the sampling step, and the answers reset to unoccluded.
@@ -80,6 +86,7 @@ impl ShadowRays {
         self.target_normal.resize(entries, Vec3::ZERO);
         self.occluded.clear();
         self.occluded.resize(entries, false);
+        self.blocked = 0;
     }
 }
 
@@ -509,6 +516,10 @@ impl EntryColumns<'_> {
 
 /// Zeroes the radiance of entries whose shadow ray was blocked.
 pub fn apply_visibility(rays: Res<ShadowRays>, mut out: ResMut<DirectLighting>) {
+    if rays.blocked == 0 {
+        // Nothing to zero (the usual case for a lit floor): no pass over the entries.
+        return;
+    }
     let out = &mut *out;
     let columns = (out.radiance.par_iter_mut(), out.occluded.par_iter_mut(), rays.occluded.par_iter());
     columns.into_par_iter().with_min_len(CHUNK).for_each(|(radiance, occluded, &blocked)| {

@@ -61,78 +61,86 @@ pub fn trace_shadow_rays(
     };
     if !bvh.few_flat_shapes() {
         // Rays one at a time: the lane queries would answer them so anyway.
-        r.occluded.par_iter_mut().enumerate().with_min_len(RAY_CHUNK).for_each(|(e, occluded)| {
-            *occluded = bvh.occluded_from(&segment(e), batch.geometry_of(point_of(e)));
-        });
+        let answers = r.occluded.par_iter_mut().enumerate().with_min_len(RAY_CHUNK);
+        r.blocked = answers
+            .map(|(e, occluded)| {
+                *occluded = bvh.occluded_from(&segment(e), batch.geometry_of(point_of(e)));
+                *occluded as usize
+            })
+            .sum();
         return;
     }
     // Segments traced LANES at a time. Blocks of point-light segments, one entry per point, are
     // built from columns by a lane kernel; others one segment at a time.
-    r.occluded.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, chunk)| {
-        let whole = c * RAY_CHUNK..c * RAY_CHUNK + chunk.len();
-        if k == 1 && batch.geometry.get(whole).is_some_and(|g| bvh.blocks_nothing_from(g)) {
-            // Every ray of the chunk leaves the scene's one flat primitive: nothing to build.
-            chunk.fill(false);
-            return;
-        }
-        crate::lanes::widest(
-            #[inline(always)]
-            || {
-                let mut b = 0;
-                while b < chunk.len() {
-                    let n = LANES.min(chunk.len() - b);
-                    let first = c * RAY_CHUNK + b;
-                    let mut origins = [GeometryId::NONE; LANES];
-                    match batch.geometry.get(first..first + LANES) {
-                        Some(g) if k == 1 => origins.copy_from_slice(g),
-                        _ => {
-                            for (l, o) in origins.iter_mut().enumerate().take(n) {
-                                *o = batch.geometry_of(point_of(first + l));
+    let chunks = r.occluded.par_chunks_mut(RAY_CHUNK).enumerate();
+    r.blocked = chunks
+        .map(|(c, chunk)| {
+            let whole = c * RAY_CHUNK..c * RAY_CHUNK + chunk.len();
+            if k == 1 && batch.geometry.get(whole).is_some_and(|g| bvh.blocks_nothing_from(g)) {
+                // Every ray of the chunk leaves the scene's one flat primitive: nothing to build.
+                chunk.fill(false);
+                return 0;
+            }
+            crate::lanes::widest(
+                #[inline(always)]
+                || {
+                    let mut b = 0;
+                    while b < chunk.len() {
+                        let n = LANES.min(chunk.len() - b);
+                        let first = c * RAY_CHUNK + b;
+                        let mut origins = [GeometryId::NONE; LANES];
+                        match batch.geometry.get(first..first + LANES) {
+                            Some(g) if k == 1 => origins.copy_from_slice(g),
+                            _ => {
+                                for (l, o) in origins.iter_mut().enumerate().take(n) {
+                                    *o = batch.geometry_of(point_of(first + l));
+                                }
                             }
                         }
-                    }
-                    if bvh.blocks_nothing_from(&origins) {
-                        // Nothing but the surface the rays leave: no ray to build.
-                        chunk[b..b + n].fill(false);
-                        b += LANES;
-                        continue;
-                    }
-                    let mut rays = RayLanes::default();
-                    let points = k == 1 && n == LANES && offset == ShadowOffset::ErrorBound;
-                    if points && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point) {
-                        let columns = |v: &[Vec3]| lanes::columns(lanes::block(v, first));
-                        // Cache-line aligned, as `RayLanes` is: the kernel loads these columns whole.
-                        #[repr(C, align(64))]
-                        struct Aligned<T>(T);
-                        // Origin, its error bound, normal and target. (Not `array::map`: its closure
-                        // may stay out of the wide code.)
-                        let ends = Aligned([
-                            columns(&batch.position),
-                            columns(&batch.position_error),
-                            columns(&batch.normal),
-                            columns(target),
-                        ]);
-                        let [origin, error, normal, to] = &ends.0;
-                        let segments = Aligned(spawn_rays_to_points_lanes([origin, error, normal], to));
-                        rays = RayLanes::from_columns(&segments.0, 1.0 - SHADOW_EPSILON);
-                    } else {
-                        for l in 0..n {
-                            rays.set(l, &segment(first + l));
+                        if bvh.blocks_nothing_from(&origins) {
+                            // Nothing but the surface the rays leave: no ray to build.
+                            chunk[b..b + n].fill(false);
+                            b += LANES;
+                            continue;
                         }
+                        let mut rays = RayLanes::default();
+                        let points = k == 1 && n == LANES && offset == ShadowOffset::ErrorBound;
+                        if points && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point) {
+                            let columns = |v: &[Vec3]| lanes::columns(lanes::block(v, first));
+                            // Cache-line aligned, as `RayLanes` is: the kernel loads these columns whole.
+                            #[repr(C, align(64))]
+                            struct Aligned<T>(T);
+                            // Origin, its error bound, normal and target. (Not `array::map`: its closure
+                            // may stay out of the wide code.)
+                            let ends = Aligned([
+                                columns(&batch.position),
+                                columns(&batch.position_error),
+                                columns(&batch.normal),
+                                columns(target),
+                            ]);
+                            let [origin, error, normal, to] = &ends.0;
+                            let segments = Aligned(spawn_rays_to_points_lanes([origin, error, normal], to));
+                            rays = RayLanes::from_columns(&segments.0, 1.0 - SHADOW_EPSILON);
+                        } else {
+                            for l in 0..n {
+                                rays.set(l, &segment(first + l));
+                            }
+                        }
+                        let occluded = bvh.occluded_lanes(&rays, n, &origins);
+                        // A copy of a length known at compile time is a vector store; a variable one
+                        // calls memmove.
+                        if n == LANES {
+                            chunk[b..b + LANES].copy_from_slice(&occluded);
+                        } else {
+                            chunk[b..b + n].copy_from_slice(&occluded[..n]);
+                        }
+                        b += LANES;
                     }
-                    let occluded = bvh.occluded_lanes(&rays, n, &origins);
-                    // A copy of a length known at compile time is a vector store; a variable one
-                    // calls memmove.
-                    if n == LANES {
-                        chunk[b..b + LANES].copy_from_slice(&occluded);
-                    } else {
-                        chunk[b..b + n].copy_from_slice(&occluded[..n]);
-                    }
-                    b += LANES;
-                }
-            },
-        )
-    });
+                    chunk.iter().filter(|&&o| o).count()
+                },
+            )
+        })
+        .sum();
 }
 
 /// The ray of an entry without one: invalid (zero direction), so never occluded.

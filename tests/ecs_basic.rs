@@ -72,6 +72,7 @@ fn occluders_block_shadow_rays_and_the_bvh_follows_moving_geometry() {
     let out = world.resource::<DirectLighting>();
     assert!(out.occluded[0] && out.radiance[0].0[1] == 0.0, "the ball shadows the point below it");
     assert!(!out.occluded[1] && out.radiance[1].0[1] > 0.0, "the floor never shadows itself");
+    assert_eq!(world.resource::<kelvin::systems::ShadowRays>().blocked(), 1);
     assert!(world.resource::<RunReport>().ran("trace_shadow_rays"));
 
     // Move the ball away: a refit, and the shadow is gone.
@@ -80,6 +81,7 @@ fn occluders_block_shadow_rays_and_the_bvh_follows_moving_geometry() {
     let report = world.resource::<RunReport>();
     assert!(report.ran("update_scene_bvh") && report.entries.iter().any(|e| e.system == "bvh_refit"), "{report}");
     assert!(!world.resource::<DirectLighting>().occluded[0]);
+    assert_eq!(world.resource::<kelvin::systems::ShadowRays>().blocked(), 0);
 
     // Lights that cast no shadows trace no rays.
     let mut lights = world.query::<&mut PointLight>();
