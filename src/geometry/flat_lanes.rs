@@ -265,6 +265,7 @@ impl SceneBvh {
     /// bit for bit. In a scene of one flat shape the origin's object-space rows are formed once
     /// and no `RayLanes` is built; other scenes take `closest_hits_lanes`.
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // index loops on purpose (as `occluded_lanes`)
     pub fn closest_hits_from(&self, origin: Vec3, dirs: &Lanes3, t_max: f32, out: &mut impl HitSink) {
         if self.leaf.len() != 1 || !self.few_flat_shapes() {
             let origins = [[origin.x; LANES], [origin.y; LANES], [origin.z; LANES]];

@@ -159,6 +159,7 @@ impl HitSink for Recorder {
 }
 
 #[test]
+#[allow(clippy::needless_range_loop)] // lanes by index, as the kernel reads them
 fn rays_from_one_origin_match_one_ray_at_a_time() {
     let tilted = Transform {
         rotation: Quat::from_rotation_x(0.7) * Quat::from_rotation_y(-0.3),
