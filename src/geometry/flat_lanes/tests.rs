@@ -63,14 +63,19 @@ fn lanes_from_columns_equal_lanes_from_rays() {
     }
 }
 
-#[test]
-fn flat_lanes_match_one_ray_at_a_time() {
+/// The shapes the lane tests place: a rectangle, an annulus, and a tilted, shifted placement.
+fn rect_disk_and_tilt() -> (Shape, Shape, Transform) {
     let tilted = Transform {
         rotation: Quat::from_rotation_x(0.7) * Quat::from_rotation_y(-0.3),
         ..Transform::from_translation(Vec3::new(0.5, 0.0, 0.25))
     };
     let rect = Shape::Rectangle(Rectangle { half_size: Vec2::new(2.0, 1.0) });
-    let disk = Shape::Disk(Disk { radius: 1.5, inner_radius: 0.5 });
+    (rect, Shape::Disk(Disk { radius: 1.5, inner_radius: 0.5 }), tilted)
+}
+
+#[test]
+fn flat_lanes_match_one_ray_at_a_time() {
+    let (rect, disk, tilted) = rect_disk_and_tilt();
     // The same rectangle twice makes exact ties (the first primitive must win).
     let scenes = [
         vec![(rect, Transform::IDENTITY)],
@@ -161,12 +166,7 @@ impl HitSink for Recorder {
 #[test]
 #[allow(clippy::needless_range_loop)] // lanes by index, as the kernel reads them
 fn rays_from_one_origin_match_one_ray_at_a_time() {
-    let tilted = Transform {
-        rotation: Quat::from_rotation_x(0.7) * Quat::from_rotation_y(-0.3),
-        ..Transform::from_translation(Vec3::new(0.5, 0.0, 0.25))
-    };
-    let rect = Shape::Rectangle(Rectangle { half_size: Vec2::new(2.0, 1.0) });
-    let disk = Shape::Disk(Disk { radius: 1.5, inner_radius: 0.5 });
+    let (rect, disk, tilted) = rect_disk_and_tilt();
     // One shape (the shared-origin path) and two (which builds the rays).
     let scenes = [vec![(rect, Transform::IDENTITY)], vec![(disk, tilted)], vec![(rect, tilted), (disk, tilted)]];
     // Hard cases: an origin in the plane, a NaN origin; zero, NaN and infinite directions.
