@@ -275,6 +275,7 @@ impl SceneBvh {
         let o = origin.as_dvec3().to_array();
         let o_row = [0, 1, 2].map(|i| [shape.object_point_row(i, o); LANES]);
         let d = dirs.map(|row| row.map(f64::from));
+        // The matrix row is read once per row, not per lane: read per lane, the loop stayed scalar.
         let mut d_row = [[0.0f64; LANES]; 3];
         for (i, row) in d_row.iter_mut().enumerate() {
             let m = shape.object_dir_coefficients(i);
