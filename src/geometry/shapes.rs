@@ -380,19 +380,18 @@ impl PlacedShape {
     /// The origin half of [`Self::object_row`] (rays from one origin form it once).
     #[inline(always)]
     pub(super) fn object_point_row(&self, i: usize, o: [f64; 3]) -> f64 {
-        let m = &self.to_object.matrix3;
-        m.x_axis[i] * o[0] + m.y_axis[i] * o[1] + m.z_axis[i] * o[2] + self.to_object.translation[i]
+        dot_row(self.object_matrix_row(i), o) + self.to_object.translation[i]
     }
 
     /// The direction half of [`Self::object_row`].
     #[inline(always)]
     pub(super) fn object_dir_row(&self, i: usize, d: [f64; 3]) -> f64 {
-        dot_row(self.object_dir_coefficients(i), d)
+        dot_row(self.object_matrix_row(i), d)
     }
 
     /// Row `i` of the world-to-object matrix, for lane loops that hoist it.
     #[inline(always)]
-    pub(super) fn object_dir_coefficients(&self, i: usize) -> [f64; 3] {
+    pub(super) fn object_matrix_row(&self, i: usize) -> [f64; 3] {
         let m = &self.to_object.matrix3;
         [m.x_axis[i], m.y_axis[i], m.z_axis[i]]
     }
@@ -434,7 +433,7 @@ impl PlacedShape {
     }
 }
 
-/// The sum [`PlacedShape::object_dir_row`] forms from the matrix row `m`.
+/// The sum the object rows form from matrix row `m` (before the translation, for points).
 #[inline(always)]
 pub(super) fn dot_row(m: [f64; 3], d: [f64; 3]) -> f64 {
     m[0] * d[0] + m[1] * d[1] + m[2] * d[2]
