@@ -46,9 +46,8 @@ impl RayLanes {
     pub fn from_columns([origin, dir]: &[Lanes3; 2], t_max: f32) -> Self {
         let mut valid = [false; LANES];
         for (l, valid) in valid.iter_mut().enumerate() {
-            let finite = (0..3).all(|a| origin[a][l].is_finite() && dir[a][l].is_finite());
-            let nonzero = dir[0][l] != 0.0 || dir[1][l] != 0.0 || dir[2][l] != 0.0;
-            *valid = finite && nonzero && t_max > 0.0;
+            let origin_finite = origin[0][l].is_finite() & origin[1][l].is_finite() & origin[2][l].is_finite();
+            *valid = origin_finite & dir_valid(dir, l) & (t_max > 0.0);
         }
         // Built whole, not over `default()`: t_max written lane by lane came out as two half
         // stores, and the full-width load of it in `closest_hits_lanes` stalled on them.
@@ -81,6 +80,14 @@ impl RayLanes {
     fn dir(&self, l: usize) -> [f64; 3] {
         [self.d[0][l], self.d[1][l], self.d[2][l]]
     }
+}
+
+/// The direction half of [`Ray::is_valid`] for lane `l`: finite and not zero. `&` and `|`, not
+/// `&&` and `||`, so that lane loops stay free of branches.
+#[inline(always)]
+fn dir_valid(dir: &Lanes3, l: usize) -> bool {
+    let (x, y, z) = (dir[0][l], dir[1][l], dir[2][l]);
+    x.is_finite() & y.is_finite() & z.is_finite() & ((x != 0.0) | (y != 0.0) | (z != 0.0))
 }
 
 /// The flat-shape hit test (`PlacedShape::local_hit`) of every lane over (0, t_max[l]]: hit
@@ -278,7 +285,7 @@ impl SceneBvh {
         // The matrix row is read once per row, not per lane: read per lane, the loop stayed scalar.
         let mut d_row = [[0.0f64; LANES]; 3];
         for (i, row) in d_row.iter_mut().enumerate() {
-            let m = shape.object_dir_coefficients(i);
+            let m = shape.object_matrix_row(i);
             for l in 0..LANES {
                 row[l] = dot_row(m, [d[0][l], d[1][l], d[2][l]]);
             }
@@ -288,9 +295,7 @@ impl SceneBvh {
         let origin_valid = origin.is_finite() && t_max > 0.0;
         let mut all = true;
         for l in 0..LANES {
-            let (x, y, z) = (dirs[0][l], dirs[1][l], dirs[2][l]);
-            let valid = x.is_finite() & y.is_finite() & z.is_finite() & ((x != 0.0) | (y != 0.0) | (z != 0.0));
-            hits.hit[l] &= valid & origin_valid;
+            hits.hit[l] &= dir_valid(dirs, l) & origin_valid;
             all &= hits.hit[l];
         }
         let block = self.flat_hit_block(0, &hits.t, &hits.x, &hits.y);
