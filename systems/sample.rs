@@ -107,8 +107,6 @@ pub fn update_light_sampler(
     // The sampler has caught up; clearing the flags is bookkeeping, not a change to the table.
     table.bypass_change_detection().clear_change_flags();
     report.record("light_sampler", true, what);
-    // The sampler has consumed the change log; clearing it is bookkeeping, not a table change.
-    table.bypass_change_detection().clear_change_flags();
 }
 
 /// Entries per point under `settings` for a table of `n_lights` lights.

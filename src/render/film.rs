@@ -11,8 +11,43 @@ pub struct Film {
     count: Vec<u32>,
 }
 
-/// Pixels whose samples [`Film::par_add_samples`] adds side by side.
+/// Pixels whose samples [`PixelRun::add_whole_pixels`] adds side by side.
 const PIXEL_GROUP: usize = 4;
+
+/// Consecutive pixels of a film, for one task to add their samples.
+pub struct PixelRun<'a> {
+    sum: &'a mut [DVec3],
+    count: &'a mut [u32],
+}
+
+impl PixelRun<'_> {
+    /// Adds `spp` samples to each pixel of the run: `rgb[j * spp..(j + 1) * spp]` to pixel j, in
+    /// sample order (as [`Film::add`] sample by sample). `rgb` holds every sample of the run.
+    pub fn add_whole_pixels(self, spp: usize, rgb: &[Vec3]) {
+        assert_eq!(rgb.len(), self.sum.len() * spp, "samples of whole pixels");
+        let groups = self.sum.chunks_mut(PIXEL_GROUP).zip(self.count.chunks_mut(PIXEL_GROUP));
+        for ((sums, counts), rgb) in groups.zip(rgb.chunks(PIXEL_GROUP * spp)) {
+            counts.iter_mut().for_each(|c| *c += spp as u32);
+            let Ok(sums) = <&mut [DVec3; PIXEL_GROUP]>::try_from(&mut *sums) else {
+                // The run's last few pixels.
+                for (sum, rgb) in sums.iter_mut().zip(rgb.chunks(spp)) {
+                    *sum = rgb.iter().fold(*sum, |s, c| s + c.as_dvec3());
+                }
+                continue;
+            };
+            // The group's pixels add their samples side by side: independent chains of
+            // additions overlap, where one pixel's chain waits on each addition. Each pixel
+            // still adds its own samples in order.
+            let mut acc = *sums;
+            for k in 0..spp {
+                for (j, acc) in acc.iter_mut().enumerate() {
+                    *acc += rgb[j * spp + k].as_dvec3();
+                }
+            }
+            *sums = acc;
+        }
+    }
+}
 
 impl Film {
     /// A black film.
@@ -46,22 +81,10 @@ impl Film {
         let groups = (sums.par_chunks_mut(PIXEL_GROUP), counts.par_chunks_mut(PIXEL_GROUP));
         groups.into_par_iter().enumerate().with_min_len(min_len).for_each(|(g, (sums, counts))| {
             let p0 = pixels.start + g * PIXEL_GROUP;
-            let whole = sums.len() == PIXEL_GROUP && p0 * spp >= first && (p0 + PIXEL_GROUP) * spp <= end;
-            if whole {
-                // The group's pixels add their samples side by side: independent chains of
-                // additions overlap, where one pixel's chain waits on each addition. Each pixel
-                // still adds its own samples in order.
-                let base = p0 * spp - first;
-                let mut acc = [DVec3::ZERO; PIXEL_GROUP];
-                acc.copy_from_slice(sums);
-                for k in 0..spp {
-                    for (j, acc) in acc.iter_mut().enumerate() {
-                        *acc += rgb[base + j * spp + k].as_dvec3();
-                    }
-                }
-                sums.copy_from_slice(&acc);
-                counts.iter_mut().for_each(|c| *c += spp as u32);
-                return;
+            let n = sums.len();
+            if p0 * spp >= first && (p0 + n) * spp <= end {
+                let samples = &rgb[p0 * spp - first..(p0 + n) * spp - first];
+                return PixelRun { sum: sums, count: counts }.add_whole_pixels(spp, samples);
             }
             for (j, (sum, count)) in sums.iter_mut().zip(counts).enumerate() {
                 let p = p0 + j;
@@ -72,6 +95,29 @@ impl Film {
                 }
             }
         });
+    }
+
+    /// The pixels of samples `first..first + len` as runs of `run_samples / spp` pixels, in
+    /// order, for tasks that each hold `run_samples` consecutive samples (the last run may be
+    /// shorter): None unless every run is whole pixels (`spp` divides `first`, `len` and
+    /// `run_samples`).
+    pub fn pixel_runs_mut(
+        &mut self,
+        first: usize,
+        len: usize,
+        spp: usize,
+        run_samples: usize,
+    ) -> Option<impl rayon::iter::IndexedParallelIterator<Item = PixelRun<'_>>> {
+        use rayon::prelude::*;
+        let spp = spp.max(1);
+        if first % spp != 0 || len % spp != 0 || run_samples % spp != 0 || run_samples == 0 {
+            return None;
+        }
+        let pixels = first / spp..(first + len) / spp;
+        let run = run_samples / spp;
+        let (sums, counts) = (&mut self.sum[pixels.clone()], &mut self.count[pixels]);
+        let runs = sums.par_chunks_mut(run).zip(counts.par_chunks_mut(run));
+        Some(runs.map(|(sum, count)| PixelRun { sum, count }))
     }
 
     /// The mean of each pixel's samples.
@@ -113,6 +159,32 @@ mod tests {
             }
             assert_eq!(serial.sum, parallel.sum, "spp {spp}");
             assert_eq!(serial.count, parallel.count, "spp {spp}");
+        }
+    }
+
+    /// Runs of whole pixels, each added by its own task (runs of 3 pixels, so the last group of
+    /// each run is short), give the sample-by-sample sums; runs that would split a pixel are refused.
+    #[test]
+    fn pixel_runs_add_exactly_like_single_samples() {
+        use rayon::prelude::*;
+        let mut rng = SplitMix64::new(11);
+        let (spp, pixels) = (4usize, 14usize);
+        let rgb: Vec<Vec3> =
+            (0..spp * pixels).map(|_| Vec3::new(rng.f32(), rng.f32() * 1e4, rng.f32() * 1e-4)).collect();
+        let (mut serial, mut runs) = (Film::new(pixels as u32, 1), Film::new(pixels as u32, 1));
+        for (k, &c) in rgb.iter().enumerate() {
+            serial.add((k / spp) as u32, c);
+        }
+        // Two batches: samples 0..24 and 24..56, in runs of 12 samples (3 pixels).
+        for (first, len) in [(0, 24), (24, 32)] {
+            let batch = &rgb[first..first + len];
+            let pixel_runs = runs.pixel_runs_mut(first, len, spp, 12).expect("whole pixels");
+            batch.par_chunks(12).zip(pixel_runs).for_each(|(rgb, run)| run.add_whole_pixels(spp, rgb));
+        }
+        assert_eq!(serial.sum, runs.sum);
+        assert_eq!(serial.count, runs.count);
+        for (first, len, run) in [(2, 24, 12), (0, 26, 12), (0, 24, 10), (0, 24, 0)] {
+            assert!(runs.pixel_runs_mut(first, len, spp, run).is_none(), "{first} {len} {run}");
         }
     }
 

@@ -242,42 +242,55 @@ fn render_on_pool(
         // their BSDF rays as they go (a pass of its own cost a parallel region per batch), and
         // write every contribution, so that column is only resized (no serial fill in steady
         // state).
-        contributions.resize(len, Vec3::ZERO);
-        let bsdf_rays: usize = if !spectral && !bsdf_sampling && !super::shade_lanes::turned_off() {
-            let chunks = contributions.par_chunks_mut(RAY_CHUNK).enumerate();
-            chunks
-                .map(|(c, out)| {
-                    crate::lanes::widest(
-                        #[inline(always)]
-                        || {
-                            let (first, mut b, mut traced) = (c * RAY_CHUNK, 0, 0);
-                            while b < out.len() {
-                                let end = (b + LANES).min(out.len());
-                                if !shade.shade_lanes(first + b, &mut out[b..end]) {
-                                    for (i, out) in out[b..end].iter_mut().enumerate() {
-                                        let (rgb, t) = shade_one(first + b + i);
-                                        (*out, traced) = (rgb, traced + t as usize);
-                                    }
-                                }
-                                b = end;
+        let lanes = !spectral && !bsdf_sampling && !super::shade_lanes::turned_off();
+        let shade_chunk = |c: usize, out: &mut [Vec3]| -> usize {
+            let first = c * RAY_CHUNK;
+            if !lanes {
+                let mut traced = 0;
+                for (i, out) in out.iter_mut().enumerate() {
+                    let (rgb, t) = shade_one(first + i);
+                    (*out, traced) = (rgb, traced + t as usize);
+                }
+                return traced;
+            }
+            crate::lanes::widest(
+                #[inline(always)]
+                || {
+                    let (mut b, mut traced) = (0, 0);
+                    while b < out.len() {
+                        let end = (b + LANES).min(out.len());
+                        if !shade.shade_lanes(first + b, &mut out[b..end]) {
+                            for (i, out) in out[b..end].iter_mut().enumerate() {
+                                let (rgb, t) = shade_one(first + b + i);
+                                (*out, traced) = (rgb, traced + t as usize);
                             }
-                            traced
-                        },
-                    )
+                        }
+                        b = end;
+                    }
+                    traced
+                },
+            )
+        };
+        contributions.resize(len, Vec3::ZERO);
+        let chunks = contributions.par_chunks_mut(RAY_CHUNK).enumerate();
+        // Sample k is sample k % spp of pixel k / spp (see `SampleRange`). Where each chunk holds
+        // whole pixels, the task that shaded it adds them to the film (while they are in cache,
+        // and without a parallel region of its own).
+        let spp = opts.spp as usize;
+        let bsdf_rays: usize = if let Some(runs) = film.pixel_runs_mut(first, len, spp, RAY_CHUNK) {
+            chunks
+                .zip(runs)
+                .map(|((c, out), run)| {
+                    let traced = shade_chunk(c, out);
+                    run.add_whole_pixels(spp, out);
+                    traced
                 })
                 .sum()
         } else {
-            let samples = contributions.par_iter_mut().enumerate().with_min_len(RAY_CHUNK);
-            samples
-                .map(|(k, out)| {
-                    let (rgb, t) = shade_one(k);
-                    *out = rgb;
-                    t as usize
-                })
-                .sum()
+            let traced = chunks.map(|(c, out)| shade_chunk(c, out)).sum();
+            film.par_add_samples(first, spp, &contributions);
+            traced
         };
-        // Sample k is sample k % spp of pixel k / spp (see `SampleRange`).
-        film.par_add_samples(first, opts.spp as usize, &contributions);
         stats.bsdf_rays += bsdf_rays as u64;
         stats.camera_samples += len as u64;
         first += len;
