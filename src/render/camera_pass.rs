@@ -38,8 +38,8 @@ pub(super) struct CameraColumns {
     pub(super) uv: [Vec<f32>; 2],
     pub(super) material: Vec<u32>,
     /// BVH instance that was hit; `u32::MAX` (as `SampleSurface::ESCAPED`) for rays that hit nothing.
+    /// (The primitive is the batch's `geometry` column.)
     pub(super) instance: Vec<u32>,
-    pub(super) primitive: Vec<u32>,
     /// See [`SampleSurface::flipped`].
     pub(super) flipped: Vec<bool>,
 }
@@ -49,7 +49,7 @@ impl CameraColumns {
         for column in self.dir.iter_mut().chain(&mut self.uv) {
             column.resize(n, 0.0);
         }
-        for column in [&mut self.material, &mut self.instance, &mut self.primitive] {
+        for column in [&mut self.material, &mut self.instance] {
             column.resize(n, 0);
         }
         self.flipped.resize(n, false);
@@ -67,14 +67,14 @@ impl CameraColumns {
         self.instance[k] == SampleSurface::ESCAPED.instance
     }
 
-    /// Sample `k`'s surface.
+    /// Sample `k`'s surface, on primitive `primitive` (the batch's `geometry[k].primitive`).
     #[inline(always)]
-    pub(super) fn surface(&self, k: usize) -> SampleSurface {
+    pub(super) fn surface(&self, k: usize, primitive: u32) -> SampleSurface {
         SampleSurface {
             uv: Vec2::new(self.uv[0][k], self.uv[1][k]),
             material: self.material[k],
             instance: self.instance[k],
-            primitive: self.primitive[k],
+            primitive,
             flipped: self.flipped[k],
         }
     }
@@ -165,7 +165,6 @@ impl HitSink for SlotWriter<'_, '_> {
         }
         *lanes::block_mut(chunk.material, b) = [hits.material; LANES];
         *lanes::block_mut(chunk.instance, b) = [hits.instance; LANES];
-        *lanes::block_mut(chunk.primitive, b) = [hits.id.primitive; LANES];
         *lanes::block_mut(chunk.flipped, b) = flipped;
     }
 }
@@ -183,7 +182,6 @@ struct BatchChunk<'a> {
     uv: [&'a mut [f32]; 2],
     material: &'a mut [u32],
     instance: &'a mut [u32],
-    primitive: &'a mut [u32],
     flipped: &'a mut [bool],
 }
 
@@ -195,8 +193,7 @@ impl BatchChunk<'_> {
             self.dir[a][i] = dir[a];
         }
         (self.uv[0][i], self.uv[1][i]) = surface.uv.into();
-        (self.material[i], self.instance[i], self.primitive[i]) =
-            (surface.material, surface.instance, surface.primitive);
+        (self.material[i], self.instance[i]) = (surface.material, surface.instance);
         self.flipped[i] = surface.flipped;
     }
 }
@@ -216,7 +213,7 @@ pub(super) fn trace_camera_rays(
     batch.set_len(n);
     batch.geometry.resize(n, GeometryId::NONE);
     columns.resize(n);
-    let CameraColumns { dir: [dx, dy, dz], uv: [u, v], material, instance, primitive, flipped } = columns;
+    let CameraColumns { dir: [dx, dy, dz], uv: [u, v], material, instance, flipped } = columns;
     let chunks = (
         (
             batch.position.par_chunks_mut(RAY_CHUNK),
@@ -235,13 +232,12 @@ pub(super) fn trace_camera_rays(
             v.par_chunks_mut(RAY_CHUNK),
             material.par_chunks_mut(RAY_CHUNK),
             instance.par_chunks_mut(RAY_CHUNK),
-            primitive.par_chunks_mut(RAY_CHUNK),
             flipped.par_chunks_mut(RAY_CHUNK),
         ),
     );
     chunks.into_par_iter().enumerate().for_each(|(c, (batch, columns))| {
         let (position, position_error, normal, shading_normal, pixel, sample, geometry) = batch;
-        let (dx, dy, dz, u, v, material, instance, primitive, flipped) = columns;
+        let (dx, dy, dz, u, v, material, instance, flipped) = columns;
         let mut chunk = BatchChunk {
             position,
             position_error,
@@ -254,7 +250,6 @@ pub(super) fn trace_camera_rays(
             uv: [u, v],
             material,
             instance,
-            primitive,
             flipped,
         };
         crate::lanes::widest(

@@ -363,7 +363,7 @@ impl ShadeContext<'_> {
         escape_ids: &[crate::light::LightId],
         bsdf_sampling: bool,
     ) -> (Vec3, bool) {
-        let surface = self.columns.surface(j);
+        let surface = self.columns.surface(j, self.batch.geometry[j].primitive);
         let (p, n) = (self.batch.position[j], self.batch.normal[j]);
         let query = wavelengths.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
         let wo = -self.columns.dir(j);

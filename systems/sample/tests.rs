@@ -45,7 +45,7 @@ fn slot_without_point_gets_no_light() {
 #[test]
 fn lane_path_matches_entry_by_entry() {
     use crate::shading::LightSamplerKind::{Bvh, Power, Uniform};
-    // (samples per point, sampler, lights: 6 of four kinds, 3 points, or 1 point)
+    // (samples per point, sampler, lights: 6 of four kinds and a disk light, 3 points, or 1 point)
     let runs =
         [(1, Power, 6), (3, Power, 6), (2, Uniform, 6), (1, Bvh, 6), (1, Power, 3), (1, Power, 1), (2, Uniform, 1)];
     for (samples_per_point, light_sampler, lights) in runs {
@@ -64,6 +64,10 @@ fn lane_path_matches_entry_by_entry() {
             world.spawn((spot, at(0.0, 3.0, 0.0).looking_to(Vec3::NEG_Y, Vec3::Z)));
             world.spawn((DistantLight { amount: Amount::Lux(1.0), ..Default::default() }, Transform::default()));
             world.spawn((UniformInfiniteLight::default(), Transform::default()));
+            // Samples on a surface: shadow rays that carry the light's normal.
+            let disk = crate::geometry::Disk { radius: 0.5, inner_radius: 0.0 };
+            let light = crate::light::AreaLight { two_sided: true, ..Default::default() };
+            world.spawn((light, disk, at(2.0, 3.0, -1.0)));
         }
         {
             let mut settings = world.resource_mut::<Settings>();
@@ -134,12 +138,18 @@ fn lane_path_matches_entry_by_entry() {
         assert_eq!((&lit.light, &lit.delta, &lit.occluded), (&light, &delta, &vec![false; m]));
         assert_eq!(rays.kind, ray_kind);
         assert_eq!(vec_bits(&rays.target), vec_bits(&target));
-        assert_eq!(vec_bits(&rays.target_normal), vec_bits(&target_normal));
+        // Normals are written for rays to a light's surface only.
+        let surface_normals = |normals: &[Vec3]| {
+            let surface = (0..m).filter(|&e| ray_kind[e] == ShadowTarget::Surface);
+            vec_bits(&surface.map(|e| normals[e]).collect::<Vec<_>>())
+        };
+        assert_eq!(surface_normals(&rays.target_normal), surface_normals(&target_normal));
         // The mix reached every path: point lights in lanes, other kinds, failed samples.
         assert!(light.iter().any(|l| l.kind == LightKind::Point));
         assert!(points_only || light.iter().any(|l| l.kind != LightKind::Point));
         assert!(ray_kind.contains(&ShadowTarget::Point));
         assert!(points_only || ray_kind.contains(&ShadowTarget::Infinity));
+        assert!(points_only || ray_kind.contains(&ShadowTarget::Surface));
         // (The power sampler's choices for the point at a light include that light.)
         let at_light = (0..m).any(|e| batch.pixel[e / k] == 0 && pdf[e] == 0.0 && light[e].kind == LightKind::Point);
         assert!(at_light || light_sampler != Power, "at the light");
