@@ -22,8 +22,9 @@ const NO_LIGHT: LightId = LightId { kind: LightKind::Point, row: 0 };
 /// Where an entry's shadow ray ends, if it has one.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ShadowTarget {
-    /// No ray: the sample failed or carries no light, its light casts no shadows, or shadows are
-    /// off.
+    /// No ray: the sample failed or carries no light, its light casts no shadows, shadows are
+    /// off, or nothing in the scene could block a ray from its point (the scene is one flat
+    /// primitive, and the point lies on it).
     #[default]
     None,
     /// A point with no surface (point-like lights): the ray stops just short of it.
@@ -44,10 +45,10 @@ pub struct ShadowRays {
     pub entries_per_point: usize,
     /// Where each entry's ray ends (`None`: the entry has no ray).
     pub kind: Vec<ShadowTarget>,
-    /// Segment end (the light point); zero for entries without a ray.
+    /// Segment end (the light point), written for entries with a ray only: other entries keep
+    /// what an earlier batch left (each column not written spared 3-6% of a point-lit render).
     pub target: Vec<Vec3>,
-    /// The light's surface normal at the target, written for `Surface` entries only: other
-    /// entries keep what an earlier batch left (not writing it spared 3% of a point-lit render).
+    /// The light's surface normal at the target, written for `Surface` entries only.
     pub target_normal: Vec<Vec3>,
     /// Answers, filled by the trace step (false for entries without a ray).
     pub occluded: Vec<bool>,
@@ -126,6 +127,7 @@ pub fn sample_direct_lighting(
     table: Res<LightTable>,
     sampler: Res<LightSampler>,
     settings: Res<Settings>,
+    bvh: Res<crate::geometry::SceneBvh>,
     mut out: ResMut<DirectLighting>,
     mut rays: ResMut<ShadowRays>,
 ) {
@@ -178,8 +180,14 @@ pub fn sample_direct_lighting(
         .into_par_iter()
         .enumerate()
         .map(|(c, (radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal))| {
-            let mut cols = EntryColumns { radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal };
             let first_entry = c * chunk;
+            // Rays from points on the scene's one flat primitive can meet nothing: none is cast.
+            // (Points pushed without their geometry may lie anywhere.)
+            let points = first_entry / k.max(1)..(first_entry + radiance.len()).div_ceil(k.max(1));
+            let free = batch.geometry.get(points).is_some_and(|g| bvh.blocks_nothing_from(g));
+            let shadows = settings.shadows && !free;
+            let mut cols =
+                EntryColumns { radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal, shadows };
             if lanes {
                 crate::lanes::widest(
                     #[inline(always)]
@@ -298,7 +306,6 @@ impl Sampling<'_> {
         cols.light[e] = light;
         cols.occluded[e] = false;
         cols.ray_kind[e] = ShadowTarget::None;
-        cols.target[e] = Vec3::ZERO;
         let Some((ls, pmf, flags)) = sampled else {
             (cols.radiance[e], cols.wi[e], cols.pdf[e], cols.delta[e]) =
                 (SampledSpectrum::default(), Vec3::ZERO, 0.0, false);
@@ -306,7 +313,7 @@ impl Sampling<'_> {
         };
         let pdf = ls.pdf * pmf;
         (cols.radiance[e], cols.wi[e], cols.pdf[e], cols.delta[e]) = (ls.radiance, ls.wi, pdf, flags.is_delta());
-        if !self.wants_shadow_ray(pdf, &ls.radiance, light) {
+        if !self.wants_shadow_ray(cols.shadows, pdf, &ls.radiance, light) {
             return false;
         }
         cols.ray_kind[e] = if flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION) {
@@ -323,10 +330,11 @@ impl Sampling<'_> {
         true
     }
 
-    /// Whether a sample of `light` with this pdf and radiance gets a shadow ray.
+    /// Whether a sample of `light` with this pdf and radiance gets a shadow ray (`shadows`: from
+    /// a chunk whose rays are cast at all, `EntryColumns::shadows`).
     #[inline(always)]
-    fn wants_shadow_ray(&self, pdf: f32, radiance: &SampledSpectrum, light: LightId) -> bool {
-        self.settings.shadows && pdf > 0.0 && radiance.0.iter().any(|&v| v > 0.0) && self.table.casts_shadows(light)
+    fn wants_shadow_ray(&self, shadows: bool, pdf: f32, radiance: &SampledSpectrum, light: LightId) -> bool {
+        shadows && pdf > 0.0 && radiance.0.iter().any(|&v| v > 0.0) && self.table.casts_shadows(light)
     }
 
     /// [`Self::write`] of lane `l` of `lit`, point light `light` chosen with `pmf`, without
@@ -348,10 +356,11 @@ impl Sampling<'_> {
         (cols.light[e], cols.occluded[e]) = (light, false);
         (cols.radiance[e], cols.wi[e], cols.pdf[e]) = (radiance, v(&lit.wi), pmf);
         cols.delta[e] = LightKind::Point.flags().is_delta();
-        let ray = self.wants_shadow_ray(pmf, &radiance, light);
+        let ray = self.wants_shadow_ray(cols.shadows, pmf, &radiance, light);
         cols.ray_kind[e] = if ray { ShadowTarget::Point } else { ShadowTarget::None };
-        let target = if ray { v(&lit.target) } else { Vec3::ZERO };
-        cols.target[e] = target;
+        if ray {
+            cols.target[e] = v(&lit.target);
+        }
         ray
     }
 
@@ -368,7 +377,7 @@ impl Sampling<'_> {
     ) -> usize {
         // Each column is built whole in lane arrays and stored as a block: one store loop over
         // ten columns stayed scalar, and its stores took about 40% of the sampling pass.
-        let shadows = self.settings.shadows;
+        let shadows = cols.shadows;
         // Selects as bit masks (all ones or zero): selects on arrays of bools compile to
         // per-lane mask shuffling.
         let (mut keep, mut aim, mut pdf) = ([0u32; LANES], [0u32; LANES], [0.0f32; LANES]);
@@ -381,12 +390,11 @@ impl Sampling<'_> {
             // `wants_shadow_ray`, with `&` for `&&` (an invalid lane has a zero pdf).
             aim[l] = 0u32.wrapping_sub((shadows & (pdf[l] > 0.0) & some & casts[l]) as u32);
         }
-        let (mut rgb, mut wi, mut target) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
+        let (mut rgb, mut wi) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
         for a in 0..3 {
             for l in 0..LANES {
                 rgb[a][l] = pick(lit.radiance[a][l], keep[l]);
                 wi[a][l] = pick(lit.wi[a][l], keep[l]);
-                target[a][l] = pick(lit.target[a][l], aim[l]);
             }
         }
         let (mut ray_kind, mut traced) = ([ShadowTarget::None; LANES], 0);
@@ -396,7 +404,10 @@ impl Sampling<'_> {
         }
         lanes::store_rgb_spectra(&rgb, lanes::block_mut(cols.radiance, e));
         lanes::store_vec3s(&wi, lanes::block_mut(cols.wi, e));
-        lanes::store_vec3s(&target, lanes::block_mut(cols.target, e));
+        if traced > 0 {
+            // Lanes without a ray may hold any target.
+            lanes::store_vec3s(&lit.target, lanes::block_mut(cols.target, e));
+        }
         *lanes::block_mut(cols.pdf, e) = pdf;
         *lanes::block_mut(cols.light, e) = *light;
         *lanes::block_mut(cols.delta, e) = lit.valid;
@@ -507,6 +518,9 @@ struct EntryColumns<'a> {
     ray_kind: &'a mut [ShadowTarget],
     target: &'a mut [Vec3],
     target_normal: &'a mut [Vec3],
+    /// Whether the chunk's entries may get shadow rays: shadows are on, and something in the
+    /// scene could block rays from its points.
+    shadows: bool,
 }
 
 impl EntryColumns<'_> {

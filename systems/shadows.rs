@@ -23,7 +23,10 @@ pub fn plan_shadows(
     let (run, why) = if !settings.shadows {
         (false, "shadows are off in Settings".to_string())
     } else if rays.is_empty() {
-        (false, "no shadow rays (no samples, or every light has casts_shadows = false)".to_string())
+        (
+            false,
+            "no shadow rays (no samples, every light has casts_shadows = false, or nothing can block them)".to_string(),
+        )
     } else if bvh.primitive_count() == 0 {
         (false, "no occluding geometry".to_string())
     } else {

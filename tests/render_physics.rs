@@ -48,6 +48,22 @@ fn point_light_over_lambertian_floor_gives_rho_over_pi_i_over_h2() {
     }
 }
 
+/// Only what the scene calls for: over a floor alone, nothing could block a shadow ray, so the
+/// light system casts none; a ball off to the side brings them back. The pixel is the same.
+#[test]
+fn floor_alone_casts_no_shadow_rays_and_an_occluder_brings_them_back() {
+    let (mut world, mut schedule) = floor_scene(ColorMode::Rgb, 0.5);
+    world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.0, 2.0, 0.0))));
+    let opts = RenderOptions { width: 5, height: 5, spp: 4, strategy: Strategy::Mis };
+    let (alone, stats) = render(&mut world, &mut schedule, &opts, |_| {});
+    assert_eq!(stats.shadow_rays, 0);
+    let ball = Transform::from_translation(Vec3::new(10.0, 1.0, 10.0));
+    world.spawn((kelvin::geometry::Sphere { radius: 0.5 }, ball, Material::lambertian(Vec3::ONE)));
+    let (with_ball, stats) = render(&mut world, &mut schedule, &opts, |_| {});
+    assert_eq!(stats.shadow_rays, stats.camera_samples);
+    assert_eq!(alone.pixel(2, 2), with_ball.pixel(2, 2));
+}
+
 #[test]
 fn directional_light_gives_rho_over_pi_e_cos_theta() {
     let (rho, e) = (0.8f32, 1000.0f32);

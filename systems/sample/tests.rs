@@ -126,6 +126,7 @@ fn lane_path_matches_entry_by_entry() {
             ray_kind: &mut ray_kind,
             target: &mut target,
             target_normal: &mut target_normal,
+            shadows: settings.shadows,
         };
         let traced: usize = (0..m).map(|e| sampling.entry(0, e, &mut cols) as usize).sum();
         assert_eq!(traced, rays.len());
@@ -137,13 +138,15 @@ fn lane_path_matches_entry_by_entry() {
         assert_eq!(bits(&lit.pdf), bits(&pdf));
         assert_eq!((&lit.light, &lit.delta, &lit.occluded), (&light, &delta, &vec![false; m]));
         assert_eq!(rays.kind, ray_kind);
-        assert_eq!(vec_bits(&rays.target), vec_bits(&target));
-        // Normals are written for rays to a light's surface only.
-        let surface_normals = |normals: &[Vec3]| {
-            let surface = (0..m).filter(|&e| ray_kind[e] == ShadowTarget::Surface);
-            vec_bits(&surface.map(|e| normals[e]).collect::<Vec<_>>())
+        // Targets are written for entries with rays only, normals for rays to a light's surface.
+        let written = |column: &[Vec3], kinds: &[ShadowTarget]| {
+            let entries = (0..m).filter(|&e| kinds.contains(&ray_kind[e]));
+            vec_bits(&entries.map(|e| column[e]).collect::<Vec<_>>())
         };
-        assert_eq!(surface_normals(&rays.target_normal), surface_normals(&target_normal));
+        let rays_of_any_kind = [ShadowTarget::Point, ShadowTarget::Surface, ShadowTarget::Infinity];
+        assert_eq!(written(&rays.target, &rays_of_any_kind), written(&target, &rays_of_any_kind));
+        let surface = [ShadowTarget::Surface];
+        assert_eq!(written(&rays.target_normal, &surface), written(&target_normal, &surface));
         // The mix reached every path: point lights in lanes, other kinds, failed samples.
         assert!(light.iter().any(|l| l.kind == LightKind::Point));
         assert!(points_only || light.iter().any(|l| l.kind != LightKind::Point));
