@@ -130,11 +130,12 @@ impl ShadingBatch {
         self.wavelengths.clear();
         self.geometry.clear();
     }
-    /// Sizes every column but `wavelengths` and `geometry` (which it empties) to `n` points,
-    /// keeping whatever values they held: for a caller about to write every slot of them.
+    /// Sizes every column but `wavelengths` (which it empties) to `n` points, `geometry` included,
+    /// keeping whatever values they held (new slots of `geometry` are `GeometryId::NONE`): for a
+    /// caller about to write every slot of them.
     pub fn set_len(&mut self, n: usize) {
         self.wavelengths.clear();
-        self.geometry.clear();
+        self.geometry.resize(n, GeometryId::NONE);
         self.position.resize(n, Vec3::ZERO);
         self.position_error.resize(n, Vec3::ZERO);
         self.normal.resize(n, Vec3::ZERO);

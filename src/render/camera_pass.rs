@@ -211,7 +211,6 @@ pub(super) fn trace_camera_rays(
 ) {
     let n = range.len;
     batch.set_len(n);
-    batch.geometry.resize(n, GeometryId::NONE);
     columns.resize(n);
     let CameraColumns { dir: [dx, dy, dz], uv: [u, v], material, instance, flipped } = columns;
     let chunks = (
