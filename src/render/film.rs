@@ -110,7 +110,8 @@ impl Film {
     ) -> Option<impl rayon::iter::IndexedParallelIterator<Item = PixelRun<'_>>> {
         use rayon::prelude::*;
         let spp = spp.max(1);
-        if first % spp != 0 || len % spp != 0 || run_samples % spp != 0 || run_samples == 0 {
+        let whole = |samples: usize| samples.is_multiple_of(spp);
+        if !whole(first) || !whole(len) || !whole(run_samples) || run_samples == 0 {
             return None;
         }
         let pixels = first / spp..(first + len) / spp;
