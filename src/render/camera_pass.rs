@@ -30,7 +30,8 @@ impl SampleSurface {
 
 /// The renderer's per-sample columns, indexed like the `ShadingBatch`: one column per field and
 /// axis, so that the camera pass stores and the shading pass loads whole lanes (a column of
-/// `SampleSurface` records was built lane by lane and interleaved).
+/// `SampleSurface` records was built lane by lane and interleaved). The primitive hit is the
+/// batch's own `geometry` column.
 #[derive(Default)]
 pub(super) struct CameraColumns {
     /// Unit direction of the camera ray, x, y and z.
@@ -38,7 +39,6 @@ pub(super) struct CameraColumns {
     pub(super) uv: [Vec<f32>; 2],
     pub(super) material: Vec<u32>,
     /// BVH instance that was hit; `u32::MAX` (as `SampleSurface::ESCAPED`) for rays that hit nothing.
-    /// (The primitive is the batch's `geometry` column.)
     pub(super) instance: Vec<u32>,
     /// See [`SampleSurface::flipped`].
     pub(super) flipped: Vec<bool>,
