@@ -255,16 +255,16 @@ impl PointColumns {
                 }
             }
         }
-        let (mut r, mut inv_r2, mut valid) = ([0.0f32; LANES], [0.0f32; LANES], [false; LANES]);
+        let (mut inv_r, mut inv_r2, mut valid) = ([0.0f32; LANES], [0.0f32; LANES], [false; LANES]);
         for l in 0..LANES {
             let r2 = d[0][l] * d[0][l] + d[1][l] * d[1][l] + d[2][l] * d[2][l];
-            (r[l], inv_r2[l]) = (r2.sqrt(), 1.0 / r2);
+            (inv_r[l], inv_r2[l]) = (1.0 / r2.sqrt(), 1.0 / r2);
             valid[l] = r2 > 0.0 && r2.is_finite() && inv_r2[l].is_finite();
         }
         let (mut wi, mut radiance) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
         for a in 0..3 {
             for l in 0..LANES {
-                wi[a][l] = d[a][l] / r[l];
+                wi[a][l] = d[a][l] * inv_r[l];
                 radiance[a][l] = rgb[a][l] * inv_r2[l];
                 valid[l] &= radiance[a][l].is_finite();
             }
