@@ -444,9 +444,16 @@ impl Sampling<'_> {
             // One entry per point: entries are points, read as contiguous runs (as
             // `point_and_stream`, whose slot and sample offset are then 0).
             let i = first + e;
-            let (pixels, samples) = (&self.batch.pixel[i..i + LANES], &self.batch.sample[i..i + LANES]);
-            for l in 0..LANES {
-                (point[l], pixel[l], stream[l]) = (i + l, pixels[l], samples[l] * self.spp);
+            for (l, point) in point.iter_mut().enumerate() {
+                *point = i + l;
+            }
+            // The random streams' keys, unless no number is drawn: every point takes the one
+            // point light (see below), whose samples need no u.
+            if self.only_choice.is_none_or(|(id, _)| id.kind != LightKind::Point) {
+                let (pixels, samples) = (&self.batch.pixel[i..i + LANES], &self.batch.sample[i..i + LANES]);
+                for l in 0..LANES {
+                    (pixel[l], stream[l]) = (pixels[l], samples[l] * self.spp);
+                }
             }
             p = lanes::columns(lanes::block(&self.batch.position, i));
         } else {
