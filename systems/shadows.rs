@@ -78,12 +78,8 @@ pub fn trace_shadow_rays(
     let chunks = r.occluded.par_chunks_mut(RAY_CHUNK).enumerate();
     r.blocked = chunks
         .map(|(c, chunk)| {
-            let whole = c * RAY_CHUNK..c * RAY_CHUNK + chunk.len();
-            if k == 1 && batch.geometry.get(whole).is_some_and(|g| bvh.blocks_nothing_from(g)) {
-                // Every ray of the chunk leaves the scene's one flat primitive: nothing to build.
-                chunk.fill(false);
-                return 0;
-            }
+            // (Whole chunks of points on the scene's one flat primitive cast no rays: the sampling
+            // pass leaves them out. Blocks of such points among others are skipped below.)
             crate::lanes::widest(
                 #[inline(always)]
                 || {
