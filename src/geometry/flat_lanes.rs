@@ -7,8 +7,9 @@
 use glam::{Vec2, Vec3};
 
 use super::bvh::{GeometryId, NO_SHAPE, SceneBvh};
+use super::ray::gamma;
 use super::ray::{Lanes3, Ray};
-use super::shapes::{PlacedShape, Shape, dot_row, flat_hit_from_rows};
+use super::shapes::{PlacedShape, Shape, dot_row, flat_hit_f32_from_rows, flat_hit_from_rows};
 use super::visibility::{FEW_PRIMITIVES, Hit};
 use crate::lanes::LANES;
 
@@ -91,29 +92,90 @@ fn dir_valid(dir: &Lanes3, l: usize) -> bool {
 }
 
 /// The flat-shape hit test (`PlacedShape::local_hit`) of every lane over (0, t_max[l]]: hit
-/// flags, t, object-space x and y. Each shape kind gets its own loop, so that no `match` stops it vectorising.
+/// flags, t, object-space x and y.
 #[inline(always)]
 fn flat_hits(shape: &PlacedShape, r: &RayLanes, t_max: &[f32; LANES]) -> FlatHits {
     // One step per loop over all lanes, so that LLVM vectorises across lanes.
-    let (mut o_row, mut d_row) = ([[0.0f64; LANES]; 3], [[0.0f64; LANES]; 3]);
+    let (mut o_row, mut d) = ([[0.0f64; LANES]; 3], [[0.0f32; LANES]; 3]);
     for i in 0..3 {
         for l in 0..LANES {
-            (o_row[i][l], d_row[i][l]) = shape.object_row(i, r.origin(l), r.dir(l));
+            (o_row[i][l], d[i][l]) = (shape.object_point_row(i, r.origin(l)), r.d[i][l] as f32);
         }
     }
-    flat_hits_of_rows(shape, t_max, &o_row, &d_row)
+    let mut hits = flat_hits_f32(shape, t_max, &o_row, &d);
+    hits.settle(|| {
+        let mut d_row = [[0.0f64; LANES]; 3];
+        for (i, row) in d_row.iter_mut().enumerate() {
+            for l in 0..LANES {
+                row[l] = shape.object_dir_row(i, r.dir(l));
+            }
+        }
+        flat_hits_of_rows(shape, t_max, &o_row, &d_row)
+    });
+    hits
 }
 
-/// [`flat_hits`] of the rays whose object-space rows `i` are `o_row[i]` (origins) and `d_row[i]`
-/// (directions).
+/// The f32 test of [`flat_hits`] (`PlacedShape::flat_hit`'s first step) for rays whose origins'
+/// object-space rows are `o_row` (f64) and whose world directions are `d`. Each shape kind gets
+/// its own loop, so that no `match` stops it vectorising.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops on purpose (as `occluded_lanes`)
+fn flat_hits_f32(shape: &PlacedShape, t_max: &[f32; LANES], o_row: &Rows, d: &[[f32; LANES]; 3]) -> FlatHits {
+    let (mut o32, mut d_row, mut dz_error) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3], [0.0f32; LANES]);
+    for (o32, o_row) in o32.iter_mut().zip(o_row) {
+        for l in 0..LANES {
+            o32[l] = o_row[l] as f32;
+        }
+    }
+    for (i, row) in d_row.iter_mut().enumerate() {
+        // The matrix row is read once per row, not per lane (read per lane, loops stayed scalar).
+        let m = shape.object_matrix_row32(i);
+        for l in 0..LANES {
+            row[l] = m[0] * d[0][l] + m[1] * d[1][l] + m[2] * d[2][l];
+        }
+    }
+    // `PlacedShape::object_dir_row32`'s bound, in the same operations.
+    let a = shape.abs_object_row_z32();
+    for l in 0..LANES {
+        dz_error[l] = gamma(6) * (a[0] * d[0][l].abs() + a[1] * d[1][l].abs() + a[2] * d[2][l].abs());
+    }
+    #[inline(always)]
+    fn each(
+        t_max: &[f32; LANES],
+        o: &[[f32; LANES]; 3],
+        d: &[[f32; LANES]; 3],
+        dz_error: &[f32; LANES],
+        contains: impl Fn(f32, f32) -> bool,
+    ) -> FlatHits {
+        let mut out = FlatHits::default();
+        for l in 0..LANES {
+            let rows = [(o[0][l], d[0][l]), (o[1][l], d[1][l]), (o[2][l], d[2][l])];
+            (out.sure[l], out.hit[l], out.t[l], out.x[l], out.y[l]) =
+                flat_hit_f32_from_rows(rows, dz_error[l], t_max[l], &contains);
+        }
+        out
+    }
+    match shape.shape {
+        Shape::Rectangle(rect) => {
+            each(t_max, &o32, &d_row, &dz_error, |x, y| Shape::Rectangle(rect).flat_contains32(x, y))
+        }
+        Shape::Disk(disk) => each(t_max, &o32, &d_row, &dz_error, |x, y| Shape::Disk(disk).flat_contains32(x, y)),
+        Shape::Sphere(_) => FlatHits::default(),
+    }
+}
+
+/// The f64 test of [`flat_hits`] for the rays whose object-space rows `i` are `o_row[i]` (origins)
+/// and `d_row[i]` (directions), x and y rounded to f32 (as `PlacedShape::flat_hit`). Every answer
+/// is sure.
 #[inline(always)]
 fn flat_hits_of_rows(shape: &PlacedShape, t_max: &[f32; LANES], o_row: &Rows, d_row: &Rows) -> FlatHits {
     #[inline(always)]
     fn each(t_max: &[f32; LANES], o_row: &Rows, d_row: &Rows, contains: impl Fn(f64, f64) -> bool) -> FlatHits {
-        let mut out = FlatHits::default();
+        let mut out = FlatHits { sure: [true; LANES], ..FlatHits::default() };
         for l in 0..LANES {
             let rows = [(o_row[0][l], d_row[0][l]), (o_row[1][l], d_row[1][l]), (o_row[2][l], d_row[2][l])];
-            (out.hit[l], out.t[l], out.x[l], out.y[l]) = flat_hit_from_rows(rows, t_max[l], &contains);
+            let (hit, t, x, y) = flat_hit_from_rows(rows, t_max[l], &contains);
+            (out.hit[l], out.t[l], out.x[l], out.y[l]) = (hit, t, x as f32, y as f32);
         }
         out
     }
@@ -127,22 +189,42 @@ fn flat_hits_of_rows(shape: &PlacedShape, t_max: &[f32; LANES], o_row: &Rows, d_
 /// Object-space rows of `LANES` rays, one array of lanes per axis.
 type Rows = [[f64; LANES]; 3];
 
-/// What [`flat_hits`] finds per lane: whether the ray hits, t, and the object-space x and y.
-/// 64-byte aligned, as `RayLanes` is (a tuple of these arrays had them straddle cache lines).
+/// What [`flat_hits`] finds per lane: whether the f32 test was sure, whether the ray hits, t, and
+/// the object-space x and y. 64-byte aligned, as `RayLanes` is (a tuple of these arrays had them
+/// straddle cache lines).
 #[derive(Clone, Copy, Default)]
 #[repr(C, align(64))]
 struct FlatHits {
-    x: [f64; LANES],
-    y: [f64; LANES],
+    x: [f32; LANES],
+    y: [f32; LANES],
     t: [f32; LANES],
     hit: [bool; LANES],
+    sure: [bool; LANES],
+}
+
+impl FlatHits {
+    /// Takes the answers of `exact` (the f64 test) for the lanes whose f32 answer is not sure;
+    /// `exact` runs only if there are any.
+    #[inline(always)]
+    fn settle(&mut self, exact: impl FnOnce() -> FlatHits) {
+        // A fold without early exit, so that it stays in lanes.
+        if self.sure.iter().fold(true, |all, &s| all & s) {
+            return;
+        }
+        let e = exact();
+        for l in 0..LANES {
+            if !self.sure[l] {
+                (self.hit[l], self.t[l], self.x[l], self.y[l], self.sure[l]) = (e.hit[l], e.t[l], e.x[l], e.y[l], true);
+            }
+        }
+    }
 }
 
 /// [`Shape::flat_uv`] of every lane, one loop per shape kind (as [`flat_hits`]).
 #[inline(always)]
-fn flat_uvs(shape: &Shape, x: &[f64; LANES], y: &[f64; LANES]) -> [[f32; LANES]; 2] {
+fn flat_uvs(shape: &Shape, x: &[f32; LANES], y: &[f32; LANES]) -> [[f32; LANES]; 2] {
     #[inline(always)]
-    fn each(x: &[f64; LANES], y: &[f64; LANES], uv: impl Fn(f64, f64) -> Vec2) -> [[f32; LANES]; 2] {
+    fn each(x: &[f32; LANES], y: &[f32; LANES], uv: impl Fn(f32, f32) -> Vec2) -> [[f32; LANES]; 2] {
         let mut out = [[0.0; LANES]; 2];
         for l in 0..LANES {
             (out[0][l], out[1][l]) = uv(x[l], y[l]).into();
@@ -237,7 +319,7 @@ impl SceneBvh {
         }
         // As `closest_hit_each`: primitives in input order; a later one wins only when nearer.
         let (mut best_t, mut best_slot) = (r.t_max, [NO_SLOT; LANES]);
-        let (mut best_x, mut best_y) = ([0.0f64; LANES], [0.0f64; LANES]);
+        let (mut best_x, mut best_y) = ([0.0f32; LANES], [0.0f32; LANES]);
         for prim in 0..self.leaf.len() as u32 {
             let slot = self.slot_of(prim);
             let hits = flat_hits(&self.shapes[self.leaf[slot].shape as usize], r, &best_t);
@@ -281,16 +363,19 @@ impl SceneBvh {
         let shape = &self.shapes[self.leaf[0].shape as usize];
         let o = origin.as_dvec3().to_array();
         let o_row = [0, 1, 2].map(|i| [shape.object_point_row(i, o); LANES]);
-        let d = dirs.map(|row| row.map(f64::from));
-        // The matrix row is read once per row, not per lane: read per lane, the loop stayed scalar.
-        let mut d_row = [[0.0f64; LANES]; 3];
-        for (i, row) in d_row.iter_mut().enumerate() {
-            let m = shape.object_matrix_row(i);
-            for l in 0..LANES {
-                row[l] = dot_row(m, [d[0][l], d[1][l], d[2][l]]);
+        let mut hits = flat_hits_f32(shape, &[t_max; LANES], &o_row, dirs);
+        hits.settle(|| {
+            let d = dirs.map(|row| row.map(f64::from));
+            // The matrix row is read once per row, not per lane: read per lane, the loop stayed scalar.
+            let mut d_row = [[0.0f64; LANES]; 3];
+            for (i, row) in d_row.iter_mut().enumerate() {
+                let m = shape.object_matrix_row(i);
+                for l in 0..LANES {
+                    row[l] = dot_row(m, [d[0][l], d[1][l], d[2][l]]);
+                }
             }
-        }
-        let mut hits = flat_hits_of_rows(shape, &[t_max; LANES], &o_row, &d_row);
+            flat_hits_of_rows(shape, &[t_max; LANES], &o_row, &d_row)
+        });
         // `Ray::is_valid` of each lane; a fold without early exit, so that it stays in lanes.
         let origin_valid = origin.is_finite() && t_max > 0.0;
         let mut all = true;
@@ -309,7 +394,7 @@ impl SceneBvh {
 
     /// The hit records of every lane as hits on leaf `slot` at flat coordinates (x, y).
     #[inline(always)]
-    fn flat_hit_block(&self, slot: usize, t: &[f32; LANES], x: &[f64; LANES], y: &[f64; LANES]) -> FlatHitBlock {
+    fn flat_hit_block(&self, slot: usize, t: &[f32; LANES], x: &[f32; LANES], y: &[f32; LANES]) -> FlatHitBlock {
         let shape = &self.shapes[self.leaf[slot].shape as usize];
         let (mut p, mut p_error) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
         for a in 0..3 {

@@ -229,17 +229,7 @@ fn step_toward(v: f32, towards: f32) -> f32 {
 /// 2^-40 * abs_terms, which dwarfs the f64 roundings (a few 2^-53 each).
 pub fn f64_point_error(p64: DVec3, abs_terms: DVec3) -> Vec3 {
     let e = p64.abs() * 2f64.powi(-23) + abs_terms * 2f64.powi(-40);
-    // `f64_coordinate_error` per axis (for lane loops): the same operations.
     (e * (1.0 + 2f64.powi(-20)) + DVec3::splat(f32::MIN_POSITIVE as f64)).as_vec3()
-}
-
-/// [`f64_point_error`] of one coordinate (the same operations).
-#[inline(always)]
-pub(crate) fn f64_coordinate_error(p64: f64, abs_terms: f64) -> f32 {
-    let e = p64.abs() * 2f64.powi(-23) + abs_terms * 2f64.powi(-40);
-    // The f32 copy must still bound: raise by 2^-20 relative, more than rounding to nearest can
-    // take off (2^-24), plus the smallest normal f32 for bounds in the subnormal range.
-    (e * (1.0 + 2f64.powi(-20)) + f32::MIN_POSITIVE as f64) as f32
 }
 
 /// The bound pbrt-v4 uses for a point interpolated from triangle vertices with barycentrics

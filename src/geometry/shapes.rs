@@ -17,8 +17,12 @@ use glam::{DAffine3, DMat3, DVec3, Vec2, Vec3};
 use std::f64::consts::{PI, TAU};
 
 use super::GeometryError;
-use super::ray::{Ray, SurfacePoint, f64_coordinate_error, f64_point_error};
+use super::ray::{Ray, SurfacePoint, f64_point_error, gamma};
 use super::transform::Transform;
+use flat::FlatMap;
+pub(super) use flat::{dot_row, flat_hit_f32_from_rows, flat_hit_from_rows};
+
+mod flat;
 
 /// A sphere centred on the entity's origin. Poles on local +-Y.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
@@ -64,6 +68,8 @@ pub struct PlacedShape {
     normal_matrix: DMat3,
     /// Flat shapes: their world normal (the front, +Z), the same for every point.
     pub(super) flat_normal: Option<Vec3>,
+    /// to_world in f32 for the points of flat-shape hits.
+    flat_map: FlatMap,
 }
 
 /// A ray-shape hit in world space.
@@ -190,20 +196,32 @@ impl Shape {
         }
     }
 
+    /// [`Self::flat_contains`] in f32, for the f32 hit test.
+    #[inline(always)]
+    pub(crate) fn flat_contains32(&self, x: f32, y: f32) -> bool {
+        match *self {
+            Shape::Disk(disk) => {
+                let rho2 = x * x + y * y;
+                rho2 <= disk.radius * disk.radius && rho2 >= disk.inner_radius * disk.inner_radius
+            }
+            Shape::Rectangle(rect) => x.abs() <= rect.half_size.x && y.abs() <= rect.half_size.y,
+            Shape::Sphere(_) => false,
+        }
+    }
+
     /// The uv of object-space point (x, y, 0) on a flat shape (see [`ShapeHit::uv`]).
     #[inline(always)]
-    pub(crate) fn flat_uv(&self, x: f64, y: f64) -> Vec2 {
+    pub(crate) fn flat_uv(&self, x: f32, y: f32) -> Vec2 {
         match *self {
             Shape::Disk(d) => {
-                let (r, ri) = (d.radius as f64, d.inner_radius as f64);
                 let rho = (x * x + y * y).sqrt();
-                let phi = y.atan2(x).rem_euclid(TAU);
-                Vec2::new((phi / TAU) as f32, ((r - rho) / (r - ri)) as f32)
+                let phi = y.atan2(x).rem_euclid(std::f32::consts::TAU);
+                Vec2::new(phi / std::f32::consts::TAU, (d.radius - rho) / (d.radius - d.inner_radius))
             }
             Shape::Rectangle(rect) => {
                 // Reciprocals, which lane loops hoist: two divisions per hit cost ~5% of a plane render.
-                let inv = rect.half_size.as_dvec2().recip();
-                Vec2::new((0.5 * (x * inv.x + 1.0)) as f32, (0.5 * (y * inv.y + 1.0)) as f32)
+                let inv = rect.half_size.recip();
+                Vec2::new(0.5 * (x * inv.x + 1.0), 0.5 * (y * inv.y + 1.0))
             }
             Shape::Sphere(_) => Vec2::ZERO,
         }
@@ -219,7 +237,9 @@ impl Shape {
                 let theta = n.y.clamp(-1.0, 1.0).acos();
                 (n * r, n, Vec2::new((phi / TAU) as f32, (theta / PI) as f32))
             }
-            Shape::Disk(_) | Shape::Rectangle(_) => (DVec3::new(p.x, p.y, 0.0), DVec3::Z, self.flat_uv(p.x, p.y)),
+            Shape::Disk(_) | Shape::Rectangle(_) => {
+                (DVec3::new(p.x, p.y, 0.0), DVec3::Z, self.flat_uv(p.x as f32, p.y as f32))
+            }
         }
     }
 
@@ -281,6 +301,7 @@ impl PlacedShape {
             abs_translation: to_world.translation.abs(),
             normal_matrix,
             flat_normal: shape.is_flat().then(|| (normal_matrix * DVec3::Z).normalize().as_vec3()),
+            flat_map: FlatMap::new(&to_world, &to_object),
         };
         let (lo, hi) = placed.world_bounds();
         if !(lo.is_finite() && hi.is_finite()) {
@@ -338,6 +359,14 @@ impl PlacedShape {
 
     /// The hit at parameter `t` and object-space point `p` that [`Self::local_hit`] returned.
     pub(crate) fn hit_at_local(&self, t: f32, p: DVec3) -> ShapeHit {
+        if let Some(n) = self.flat_normal {
+            let (x, y) = (p.x as f32, p.y as f32);
+            let (mut p, mut p_error) = (Vec3::ZERO, Vec3::ZERO);
+            for a in 0..3 {
+                (p[a], p_error[a]) = self.flat_world_coordinate(a, x, y);
+            }
+            return ShapeHit { t, point: SurfacePoint { p, p_error, n }, uv: self.shape.flat_uv(x, y) };
+        }
         let (p_obj, n_obj, uv) = self.shape.project(p);
         ShapeHit { t, point: self.surface_point(p_obj, n_obj), uv }
     }
@@ -353,47 +382,7 @@ impl PlacedShape {
             return Some((t, o + t as f64 * d));
         }
         let (hit, t, x, y) = self.flat_hit(o.to_array(), d.to_array(), t_max);
-        hit.then_some((t, DVec3::new(x, y, 0.0)))
-    }
-
-    /// [`Self::local_hit`] of a flat shape: whether the ray o + t d meets it in (0, t_max], at t
-    /// (rounded to f32) and object-space (x, y, 0). The plane test needs only row z, and most
-    /// shadow rays fail it (they leave the plane), so rows x and y wait for it. (Lane loops use
-    /// [`flat_hit_from_rows`] on all three rows, without branches.)
-    #[inline(always)]
-    fn flat_hit(&self, o: [f64; 3], d: [f64; 3], t_max: f32) -> (bool, f32, f64, f64) {
-        let (oz, dz) = self.object_row(2, o, d);
-        if !plane_t(oz, dz, t_max).0 {
-            return (false, 0.0, 0.0, 0.0);
-        }
-        let rows = [self.object_row(0, o, d), self.object_row(1, o, d), (oz, dz)];
-        flat_hit_from_rows(rows, t_max, |x, y| self.shape.flat_contains(x, y))
-    }
-
-    /// Row `i` of the ray o + t d in object space: origin and direction components, the f64
-    /// sums that `transform_point3` and `transform_vector3` form.
-    #[inline(always)]
-    pub(super) fn object_row(&self, i: usize, o: [f64; 3], d: [f64; 3]) -> (f64, f64) {
-        (self.object_point_row(i, o), self.object_dir_row(i, d))
-    }
-
-    /// The origin half of [`Self::object_row`] (rays from one origin form it once).
-    #[inline(always)]
-    pub(super) fn object_point_row(&self, i: usize, o: [f64; 3]) -> f64 {
-        dot_row(self.object_matrix_row(i), o) + self.to_object.translation[i]
-    }
-
-    /// The direction half of [`Self::object_row`].
-    #[inline(always)]
-    pub(super) fn object_dir_row(&self, i: usize, d: [f64; 3]) -> f64 {
-        dot_row(self.object_matrix_row(i), d)
-    }
-
-    /// Row `i` of the world-to-object matrix, for lane loops that hoist it.
-    #[inline(always)]
-    pub(super) fn object_matrix_row(&self, i: usize) -> [f64; 3] {
-        let m = &self.to_object.matrix3;
-        [m.x_axis[i], m.y_axis[i], m.z_axis[i]]
+        hit.then_some((t, DVec3::new(x as f64, y as f64, 0.0)))
     }
 
     /// A point uniformly distributed over the surface (density 1 / area per m^2), with its error
@@ -421,45 +410,6 @@ impl PlacedShape {
         };
         SurfacePoint { p: p64.as_vec3(), p_error: f64_point_error(p64, terms), n }
     }
-
-    /// World coordinate `a` of object-space point (x, y, 0) of a flat shape and its error bound:
-    /// `surface_point`'s f64 sums for one axis, rounded once (for lane loops).
-    #[inline(always)]
-    pub(super) fn flat_world_coordinate(&self, a: usize, x: f64, y: f64) -> (f32, f32) {
-        let (m, abs_m) = (&self.to_world.matrix3, &self.abs_linear);
-        let p = m.x_axis[a] * x + m.y_axis[a] * y + self.to_world.translation[a];
-        let terms = abs_m.x_axis[a] * x.abs() + abs_m.y_axis[a] * y.abs() + self.abs_translation[a];
-        (p as f32, f64_coordinate_error(p, terms))
-    }
-}
-
-/// The sum the object rows form from matrix row `m` (before the translation, for points).
-#[inline(always)]
-pub(super) fn dot_row(m: [f64; 3], d: [f64; 3]) -> f64 {
-    m[0] * d[0] + m[1] * d[1] + m[2] * d[2]
-}
-
-/// The rest of [`PlacedShape::flat_hit`] from the object-space ray's rows (origin, direction)
-/// for x, y and z, with the shape's containment test.
-#[inline(always)]
-pub(super) fn flat_hit_from_rows(
-    [(ox, dx), (oy, dy), (oz, dz)]: [(f64, f64); 3],
-    t_max: f32,
-    contains: impl Fn(f64, f64) -> bool,
-) -> (bool, f32, f64, f64) {
-    let (ahead, t, t32) = plane_t(oz, dz, t_max);
-    let (x, y) = (ox + t * dx, oy + t * dy);
-    (ahead & contains(x, y), t32, x, y)
-}
-
-/// Where a ray with object-space z row (oz, dz) meets the plane z = 0: whether in (0, t_max]
-/// (tested on t rounded to f32, so that every caller agrees), t and t as f32.
-#[inline(always)]
-fn plane_t(oz: f64, dz: f64, t_max: f32) -> (bool, f64, f32) {
-    // dz = 0 (parallel to the plane) makes t infinite or NaN, which the tests reject.
-    let t = -oz / dz;
-    let t32 = t as f32;
-    ((dz != 0.0) & (t > 0.0) & (t32 > 0.0) & (t32 <= t_max), t, t32)
 }
 
 /// Smallest `t` in (0, t_max] where the object-space ray `o + t d` meets a sphere of radius `r`
