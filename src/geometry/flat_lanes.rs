@@ -1,19 +1,20 @@
 //! Ray queries of [`LANES`] rays at once for scenes of a few flat shapes (a ground rectangle, a
 //! disk light): the answers of [`SceneBvh::closest_hit`] and [`SceneBvh::occluded_from`] bit for
-//! bit, from the same f64 operations in the same order (`PlacedShape::object_row`,
-//! `flat_hit_from_rows`, `PlacedShape::flat_world_coordinate`) run as lane loops, which compile
-//! to vector code inside `lanes::widest`. Other scenes answer one ray at a time.
+//! bit, from the same operations in the same order (`PlacedShape::flat_hit`: the f32 test, the
+//! f64 test where the f32 answer is not sure, and `PlacedShape::flat_world_coordinate`) run as
+//! lane loops, which compile to vector code inside `lanes::widest`. Other scenes answer one ray
+//! at a time.
 
 use glam::{Vec2, Vec3};
 
 use super::bvh::{GeometryId, NO_SHAPE, SceneBvh};
-use super::ray::gamma;
-use super::ray::{Lanes3, Ray};
+use super::ray::{Lanes3, Ray, gamma};
 use super::shapes::{PlacedShape, Shape, dot_row, flat_hit_f32_from_rows, flat_hit_from_rows};
 use super::visibility::{FEW_PRIMITIVES, Hit};
 use crate::lanes::LANES;
 
-/// [`LANES`] rays as lane columns, widened to f64 (the precision of the flat-shape test).
+/// [`LANES`] rays as lane columns, widened to f64 (origins' object-space rows are formed in f64,
+/// and directions' too where the f32 test is not sure).
 /// Lanes never set hold invalid rays (zero direction), which hit nothing.
 #[derive(Clone, Copy, Debug)]
 #[repr(align(64))]
@@ -94,6 +95,7 @@ fn dir_valid(dir: &Lanes3, l: usize) -> bool {
 /// The flat-shape hit test (`PlacedShape::local_hit`) of every lane over (0, t_max[l]]: hit
 /// flags, t, object-space x and y.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops on purpose (as `occluded_lanes`)
 fn flat_hits(shape: &PlacedShape, r: &RayLanes, t_max: &[f32; LANES]) -> FlatHits {
     // One step per loop over all lanes, so that LLVM vectorises across lanes.
     let (mut o_row, mut d) = ([[0.0f64; LANES]; 3], [[0.0f32; LANES]; 3]);
@@ -103,6 +105,10 @@ fn flat_hits(shape: &PlacedShape, r: &RayLanes, t_max: &[f32; LANES]) -> FlatHit
         }
     }
     let mut hits = flat_hits_f32(shape, t_max, &o_row, &d);
+    // Invalid lanes (zero directions, unset lanes of a partial block) count as no hit anyway.
+    for l in 0..LANES {
+        hits.sure[l] |= !r.valid[l];
+    }
     hits.settle(|| {
         let mut d_row = [[0.0f64; LANES]; 3];
         for (i, row) in d_row.iter_mut().enumerate() {
