@@ -8,8 +8,10 @@
 use glam::{Vec2, Vec3};
 
 use super::bvh::{GeometryId, NO_SHAPE, SceneBvh};
-use super::ray::{Lanes3, Ray, gamma};
-use super::shapes::{PlacedShape, Shape, dot_row, flat_hit_f32_from_rows, flat_hit_from_rows};
+use super::ray::{Lanes3, Ray};
+use super::shapes::{
+    PlacedShape, Shape, dot_row, dot_row32, dz_error_bound, flat_hit_f32_from_rows, flat_hit_from_rows,
+};
 use super::visibility::{FEW_PRIMITIVES, Hit};
 use crate::lanes::LANES;
 
@@ -77,11 +79,6 @@ impl RayLanes {
     fn origin(&self, l: usize) -> [f64; 3] {
         [self.o[0][l], self.o[1][l], self.o[2][l]]
     }
-
-    #[inline(always)]
-    fn dir(&self, l: usize) -> [f64; 3] {
-        [self.d[0][l], self.d[1][l], self.d[2][l]]
-    }
 }
 
 /// The direction half of [`Ray::is_valid`] for lane `l`: finite and not zero. `&` and `|`, not
@@ -109,16 +106,23 @@ fn flat_hits(shape: &PlacedShape, r: &RayLanes, t_max: &[f32; LANES]) -> FlatHit
     for l in 0..LANES {
         hits.sure[l] |= !r.valid[l];
     }
-    hits.settle(|| {
-        let mut d_row = [[0.0f64; LANES]; 3];
-        for (i, row) in d_row.iter_mut().enumerate() {
-            for l in 0..LANES {
-                row[l] = shape.object_dir_row(i, r.dir(l));
-            }
-        }
-        flat_hits_of_rows(shape, t_max, &o_row, &d_row)
-    });
+    hits.settle(|| flat_hits_of_rows(shape, t_max, &o_row, &dir_rows(shape, &r.d)));
     hits
+}
+
+/// The f64 object-space rows of directions `d` (for the f64 test).
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops on purpose (as `occluded_lanes`)
+fn dir_rows(shape: &PlacedShape, d: &Rows) -> Rows {
+    let mut d_row = [[0.0f64; LANES]; 3];
+    for (i, row) in d_row.iter_mut().enumerate() {
+        // The matrix row is read once per row, not per lane: read per lane, the loop stayed scalar.
+        let m = shape.object_matrix_row(i);
+        for l in 0..LANES {
+            row[l] = dot_row(m, [d[0][l], d[1][l], d[2][l]]);
+        }
+    }
+    d_row
 }
 
 /// The f32 test of [`flat_hits`] (`PlacedShape::flat_hit`'s first step) for rays whose origins'
@@ -137,13 +141,12 @@ fn flat_hits_f32(shape: &PlacedShape, t_max: &[f32; LANES], o_row: &Rows, d: &[[
         // The matrix row is read once per row, not per lane (read per lane, loops stayed scalar).
         let m = shape.object_matrix_row32(i);
         for l in 0..LANES {
-            row[l] = m[0] * d[0][l] + m[1] * d[1][l] + m[2] * d[2][l];
+            row[l] = dot_row32(m, [d[0][l], d[1][l], d[2][l]]);
         }
     }
-    // `PlacedShape::object_dir_row32`'s bound, in the same operations.
     let a = shape.abs_object_row_z32();
     for l in 0..LANES {
-        dz_error[l] = gamma(6) * (a[0] * d[0][l].abs() + a[1] * d[1][l].abs() + a[2] * d[2][l].abs());
+        dz_error[l] = dz_error_bound(a, [d[0][l], d[1][l], d[2][l]]);
     }
     #[inline(always)]
     fn each(
@@ -371,15 +374,7 @@ impl SceneBvh {
         let o_row = [0, 1, 2].map(|i| [shape.object_point_row(i, o); LANES]);
         let mut hits = flat_hits_f32(shape, &[t_max; LANES], &o_row, dirs);
         hits.settle(|| {
-            let d = dirs.map(|row| row.map(f64::from));
-            // The matrix row is read once per row, not per lane: read per lane, the loop stayed scalar.
-            let mut d_row = [[0.0f64; LANES]; 3];
-            for (i, row) in d_row.iter_mut().enumerate() {
-                let m = shape.object_matrix_row(i);
-                for l in 0..LANES {
-                    row[l] = dot_row(m, [d[0][l], d[1][l], d[2][l]]);
-                }
-            }
+            let d_row = dir_rows(shape, &dirs.map(|row| row.map(f64::from)));
             flat_hits_of_rows(shape, &[t_max; LANES], &o_row, &d_row)
         });
         // `Ray::is_valid` of each lane; a fold without early exit, so that it stays in lanes.

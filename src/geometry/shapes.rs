@@ -20,7 +20,7 @@ use super::GeometryError;
 use super::ray::{Ray, SurfacePoint, f64_point_error, gamma};
 use super::transform::Transform;
 use flat::FlatMap;
-pub(super) use flat::{dot_row, flat_hit_f32_from_rows, flat_hit_from_rows};
+pub(super) use flat::{dot_row, dot_row32, dz_error_bound, flat_hit_f32_from_rows, flat_hit_from_rows};
 
 mod flat;
 
@@ -68,7 +68,7 @@ pub struct PlacedShape {
     normal_matrix: DMat3,
     /// Flat shapes: their world normal (the front, +Z), the same for every point.
     pub(super) flat_normal: Option<Vec3>,
-    /// to_world in f32 for the points of flat-shape hits.
+    /// The maps of the f32 flat-shape hit test, rounded to f32.
     flat_map: FlatMap,
 }
 

@@ -41,10 +41,11 @@ impl PlacedShape {
     #[inline(always)]
     pub(super) fn flat_hit(&self, o: [f64; 3], d: [f64; 3], t_max: f32) -> (bool, f32, f32, f32) {
         let d32 = d.map(|c| c as f32);
-        let (oz, (dz, dz_error)) = (self.object_point_row(2, o) as f32, self.object_dir_row32(2, d32));
+        let (oz, dz) = (self.object_point_row(2, o) as f32, self.object_dir_row32(2, d32));
+        let dz_error = dz_error_bound(self.abs_object_row_z32(), d32);
         let (sure, _) = plane_t_f32(oz, dz, dz_error, t_max);
         if sure {
-            let rows = [0, 1].map(|i| (self.object_point_row(i, o) as f32, self.object_dir_row32(i, d32).0));
+            let rows = [0, 1].map(|i| (self.object_point_row(i, o) as f32, self.object_dir_row32(i, d32)));
             let rows = [rows[0], rows[1], (oz, dz)];
             let (_, hit, t, x, y) =
                 flat_hit_f32_from_rows(rows, dz_error, t_max, |x, y| self.shape.flat_contains32(x, y));
@@ -59,15 +60,10 @@ impl PlacedShape {
         (hit, t, x as f32, y as f32)
     }
 
-    /// Row `i` of direction `d` in object space in f32, and (row z only; 0 for the others) a bound
-    /// on its error against the f64 row: the f32 sum's gamma(3) and the rounding of the matrix
-    /// (one unit roundoff), with room for the rounding of the bound (gamma(6) in all).
+    /// Row `i` of direction `d` in object space, in f32.
     #[inline(always)]
-    pub(in crate::geometry) fn object_dir_row32(&self, i: usize, d: [f32; 3]) -> (f32, f32) {
-        let (m, a) = (&self.flat_map.rows[i], &self.flat_map.abs_row_z);
-        let row = m[0] * d[0] + m[1] * d[1] + m[2] * d[2];
-        let error = if i == 2 { gamma(6) * (a[0] * d[0].abs() + a[1] * d[1].abs() + a[2] * d[2].abs()) } else { 0.0 };
-        (row, error)
+    pub(in crate::geometry) fn object_dir_row32(&self, i: usize, d: [f32; 3]) -> f32 {
+        dot_row32(self.flat_map.rows[i], d)
     }
 
     /// Row `i` of to_object's linear part in f32, for lane loops that hoist it.
@@ -97,7 +93,7 @@ impl PlacedShape {
 
     /// The direction half of [`Self::object_row`].
     #[inline(always)]
-    pub(in crate::geometry) fn object_dir_row(&self, i: usize, d: [f64; 3]) -> f64 {
+    fn object_dir_row(&self, i: usize, d: [f64; 3]) -> f64 {
         dot_row(self.object_matrix_row(i), d)
     }
 
@@ -126,6 +122,22 @@ impl PlacedShape {
 #[inline(always)]
 pub(in crate::geometry) fn dot_row(m: [f64; 3], d: [f64; 3]) -> f64 {
     m[0] * d[0] + m[1] * d[1] + m[2] * d[2]
+}
+
+/// [`dot_row`] in f32: row `i` of a direction in object space, from row `i` of to_object's
+/// linear part in f32 (`PlacedShape::object_matrix_row32`).
+#[inline(always)]
+pub(in crate::geometry) fn dot_row32(m: [f32; 3], d: [f32; 3]) -> f32 {
+    m[0] * d[0] + m[1] * d[1] + m[2] * d[2]
+}
+
+/// A bound on the error of direction `d`'s z row in f32 ([`dot_row32`]) against the f64 row,
+/// from |row z| of to_object's linear part (`PlacedShape::abs_object_row_z32`): the f32 sum's
+/// gamma(3) and the rounding of the matrix (one unit roundoff), with room for the rounding of
+/// the bound itself (gamma(6) in all).
+#[inline(always)]
+pub(in crate::geometry) fn dz_error_bound(abs_row_z: [f32; 3], d: [f32; 3]) -> f32 {
+    gamma(6) * (abs_row_z[0] * d[0].abs() + abs_row_z[1] * d[1].abs() + abs_row_z[2] * d[2].abs())
 }
 
 /// The rest of [`PlacedShape::flat_hit`] from the object-space ray's rows (origin, direction)
@@ -178,7 +190,7 @@ fn plane_t_f32(oz: f32, dz: f32, dz_error: f32, t_max: f32) -> (bool, f32) {
     let r = 1.0 / dz;
     let t = -oz * r;
     let margin = t.abs() * (16.0 * U + 4.0 * dz_error * r.abs());
-    let apart = (t > margin) & (t + margin <= t_max) | (t < -margin) | (t - margin > t_max);
+    let apart = ((t > margin) & (t + margin <= t_max)) | (t < -margin) | (t - margin > t_max);
     (apart & (dz.abs() > 4.0 * dz_error), t)
 }
 
@@ -223,7 +235,8 @@ mod tests {
                 let rows = [shape.object_row(0, o64, d), shape.object_row(1, o64, d), (oz, dz)];
                 let f64_answer = flat_hit_from_rows(rows, t_max, |x, y| shape.shape.flat_contains(x, y)).0;
                 let d32 = d.map(|c| c as f32);
-                let (dz32, dz_error) = shape.object_dir_row32(2, d32);
+                let (dz32, dz_error) =
+                    (shape.object_dir_row32(2, d32), dz_error_bound(shape.abs_object_row_z32(), d32));
                 let sure = plane_t_f32(oz as f32, dz32, dz_error, t_max).0;
                 unsure += !sure as usize;
                 let clear = i % 2 == 0 && (t_max == f32::INFINITY || t_max == 1.0 - crate::geometry::SHADOW_EPSILON);
