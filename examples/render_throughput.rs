@@ -1,5 +1,6 @@
 //! Renders the point-light-over-plane scene (or the default scene with `default`) at 128x128 and
-//! 64 spp several times and prints camera samples per second: a quick loop for profiling.
+//! 64 spp several times and prints camera samples per second and the time of each pass: a quick
+//! loop for profiling.
 //! `cargo run --release --example render_throughput [default] [repeats]`
 
 use bevy_ecs::prelude::*;
@@ -21,11 +22,15 @@ fn main() {
     let opts = RenderOptions { width: 128, height: 128, spp: 64, strategy: Strategy::Mis };
     for _ in 0..repeats {
         let (_, stats) = render(&mut world, &mut schedule, &opts, |_| {});
+        let p = stats.passes;
         println!(
-            "{:.1} ms, {:.2} M samples/s, {:.2} M shadow rays/s",
+            "{:.1} ms, {:.2} M samples/s, {:.2} M shadow rays/s (camera {:.2} ms, light system {:.2} ms, shading {:.2} ms)",
             stats.seconds * 1e3,
             stats.camera_samples as f64 / stats.seconds / 1e6,
-            stats.shadow_rays as f64 / stats.seconds / 1e6
+            stats.shadow_rays as f64 / stats.seconds / 1e6,
+            p.camera * 1e3,
+            p.light_system * 1e3,
+            p.shading * 1e3
         );
     }
 }

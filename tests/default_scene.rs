@@ -29,6 +29,10 @@ fn default_scene_has_area_spot_blackbody_point_and_sky_lights_and_renders() {
     // MIS traces one BSDF ray per camera sample that hit a surface (most of them, in a room).
     assert_eq!(stats.camera_samples, 24 * 24 * 2);
     assert!(stats.bsdf_rays > stats.camera_samples / 2 && stats.bsdf_rays <= stats.camera_samples, "{stats:?}");
+    // Every pass took time, and together no more than the render.
+    let p = stats.passes;
+    assert!(p.camera > 0.0 && p.light_system > 0.0 && p.shading > 0.0, "{p:?}");
+    assert!(p.camera + p.light_system + p.shading <= stats.seconds, "{stats:?}");
 }
 
 #[test]

@@ -209,5 +209,12 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         stats.shadow_rays as f64 / secs / 1e6,
         stats.bsdf_rays as f64 / secs / 1e6
     );
+    if args.report {
+        let p = stats.passes;
+        println!(
+            "passes: camera {:.3} s, light system {:.3} s, shading and film {:.3} s",
+            p.camera, p.light_system, p.shading
+        );
+    }
     Ok(())
 }

@@ -80,6 +80,19 @@ pub struct RenderStats {
     pub camera_samples: u64,
     pub shadow_rays: u64,
     pub bsdf_rays: u64,
+    /// Where the time went, pass by pass (their sum is `seconds` less the set-up).
+    pub passes: PassSeconds,
+}
+
+/// Seconds spent in each pass of a render, summed over its batches.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PassSeconds {
+    /// Camera rays and their closest hits, written into the `ShadingBatch`.
+    pub camera: f64,
+    /// The schedule's run per batch: light choice, Sample_Li and shadow rays.
+    pub light_system: f64,
+    /// MIS with BSDF samples, and adding the samples to the film.
+    pub shading: f64,
 }
 
 /// The power heuristic (beta = 2) weight of a strategy with pdf `a` against one with pdf `b`.
@@ -186,6 +199,7 @@ fn render_on_pool(
     while first < total {
         let len = BATCH_SAMPLES.min(total - first);
         let range = SampleRange { first, len, width: opts.width, spp: opts.spp, seed };
+        let camera_start = std::time::Instant::now();
         // Every camera sample takes a slot of the batch (one with no point if its ray escaped).
         world.resource_scope(|world, mut batch: Mut<ShadingBatch>| {
             trace_camera_rays(&mut batch, &mut columns, world.resource::<SceneBvh>(), &camera, range);
@@ -201,7 +215,11 @@ fn render_on_pool(
                 batch.wavelengths.par_extend(lambda);
             }
         });
+        let light_system_start = std::time::Instant::now();
         schedule.run(world);
+        let shading_start = std::time::Instant::now();
+        stats.passes.camera += (light_system_start - camera_start).as_secs_f64();
+        stats.passes.light_system += (shading_start - light_system_start).as_secs_f64();
         stats.shadow_rays += world.resource::<crate::systems::ShadowRays>().len() as u64;
 
         let world_ref = &*world;
@@ -291,6 +309,7 @@ fn render_on_pool(
             film.par_add_samples(first, spp, &contributions);
             traced
         };
+        stats.passes.shading += shading_start.elapsed().as_secs_f64();
         stats.bsdf_rays += bsdf_rays as u64;
         stats.camera_samples += len as u64;
         first += len;
