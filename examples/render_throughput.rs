@@ -24,7 +24,7 @@ fn main() {
         let (_, stats) = render(&mut world, &mut schedule, &opts, |_| {});
         let p = stats.passes;
         println!(
-            "{:.1} ms, {:.2} M samples/s, {:.2} M shadow rays/s (camera {:.2} ms, light system {:.2} ms, shading {:.2} ms)",
+            "{:.1} ms, {:.2} M samples/s, {:.2} M shadow rays/s (camera {:.2} ms, light system {:.2} ms, shading and film {:.2} ms)",
             stats.seconds * 1e3,
             stats.camera_samples as f64 / stats.seconds / 1e6,
             stats.shadow_rays as f64 / stats.seconds / 1e6,
