@@ -46,7 +46,7 @@ pub struct ShadowRays {
     /// Where each entry's ray ends (`None`: the entry has no ray).
     pub kind: Vec<ShadowTarget>,
     /// Segment end (the light point), written for entries with a ray only: other entries keep
-    /// what an earlier batch left (each column not written spared 3-6% of a point-lit render).
+    /// what an earlier batch left (writing every slot would be a pass over the column for nothing).
     pub target: Vec<Vec3>,
     /// The light's surface normal at the target, written for `Surface` entries only.
     pub target_normal: Vec<Vec3>,
@@ -138,7 +138,7 @@ pub fn sample_direct_lighting(
     let out = &mut *out;
     // Every entry is written below, so the columns are only resized: steady-state batches of one
     // size never fill them first. The tasks write the offsets of their points too (a serial pass
-    // over them cost about 3% of a two-thread render); the last one is written here.
+    // over them would not run in parallel); the last one is written here.
     let m = n * k;
     out.offsets.resize(n + 1, 0);
     out.offsets[n] = m as u32;
@@ -391,7 +391,7 @@ impl Sampling<'_> {
         lit: &PointLanes,
     ) -> usize {
         // Each column is built whole in lane arrays and stored as a block: one store loop over
-        // ten columns stayed scalar, and its stores took about 40% of the sampling pass.
+        // ten columns stayed scalar, and its stores dominated the sampling pass.
         let shadows = cols.shadows;
         // Selects as bit masks (all ones or zero): selects on arrays of bools compile to
         // per-lane mask shuffling.

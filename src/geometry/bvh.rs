@@ -11,16 +11,13 @@
 //! occluder of either kind. The cost is a single, well-predicted branch per primitive.
 //!
 //! **Build.** obvhs PLOC + parallel reinsertion, converted to an 8-wide compressed BVH (CWBVH),
-//! with the `fast_build` preset: `medium_build` traced closest hits ~8% faster here but built ~25%
-//! slower, and dynamic scenes rebuild when geometry is added or removed.
+//! with the `fast_build` preset: dynamic scenes rebuild when geometry is added or removed, and
+//! `medium_build` buys little trace speed for a much slower build.
 //!
 //! **Refit, not rebuild, when only transforms change** (`refit.rs`). A refit rewrites the moved
 //! instances' world triangles and re-quantises only the nodes on their paths to the root, keeping
-//! the topology. Measured with `benches/visibility.rs` (1,042 objects, 100k triangles, 2 cores
-//! shared with other builds): refit 0.05 ms when 1% of the objects move and 4.4 ms when all move,
-//! against 53 ms for a rebuild (0.9 s for 1M triangles). Small motions barely hurt the tree (SAH-style cost x1.05 after every object
-//! moved by up to 1 m), but objects that jump across the scene wreck it (cost x41, incoherent
-//! any-hit ~20x slower than a fresh build). So [`SceneBvh::update_transforms`] refits, tracks that
+//! the topology, at a small fraction of a rebuild's cost. Small motions barely hurt the tree, but
+//! objects that jump across the scene wreck it. So [`SceneBvh::update_transforms`] refits, tracks that
 //! cost (sum of node surface areas over the root's) and rebuilds once it passes
 //! [`REBUILD_COST_RATIO`] times its value after the last build. Adding or removing geometry
 //! always rebuilds (a new `SceneBvh::build`).

@@ -122,7 +122,7 @@ impl ShearedRay {
 }
 
 /// `v` with its axes rotated so that axis `kz` becomes z (static swizzles: runtime indexing
-/// into a `Vec3` made the whole test ~25% slower).
+/// into a `Vec3` is slower).
 #[inline(always)]
 fn swizzle(v: Vec3, kz: u8) -> Vec3 {
     match kz {

@@ -1,7 +1,6 @@
 //! Whole blocks of `LANES` lane columns (all x, all y, all z) stored into columns of vectors
-//! (x, y, z interleaved). The sampling pass's entry stores, made lane by lane, took about 40% of
-//! its time, and LLVM's vectoriser, left to itself, rebuilds the interleaving from scalars
-//! inside large kernels. With AVX-512 a block is a few registers moved by two-source permutes;
+//! (x, y, z interleaved). Entry stores made lane by lane dominated the sampling pass, and LLVM's
+//! vectoriser, left to itself, rebuilds the interleaving from scalars inside large kernels. With AVX-512 a block is a few registers moved by two-source permutes;
 //! elsewhere, lane by lane.
 //!
 //! The AVX-512 code sits in `#[target_feature]` functions, which only code compiled for AVX-512

@@ -27,13 +27,8 @@ use super::wide::{WideTree, choose_lane, lane_probability};
 use crate::light::{LightBounds, LightId, LightSampleContext, LightTable};
 use crate::prefetch::prefetch;
 
-/// Rebuild after refits once [`BvhSampler::cost_ratio`] passes this. Measured on the 10k-light
-/// scaling scene with 10% of the lights random-walking 0.5 m per frame and the tree only refitted
-/// (`light_tree_quality` in tests/light_sampler.rs): the exact variance of the BVH estimator over
-/// a fresh tree's is 1.10 at cost ratios 1.1-1.5, 1.2-1.3 at 1.6-2.0 and 1.5 at 2.2-2.3 (fresh
-/// trees themselves vary by +-7%). A rebuild (~35 ms) costs as much as ~45 refits of 10% of the
-/// lights (~0.8 ms); at 1.5 this scenario rebuilds every ~130 frames, ~0.3 ms per frame amortised,
-/// and keeps the variance within ~10-20% of a fresh tree's.
+/// Rebuild after refits once [`BvhSampler::cost_ratio`] passes this: up to here the variance stays
+/// near a fresh tree's (`light_tree_quality` in tests/light_sampler.rs), and rebuilds stay rare.
 pub const LIGHT_TREE_REBUILD_RATIO: f32 = 1.5;
 
 /// How many changed lights ahead a refit prefetches leaf nodes.
@@ -242,8 +237,8 @@ impl BvhSampler {
     /// Returns the number of nodes recomputed, or None (changing nothing further) if a light
     /// would have to enter or leave the tree.
     fn refit(&mut self, table: &LightTable, changed: &[LightId]) -> Option<usize> {
-        // With 100k lights the nodes outgrow the caches and a refit waits on memory, so each step
-        // prefetches the table rows and nodes of a later one (1% of 100k lights moving: 1.36 -> ~0.85 ms).
+        // Large trees outgrow the caches and a refit waits on memory, so each step prefetches the
+        // table rows and nodes of a later one.
         let mut recomputed = 0;
         for (k, &id) in changed.iter().enumerate() {
             if let Some(&a) = changed.get(k + PREFETCH_DISTANCE) {
@@ -363,7 +358,7 @@ impl BvhSampler {
     /// node's SAOH cost now over its cost right after the last build. 1 after a build, growing
     /// as moving lights stretch the boxes and cones. (A sum of costs over the root's, as the
     /// geometry BVH uses, is dominated by the few top nodes, whose bounds barely move, and
-    /// stayed within 3% while the variance grew 50%; see `light_tree_quality`.)
+    /// missed the variance's growth; see `light_tree_quality`.)
     pub fn cost_ratio(&self) -> f32 {
         if self.costed_nodes > 0 { (self.growth_sum / self.costed_nodes as f64).exp() as f32 } else { 1.0 }
     }

@@ -205,11 +205,10 @@ impl ClusterQuery {
     /// - The squared distance to the centre is clamped below at radius x gap, the geometric mean
     ///   of the box's radius and its distance from `p` (at least radius / 8): a cluster next to
     ///   or around `p` is not weighed as if its power sat at its centre. pbrt clamps at the
-    ///   half-diagonal's length, which is not scale-free; this is, and does as well (relative
-    ///   RMSE 2.06 vs 2.06 at 10k lights; the squared half-diagonal gives 3.6).
+    ///   half-diagonal's length, which is not scale-free; this is, and does as well.
     /// - The receiver cosine is also bounded by the box's extent along `n` over its distance
     ///   from `p`, much tighter than the bounding-sphere cone for wide, flat clusters seen at
-    ///   grazing angles (relative RMSE 2.9 -> 2.06 at 10k lights).
+    ///   grazing angles.
     #[inline(always)]
     pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
         if self.phi == 0.0 {
