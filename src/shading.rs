@@ -229,10 +229,20 @@ pub struct RunEntry {
     pub system: &'static str,
     pub ran: bool,
     pub why: String,
+    /// How many items a decision to run covers and of what (`(16384, "points")`), for systems
+    /// that count their work; [`RunSummary`] sums them over updates.
+    pub count: Option<(u64, &'static str)>,
 }
 
-/// Which systems ran in the last update and why each skipped one was skipped, plus warnings
-/// (lights rejected for bad parameters, and so on).
+/// Which systems ran in one update and why each skipped one was skipped, plus that update's
+/// warnings (lights rejected for bad parameters, and so on).
+///
+/// **One update only.** Every update starts by clearing it (`begin_update`), so an app that runs
+/// the schedule once per frame reads this frame's decisions and warnings here, after the run. A
+/// caller that runs the schedule more than once and wants all of it folds each update into a
+/// [`RunSummary`] right after the run: the renderer does so for every update of a render (its
+/// batches and the update before them) in `RenderStats::report`, which `kelvin render --report`
+/// prints.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct RunReport {
     pub entries: Vec<RunEntry>,
@@ -242,7 +252,18 @@ pub struct RunReport {
 impl RunReport {
     /// Records a decision.
     pub fn record(&mut self, system: &'static str, ran: bool, why: impl Into<String>) {
-        self.entries.push(RunEntry { system, ran, why: why.into() });
+        self.entries.push(RunEntry { system, ran, why: why.into(), count: None });
+    }
+    /// Records a decision to run that covers `count` items of `unit` (points, rays).
+    pub fn record_count(
+        &mut self,
+        system: &'static str,
+        ran: bool,
+        why: impl Into<String>,
+        count: u64,
+        unit: &'static str,
+    ) {
+        self.entries.push(RunEntry { system, ran, why: why.into(), count: Some((count, unit)) });
     }
     /// Did `system` run in the last update?
     pub fn ran(&self, system: &str) -> bool {
@@ -254,6 +275,88 @@ impl std::fmt::Display for RunReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         for e in &self.entries {
             writeln!(f, "{:<28} {:<8} {}", e.system, if e.ran { "ran" } else { "skipped" }, e.why)?;
+        }
+        for w in &self.warnings {
+            writeln!(f, "warning: {w}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Many updates' [`RunReport`]s folded into one (with [`RunSummary::add`] after each update):
+/// per system and outcome, how many updates ran or skipped it, the counts summed and the last
+/// reason; and every warning of every update, in order. Its size grows with the warnings only.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RunSummary {
+    /// Updates folded in.
+    pub updates: u32,
+    /// One line per system and outcome, systems in the order first seen, ran before skipped.
+    pub lines: Vec<SummaryLine>,
+    /// Every update's warnings, in order.
+    pub warnings: Vec<String>,
+}
+
+/// A system's updates with one outcome, in a [`RunSummary`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SummaryLine {
+    pub system: &'static str,
+    pub ran: bool,
+    /// Updates with this outcome.
+    pub updates: u32,
+    /// The sum of their counts and the unit, if their decisions count work.
+    pub count: Option<(u64, &'static str)>,
+    /// The reason the last of them gave.
+    pub last_why: String,
+}
+
+impl RunSummary {
+    /// Folds in one update's report.
+    pub fn add(&mut self, report: &RunReport) {
+        self.updates += 1;
+        for e in &report.entries {
+            let i = match self.lines.iter().position(|l| l.system == e.system && l.ran == e.ran) {
+                Some(i) => i,
+                None => {
+                    // Next to the system's other outcome, ran first; new systems at the end.
+                    let other = self.lines.iter().position(|l| l.system == e.system);
+                    let i = other.map_or(self.lines.len(), |o| if e.ran { o } else { o + 1 });
+                    let line =
+                        SummaryLine { system: e.system, ran: e.ran, updates: 0, count: None, last_why: String::new() };
+                    self.lines.insert(i, line);
+                    i
+                }
+            };
+            let line = &mut self.lines[i];
+            line.updates += 1;
+            line.last_why.clone_from(&e.why);
+            if let Some((n, unit)) = e.count {
+                line.count = Some((line.count.map_or(0, |c| c.0) + n, unit));
+            }
+        }
+        self.warnings.extend(report.warnings.iter().cloned());
+    }
+    /// The line of `system` with outcome `ran`.
+    pub fn line(&self, system: &str, ran: bool) -> Option<&SummaryLine> {
+        self.lines.iter().find(|l| l.system == system && l.ran == ran)
+    }
+    /// How many updates ran `system`.
+    pub fn runs(&self, system: &str) -> u32 {
+        self.line(system, true).map_or(0, |l| l.updates)
+    }
+    /// The sum of `system`'s counts over the updates that ran it (0 if it counts nothing).
+    pub fn count(&self, system: &str) -> u64 {
+        self.line(system, true).and_then(|l| l.count).map_or(0, |c| c.0)
+    }
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "run report over {} updates:", self.updates)?;
+        for l in &self.lines {
+            let outcome = if l.ran { "ran" } else { "skipped" };
+            let times = format!("{} of {}", l.updates, self.updates);
+            let total = l.count.map_or(String::new(), |(n, unit)| format!("{n} {unit} in all; last: "));
+            writeln!(f, "{:<28} {outcome:<8} {times:<10} {total}{}", l.system, l.last_why)?;
         }
         for w in &self.warnings {
             writeln!(f, "warning: {w}")?;

@@ -23,8 +23,8 @@ pub fn planned(flag: fn(&Work) -> bool) -> impl FnMut(Res<Work>) -> bool + Clone
     move |work: Res<Work>| flag(&work)
 }
 
-/// Starts an update: empties the run report and the decisions, and passes settings the light
-/// table needs.
+/// Starts an update: empties the run report (it holds one update's decisions and warnings; see
+/// `RunReport` for keeping more) and the decisions, and passes settings the light table needs.
 pub fn begin_update(
     mut report: ResMut<RunReport>,
     mut work: ResMut<Work>,
@@ -80,7 +80,11 @@ pub fn plan_sampling(
         (true, format!("{} points x {} lights, {mode} mode", batch.len(), table.len()))
     };
     work.sampling = run;
-    report.record("sample_direct_lighting", run, why);
+    if run {
+        report.record_count("sample_direct_lighting", true, why, batch.len() as u64, "points");
+    } else {
+        report.record("sample_direct_lighting", run, why);
+    }
     if !run {
         // Every point gets no entries: nothing from an earlier update may linger.
         out.clear();

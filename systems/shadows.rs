@@ -33,7 +33,11 @@ pub fn plan_shadows(
         (true, format!("{} rays against {} primitives", rays.len(), bvh.primitive_count()))
     };
     work.shadows = run;
-    report.record("trace_shadow_rays", run, why);
+    if run {
+        report.record_count("trace_shadow_rays", true, why, rays.len() as u64, "rays");
+    } else {
+        report.record("trace_shadow_rays", run, why);
+    }
 }
 
 /// Builds offset segments from each entry's batch point (off the shading surface, and off the

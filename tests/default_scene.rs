@@ -1,7 +1,9 @@
 //! The embedded default scene: every light kind it promises is in the light table, and it renders.
 
 use bevy_ecs::prelude::*;
-use kelvin::light::{LightKind, LightTable};
+use glam::Vec3;
+use kelvin::geometry::Transform;
+use kelvin::light::{LightKind, LightTable, PointLight};
 use kelvin::render::renderer::{RenderOptions, Strategy, render};
 use kelvin::shading::RunReport;
 use kelvin::systems::LightingPlugin;
@@ -18,8 +20,7 @@ fn default_scene_has_area_spot_blackbody_point_and_sky_lights_and_renders() {
         &RenderOptions { width: 24, height: 24, spp: 2, strategy: Strategy::Mis },
         |_| {},
     );
-    let report = world.resource::<RunReport>();
-    assert!(report.warnings.is_empty(), "{report}");
+    assert!(stats.report.warnings.is_empty(), "{}", stats.report);
     let table = world.resource::<LightTable>();
     let kinds: Vec<LightKind> = table.ids().map(|id| id.kind).collect();
     for k in [LightKind::Area, LightKind::Spot, LightKind::Point, LightKind::UniformInfinite] {
@@ -45,4 +46,33 @@ fn table_length_counts_every_kind() {
     let table = world.resource::<LightTable>();
     assert_eq!(table.len(), table.ids().count());
     assert_eq!(table.len(), 4);
+}
+
+/// The render's report covers all of it: a light rejected in the first update (before any
+/// batch) is still reported at the end, and the counts are summed over the batches.
+#[test]
+fn render_report_keeps_every_warning_and_sums_counts_over_batches() {
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    LightingPlugin::build(&mut world, &mut schedule);
+    kelvin::scenes::default_scene::spawn_default_scene(&mut world);
+    world.spawn((PointLight::candela(-5.0), Transform::from_translation(Vec3::Y)));
+    // 96 x 96 x 4 = 36864 camera samples: three batches, after the update that syncs the scene.
+    let opts = RenderOptions { width: 96, height: 96, spp: 4, strategy: Strategy::Mis };
+    let (_, stats) = render(&mut world, &mut schedule, &opts, |_| {});
+    let report = &stats.report;
+    assert_eq!(report.updates, 4, "{report}");
+    assert_eq!(report.warnings.len(), 1, "{report}");
+    assert!(report.warnings[0].contains("PointLight: amount = -5 must be finite and >= 0"), "{report}");
+    assert_eq!(report.runs("sample_direct_lighting"), 3, "{report}");
+    assert_eq!(report.count("sample_direct_lighting"), stats.camera_samples, "{report}");
+    assert_eq!(report.count("trace_shadow_rays"), stats.shadow_rays, "{report}");
+    assert_eq!(report.line("sample_direct_lighting", false).map(|l| l.updates), Some(1), "{report}");
+    // The sampler was built once, in the first update, and left alone by the batches.
+    assert_eq!(report.runs("update_light_sampler"), 1, "{report}");
+    assert_eq!(report.line("update_light_sampler", false).map(|l| l.updates), Some(3), "{report}");
+    let text = report.to_string();
+    assert!(text.contains("36864 points in all") && text.contains("warning: light"), "{text}");
+    // The world's report is the last update's alone, as an app that runs once per frame reads it.
+    assert!(world.resource::<RunReport>().warnings.is_empty());
 }

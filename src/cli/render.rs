@@ -11,7 +11,7 @@ use kelvin::light::ImageInfiniteLight;
 use kelvin::render::camera::CameraModel;
 use kelvin::render::film_io::{write_exr, write_png};
 use kelvin::render::renderer::{RenderOptions, Strategy, render_with};
-use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, RunReport, Settings};
+use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, Settings};
 use kelvin::systems::LightingPlugin;
 
 use super::CliError;
@@ -73,7 +73,9 @@ pub struct RenderArgs {
     /// instead of the scene's camera; the EXR can light another scene with --env.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_point)]
     environment_at: Option<glam::Vec3>,
-    /// Print which systems ran and why others were skipped.
+    /// Print the light system's run report over the whole render (which systems ran in how many
+    /// of its updates, with counts summed over the batches, why others were skipped, and every
+    /// warning), and the time of each pass.
     #[arg(long)]
     report: bool,
 }
@@ -195,7 +197,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         render_with(&mut world, &mut schedule, &opts, camera, |f| bar.set_position((f * 1000.0) as u64));
     bar.finish_and_clear();
     if args.report {
-        eprint!("{}", world.resource::<RunReport>());
+        eprint!("{}", stats.report);
     }
     let rgb = film.pixels();
     let exposure = args.exposure.unwrap_or_else(|| auto_exposure(&rgb));

@@ -17,7 +17,7 @@ use crate::light::{ColorQuery, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
 use crate::sampling::Frame;
-use crate::shading::{ColorMode, DirectLighting, SceneBounds, Settings, ShadingBatch};
+use crate::shading::{ColorMode, DirectLighting, RunReport, RunSummary, SceneBounds, Settings, ShadingBatch};
 use crate::spectrum::{SampledSpectrum, SampledWavelengths, color};
 use crate::systems::GeometryIndex;
 
@@ -82,6 +82,9 @@ pub struct RenderStats {
     pub bsdf_rays: u64,
     /// Where the time went, pass by pass (their sum is `seconds` less the set-up).
     pub passes: PassSeconds,
+    /// The light system's run report over every update of the render (the one before the first
+    /// batch, then one per batch): each warning, and per system its runs and summed counts.
+    pub report: RunSummary,
 }
 
 /// Seconds spent in each pass of a render, summed over its batches.
@@ -175,11 +178,15 @@ fn render_on_pool(
     mut progress: impl FnMut(f32),
 ) -> (Film, RenderStats) {
     let start = std::time::Instant::now();
+    let mut stats = RenderStats::default();
     // Compensated env tables only pay off when BSDF samples cover the dim part of the sky.
     world.resource_mut::<Settings>().mis = opts.strategy == Strategy::Mis;
     // One update brings the BVH and light tables up to date before cameras are placed.
     world.resource_mut::<ShadingBatch>().clear();
     schedule.run(world);
+    // Each update clears the world's run report: what it says (this update's warnings above all)
+    // is kept in the render's own.
+    stats.report.add(world.resource::<RunReport>());
     let camera = camera.unwrap_or_else(|| CameraModel::Pinhole(find_camera(world, opts.width, opts.height)));
     let materials: Vec<Material> = {
         let entities = world.resource::<GeometryIndex>().entities.clone();
@@ -191,7 +198,6 @@ fn render_on_pool(
     let seed = settings.seed ^ RENDER_SALT;
 
     let mut film = Film::new(opts.width, opts.height);
-    let mut stats = RenderStats::default();
     let total = opts.width as usize * opts.height as usize * opts.spp as usize;
     let mut columns = CameraColumns::default();
     let mut contributions: Vec<Vec3> = Vec::new();
@@ -218,6 +224,7 @@ fn render_on_pool(
         let light_system_start = std::time::Instant::now();
         schedule.run(world);
         let shading_start = std::time::Instant::now();
+        stats.report.add(world.resource::<RunReport>());
         stats.passes.camera += (light_system_start - camera_start).as_secs_f64();
         stats.passes.light_system += (shading_start - light_system_start).as_secs_f64();
         stats.shadow_rays += world.resource::<crate::systems::ShadowRays>().len() as u64;
