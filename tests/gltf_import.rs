@@ -1,23 +1,30 @@
-//! glTF import: the real scenes in ../shared/data/gltf (counts, emissive strengths, light kinds, external buffers
+//! glTF import: the real scenes in tests/data/gltf (counts, emissive strengths, light kinds, external buffers
 //! and textures), the Khronos glTF-Validator's valid and invalid files against their reports, and broken files
 //! made here (truncated .glb, short or missing buffer, missing or garbage textures, out-of-bounds accessors).
 
 use std::path::{Path, PathBuf};
 
+use bevy_ecs::prelude::*;
 use glam::{Vec3, Vec4};
+use kelvin::geometry::Transform;
+use kelvin::light::GoniometricLight;
 use kelvin::rng::SplitMix64;
 use kelvin::scene::gltf::{GltfError, GltfScene, IesSource, LightKind, load_gltf, load_gltf_from_bytes};
+use kelvin::scene::ies::IesProfile;
+use kelvin::scene::spawn::{SpawnReport, spawn_gltf};
+use kelvin::shading::{DirectLighting, LightSelection, Settings, ShadingBatch};
+use kelvin::systems::LightingPlugin;
 use serde_json::{Value, json};
 
 mod common;
-use common::files::{TempDir, shared_data};
+use common::files::{TempDir, test_data};
 
 fn temp_dir(test: &str) -> TempDir {
     TempDir::new("gltf", test)
 }
 
-fn gltf_dir() -> Option<PathBuf> {
-    shared_data("gltf")
+fn gltf_dir() -> PathBuf {
+    test_data("gltf")
 }
 
 /// Every .gltf / .glb under `dir`, sorted.
@@ -48,7 +55,7 @@ fn triangle_count(scene: &GltfScene) -> usize {
 
 #[test]
 fn every_sample_scene_loads() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let files: Vec<PathBuf> =
         gltf_files(&dir).into_iter().filter(|p| !p.to_string_lossy().contains("khronos-validator")).collect();
     assert!(files.len() >= 14, "expected the sample scenes, found {}", files.len());
@@ -88,7 +95,7 @@ fn every_sample_scene_loads() {
 
 #[test]
 fn cornell_box_has_an_emitter_of_strength_100() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let scene = load_ok(&dir.join("bevy/CornellBox.glb"));
     assert_eq!((scene.meshes.len(), scene.instances.len(), scene.materials.len()), (4, 4, 5));
     let emitters: Vec<_> = scene.materials.iter().filter(|m| m.emissive != Vec3::ZERO).collect();
@@ -101,7 +108,7 @@ fn cornell_box_has_an_emitter_of_strength_100() {
 
 #[test]
 fn emissive_strength_test_has_strengths_1_to_16() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let scene = load_ok(&dir.join("renderling/EmissiveStrengthTest.glb"));
     let factor = Vec3::new(0.1, 0.5, 0.9);
     for (name, strength) in [("Emit1", 1.0), ("Emit2", 2.0), ("Emit4", 4.0), ("Emit8", 8.0), ("Emit16", 16.0)] {
@@ -122,7 +129,7 @@ fn emissive_strength_test_has_strengths_1_to_16() {
 
 #[test]
 fn renderling_lights_have_the_stated_kinds() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let kinds = |file: &str| -> Vec<LightKind> {
         load_ok(&dir.join("renderling").join(file)).lights.iter().map(|l| l.kind).collect()
     };
@@ -155,7 +162,7 @@ fn renderling_lights_have_the_stated_kinds() {
 
 #[test]
 fn mixed_lighting_example_loads_its_bin_and_jpeg_textures() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let scene = load_ok(&dir.join("bevy/MixedLightingExample/MixedLightingExample.gltf"));
     assert_eq!(scene.meshes.len(), 6);
     assert!(triangle_count(&scene) > 1000);
@@ -184,7 +191,7 @@ fn related(a: &str, b: &str) -> bool {
 
 #[test]
 fn validator_files_agree_with_their_reports() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let files = gltf_files(&dir.join("khronos-validator"));
     assert!(files.len() >= 22, "expected the validator files, found {}", files.len());
     println!("{:<75} {:>6}  outcome", "file", "errors");
@@ -224,7 +231,7 @@ fn validator_files_agree_with_their_reports() {
 
 #[test]
 fn validator_spot_angles_are_fixed_and_directional_range_dropped() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let light_dir = dir.join("khronos-validator/KHR_lights_punctual/data");
     // Lights not attached to a node are not placed, so attach them by loading a copy with a node.
     let attach = |file: &str| -> GltfScene {
@@ -441,7 +448,7 @@ fn nan_vertices_drop_their_triangles() {
 
 #[test]
 fn truncated_glb_and_bad_json_are_errors() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let bytes = std::fs::read(dir.join("bevy/CornellBox.glb")).unwrap();
     let tmp = temp_dir("truncated");
     for cut in [6, 12, 19, bytes.len() / 2, bytes.len() - 1] {
@@ -462,7 +469,7 @@ fn truncated_glb_and_bad_json_are_errors() {
 /// A real .gltf next to a truncated (or empty) copy of its .bin: an error naming both files and both lengths.
 #[test]
 fn real_gltf_with_truncated_bin_is_an_error_naming_it() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let src = dir.join("renderling");
     let bin = std::fs::read(src.join("shadow_mapping_sanity.bin")).unwrap();
     let tmp = temp_dir("truncated-bin");
@@ -486,7 +493,7 @@ fn real_gltf_with_truncated_bin_is_an_error_naming_it() {
 /// Random byte flips and truncations of real files never panic (each gives a scene or an error).
 #[test]
 fn mutated_files_never_panic() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let mut rng = SplitMix64::new(2024);
     for file in ["bevy/CornellBox.glb", "kajiya/emissive_triangle/triangle.glb", "renderling/spot_lights.glb"] {
         let original = std::fs::read(dir.join(file)).unwrap();
@@ -614,7 +621,7 @@ fn ies_lights_are_resolved_relative_to_the_file() {
 /// panic: each copy gives a scene or an error.
 #[test]
 fn mutated_json_numbers_never_panic() {
-    let Some(dir) = gltf_dir() else { return };
+    let dir = gltf_dir();
     let base = dir.join("renderling");
     let original: Value =
         serde_json::from_slice(&std::fs::read(base.join("shadow_mapping_sanity.gltf")).unwrap()).unwrap();
@@ -660,4 +667,107 @@ fn mutated_json_numbers_never_panic() {
     }
     println!("shadow_mapping_sanity.gltf: {loaded} mutated copies loaded, {failed} refused");
     assert!(loaded > 0 && failed > 0);
+}
+
+// ---- kelvin's own files (tests/data/gltf/kelvin, written by scripts/make_test_gltf.py) ----
+
+/// Rec. 709 luminance of linear RGB, as kelvin's glTF spawner weighs a light's colour.
+fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// A world with the lighting systems (every light sampled at every point) and the scene at `path` spawned.
+fn spawned(path: &Path) -> (World, Schedule, SpawnReport) {
+    let scene = load_ok(path);
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    world.insert_resource(Settings { selection: LightSelection::All, ..Default::default() });
+    LightingPlugin::build(&mut world, &mut schedule);
+    let report = spawn_gltf(&mut world, &scene);
+    (world, schedule, report)
+}
+
+/// Photometric irradiance (lx) at each of `points` on an upward-facing floor, with its standard error: the mean
+/// over `samples` light samples per point of Y(Li) cos / pdf, summed over the lights.
+fn floor_irradiance(world: &mut World, schedule: &mut Schedule, points: &[Vec3], samples: u32) -> Vec<(f64, f64)> {
+    {
+        let mut batch = world.resource_mut::<ShadingBatch>();
+        batch.clear();
+        for (i, &p) in points.iter().enumerate() {
+            for s in 0..samples {
+                batch.push(p, Vec3::Y, i as u32, s);
+            }
+        }
+    }
+    schedule.run(world);
+    let out = world.resource::<DirectLighting>();
+    (0..points.len())
+        .map(|i| {
+            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+            for k in 0..samples as usize {
+                let mut e = 0.0f64;
+                for j in out.entries(i * samples as usize + k) {
+                    let r = out.radiance[j].0;
+                    if out.pdf[j] > 0.0 {
+                        let y = luminance(Vec3::new(r[0], r[1], r[2]));
+                        e += (y * out.wi[j].dot(Vec3::Y).max(0.0) / out.pdf[j]) as f64;
+                    }
+                }
+                sum += e;
+                sum2 += e * e;
+            }
+            let n = samples as f64;
+            let mean = sum / n;
+            (mean, ((sum2 / n - mean * mean).max(0.0) / n).sqrt())
+        })
+        .collect()
+}
+
+/// EXT_lights_ies with a real profile (ASA_15M_R2.ies): the light's amount is the multiplier times the colour's
+/// luminance, as for KHR_lights_punctual lights, so a coloured lamp is as bright as an RGB renderer multiplying
+/// colour by intensity shows it, and a black one gives no light (spawned, with zero power; no warning, as for a
+/// black point light).
+#[test]
+fn ies_light_takes_its_colour_luminance() {
+    let path = test_data("gltf/kelvin/ies_light_colour.gltf");
+    let (mut world, mut schedule, report) = spawned(&path);
+    assert!(report.warnings.is_empty(), "{:#?}", report.warnings);
+    assert_eq!(report.lights, 2);
+    let profile = IesProfile::from_file(&test_data("ies/luxcore/ASA_15M_R2.ies")).unwrap();
+    // The file's first candela value (vertical 0, nadir) and the one at vertical 30 degrees, plane C0, both
+    // read off the file (its candela multiplier and ballast factor are 1).
+    assert_eq!((profile.candela(0.0, 0.0), profile.candela(30.0, 0.0)), (1666.0, 2337.0));
+    let colour = Vec3::new(1.0, 0.5, 0.25);
+    let multiplier = 2.5;
+
+    let mut lamps: Vec<(GoniometricLight, Transform)> =
+        world.query::<(&GoniometricLight, &Transform)>().iter(&world).map(|(g, t)| (g.clone(), *t)).collect();
+    lamps.sort_by(|a, b| a.1.translation.x.total_cmp(&b.1.translation.x));
+    let [(coloured, at_coloured), (black, at_black)] = &lamps[..] else { panic!("{} IES lights", lamps.len()) };
+    assert_eq!((at_coloured.translation, at_black.translation), (Vec3::new(0.0, 3.0, 0.0), Vec3::new(4.0, 3.0, 0.0)));
+    let coloured = coloured.resolve(at_coloured).unwrap();
+    let black = black.resolve(at_black).unwrap();
+    // Candela straight down (the lamp is aimed down): photometric intensity per profile unit times the profile.
+    let down = coloured.intensity.luminous() * coloured.profile_value(Vec3::NEG_Y);
+    let expected = multiplier * luminance(colour) * 1666.0;
+    assert!((down / expected - 1.0).abs() < 1e-3, "{down} cd down, expected {expected} (2.5 x 0.588 x 1666)");
+    let black_down = black.intensity.luminous() * black.profile_value(Vec3::NEG_Y);
+    assert_eq!((black_down, black.phi()), (0.0, 0.0), "a black IES light emits nothing");
+
+    // Irradiance on the floor, 3 m below: under the coloured lamp, 30 degrees off its axis in plane C0 (local +X,
+    // world +X here) and under the black lamp, where only the coloured one (at 53.13 degrees) lights the floor.
+    let off_axis = Vec3::new(3.0 * 30f32.to_radians().tan(), 0.0, 0.0);
+    let under_black = Vec3::new(4.0, 0.0, 0.0);
+    let e = floor_irradiance(&mut world, &mut schedule, &[Vec3::ZERO, off_axis, under_black], 1);
+    let scale = (multiplier * luminance(colour)) as f64;
+    let cos30 = 30f64.to_radians().cos();
+    let cos53 = 0.6;
+    let expected = [
+        scale * 1666.0 / 9.0,
+        scale * 2337.0 * cos30 / (3.0 / cos30).powi(2),
+        scale * profile.candela(53.130102, 0.0) * cos53 / 25.0,
+    ];
+    for (k, ((got, _), want)) in e.iter().zip(expected).enumerate() {
+        assert!((got / want - 1.0).abs() < 2e-3, "point {k}: {got} lx, expected {want} lx");
+    }
 }

@@ -1,9 +1,11 @@
 //! Turning an imported glTF scene into entities: meshes (baked to world space) with materials,
 //! emissive surfaces as area lights, KHR_lights_punctual / EXT_lights_ies lights, and cameras.
 //!
-//! Light units are glTF's: candela for point and spot lights, lux for directional ones. A light's
-//! colour is its chromaticity (an RGB-derived spectrum); its luminous amount is the intensity
-//! times the colour's luminance, as an RGB renderer multiplying colour by intensity would show.
+//! Light units are glTF's: candela for point and spot lights, lux for directional ones, and for
+//! EXT_lights_ies lights a multiplier on the profile's candela values. A light's colour is its
+//! chromaticity (an RGB-derived spectrum); its luminous amount is the intensity (or multiplier)
+//! times the colour's luminance, as an RGB renderer multiplying colour by intensity would show, so
+//! a black light of any kind emits nothing.
 //! `range` is ignored: kelvin keeps the inverse-square law everywhere (glTF allows a renderer to
 //! treat range as a culling hint).
 
@@ -117,8 +119,10 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
             }
             LightKind::Ies => match load_ies(light.ies.as_ref()) {
                 Ok(profile) => {
+                    // The multiplier scales the profile's candela values; the colour weighs them by its
+                    // luminance, as for the other kinds (a black colour gives no light).
                     let mut g = GoniometricLight::from_ies(Arc::new(profile));
-                    g.amount = Amount::Candela(light.intensity);
+                    g.amount = Amount::Candela(luminous);
                     g.spectrum = spectrum;
                     e.insert((g, transform));
                 }

@@ -1,0 +1,157 @@
+#!/usr/bin/env python3
+"""Writes kelvin's own small glTF test files into tests/data/gltf/kelvin/ (Python 3 standard library only).
+
+    python3 scripts/make_test_gltf.py
+
+Every file is a .gltf whose geometry sits in one base64 data: URI buffer, so it needs nothing beside it except
+what it names on purpose (the EXT_lights_ies file references a real IES profile elsewhere in tests/data). The
+output is deterministic: running the script again rewrites the same bytes. What each file is for, and what the
+tests read from it, is in tests/data/SOURCES.md and tests/gltf_import.rs.
+
+Conventions (glTF 2.0): right-handed, +Y up, metres; a triangle's front face is counter-clockwise, its geometric
+normal (p1 - p0) x (p2 - p0). The script checks the facing of every surface it writes, in world space and with the
+spec's rule that a node whose world transform has a negative determinant reverses the winding (section 3.7.4).
+"""
+
+import base64
+import json
+import math
+import struct
+from pathlib import Path
+
+OUT = Path(__file__).resolve().parent.parent / "tests" / "data" / "gltf" / "kelvin"
+
+# glTF constants.
+FLOAT, UNSIGNED_SHORT = 5126, 5123
+ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
+
+
+def sub(a, b):
+    return [a[i] - b[i] for i in range(3)]
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def normalize(v):
+    n = math.sqrt(sum(x * x for x in v))
+    return [x / n for x in v]
+
+
+def quad(corner, edge_u, edge_v):
+    """Four corners corner, +u, +u+v, +v: triangles (0, 1, 2), (0, 2, 3) face (edge_u x edge_v)."""
+    c, u, v = corner, edge_u, edge_v
+    return [c, [c[i] + u[i] for i in range(3)], [c[i] + u[i] + v[i] for i in range(3)], [c[i] + v[i] for i in range(3)]]
+
+
+QUAD_INDICES = [0, 1, 2, 0, 2, 3]
+
+
+class Gltf:
+    """A glTF document under construction: one buffer, meshes of one triangle-list primitive each."""
+
+    def __init__(self):
+        self.bin = bytearray()
+        self.doc = {
+            "asset": {"version": "2.0", "generator": "kelvin scripts/make_test_gltf.py"},
+            "scene": 0,
+            "scenes": [{"nodes": []}],
+            "nodes": [],
+            "meshes": [],
+            "materials": [],
+            "accessors": [],
+            "bufferViews": [],
+            "buffers": [],
+        }
+
+    def _view(self, data, target):
+        while len(self.bin) % 4:
+            self.bin.append(0)
+        self.doc["bufferViews"].append(
+            {"buffer": 0, "byteOffset": len(self.bin), "byteLength": len(data), "target": target}
+        )
+        self.bin.extend(data)
+        return len(self.doc["bufferViews"]) - 1
+
+    def _accessor(self, **fields):
+        self.doc["accessors"].append(fields)
+        return len(self.doc["accessors"]) - 1
+
+    def material(self, **fields):
+        self.doc["materials"].append(fields)
+        return len(self.doc["materials"]) - 1
+
+    def mesh(self, name, positions, indices, material):
+        """A mesh without NORMAL data (its facing is the winding alone)."""
+        data = b"".join(struct.pack("<3f", *p) for p in positions)
+        pos = self._accessor(
+            bufferView=self._view(data, ARRAY_BUFFER),
+            componentType=FLOAT,
+            count=len(positions),
+            type="VEC3",
+            min=[min(p[i] for p in positions) for i in range(3)],
+            max=[max(p[i] for p in positions) for i in range(3)],
+        )
+        idx = self._accessor(
+            bufferView=self._view(struct.pack(f"<{len(indices)}H", *indices), ELEMENT_ARRAY_BUFFER),
+            componentType=UNSIGNED_SHORT,
+            count=len(indices),
+            type="SCALAR",
+        )
+        primitive = {"attributes": {"POSITION": pos}, "indices": idx, "material": material}
+        self.doc["meshes"].append({"name": name, "primitives": [primitive]})
+        return len(self.doc["meshes"]) - 1
+
+    def node(self, **fields):
+        self.doc["nodes"].append(fields)
+        self.doc["scenes"][0]["nodes"].append(len(self.doc["nodes"]) - 1)
+        return len(self.doc["nodes"]) - 1
+
+    def write(self, name):
+        if not self.doc["materials"]:
+            del self.doc["materials"]
+        uri = "data:application/octet-stream;base64," + base64.b64encode(bytes(self.bin)).decode("ascii")
+        self.doc["buffers"] = [{"byteLength": len(self.bin), "uri": uri}]
+        OUT.mkdir(parents=True, exist_ok=True)
+        text = json.dumps(self.doc, indent=2) + "\n"
+        (OUT / name).write_text(text, encoding="utf-8")
+        print(f"wrote {OUT / name} ({len(text)} bytes)")
+
+
+def floor(g, half_size):
+    """A grey floor at y = 0, facing up, `half_size` metres each way from the origin."""
+    s = half_size
+    positions = quad([-s, 0.0, -s], [0.0, 0.0, 2 * s], [2 * s, 0.0, 0.0])
+    assert normalize(cross(sub(positions[1], positions[0]), sub(positions[2], positions[0]))) == [0.0, 1.0, 0.0]
+    grey = g.material(name="floor", pbrMetallicRoughness={"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0})
+    return g.node(name="floor", mesh=g.mesh("floor", positions, QUAD_INDICES, grey))
+
+
+# ---- ies_light_colour.gltf ----
+
+# A rotation of -90 degrees about +X: the light's local -Z (an IES profile's nadir) points down, world -Y.
+AIM_DOWN = [-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)]
+
+
+def ies_light_colour():
+    """Two EXT_lights_ies downlights with the real profile ASA_15M_R2.ies (LuxCore's test file, referenced by a
+    relative uri, not copied), 3 m over a floor: "lamp_coloured" (multiplier 2.5, colour [1, 0.5, 0.25]) at the
+    origin, "lamp_black" (multiplier 2.5, colour [0, 0, 0]) 4 m along +X."""
+    g = Gltf()
+    floor(g, 6.0)
+    g.doc["extensionsUsed"] = ["EXT_lights_ies"]
+    g.doc["extensions"] = {"EXT_lights_ies": {"lights": [{"uri": "../../ies/luxcore/ASA_15M_R2.ies"}]}}
+    for name, x, colour in [("lamp_coloured", 0.0, [1.0, 0.5, 0.25]), ("lamp_black", 4.0, [0.0, 0.0, 0.0])]:
+        g.node(
+            name=name,
+            translation=[x, 3.0, 0.0],
+            rotation=AIM_DOWN,
+            extensions={"EXT_lights_ies": {"light": 0, "multiplier": 2.5, "color": colour}},
+        )
+    assert (OUT.parent.parent / "ies" / "luxcore" / "ASA_15M_R2.ies").is_file(), "the profile the file names"
+    g.write("ies_light_colour.gltf")
+
+
+if __name__ == "__main__":
+    ies_light_colour()
