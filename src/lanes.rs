@@ -1,7 +1,8 @@
 //! Lane kernels: code written as loops over fixed-size arrays of [`LANES`] values, which LLVM
 //! turns into vector instructions, and a run-time choice of the widest instruction set the CPU
 //! has to compile them for. Without `-C target-cpu`, Rust targets baseline x86-64 (SSE2, 4 f32
-//! lanes); [`widest`] runs its closure as AVX-512 or AVX2 code where the CPU has them.
+//! lanes); [`widest`] runs its closure as AVX-512 or AVX2 code where the CPU has every feature
+//! that code is compiled with ([`Level`]).
 //!
 //! Results do not depend on the choice: Rust never contracts a * b + c into an FMA, and the
 //! vector forms of +, -, *, / and sqrt round exactly as the scalar ones do.
@@ -64,42 +65,110 @@ pub fn columns(v: &[Vec3; LANES]) -> [[f32; LANES]; 3] {
     c
 }
 
-/// Runs `f` compiled for AVX-512 or AVX2 when the CPU has them (else as it is). Only the code
-/// inlined into the wrapper is compiled for the wider set, and LLVM does not inline a large
-/// closure on its own: mark `f` `#[inline(always)]` (attributes on closures are stable), and the
-/// lane kernels it calls too. Loops over iterator adapters (`step_by`, `array::from_fn`) may stay
-/// out of line; plain `for` loops over indices do not.
+/// Runs `f` compiled for the widest instruction set the CPU has ([`level`]: AVX-512 or AVX2,
+/// else as it is). Only the code inlined into the wrapper is compiled for the wider set, and LLVM
+/// does not inline a large closure on its own: mark `f` `#[inline(always)]` (attributes on
+/// closures are stable), and the lane kernels it calls too. Loops over iterator adapters
+/// (`step_by`, `array::from_fn`) may stay out of line; plain `for` loops over indices do not.
 #[inline]
 pub fn widest<R>(f: impl FnOnce() -> R) -> R {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512dq")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-            && std::arch::is_x86_feature_detected!("avx512bw")
-        {
-            // SAFETY: the CPU has every feature the function is compiled for (checked above).
-            return unsafe { x86::avx512(f) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: as above, for AVX2.
-            return unsafe { x86::avx2(f) };
-        }
-    }
-    f()
+    let level = level();
+    // SAFETY: `level()` is a level whose every feature the CPU has (see `choose`).
+    unsafe { run_at(level, f) }
 }
 
-#[cfg(target_arch = "x86_64")]
-mod x86 {
-    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx512bw,avx2,avx,sse4.2,popcnt,bmi1,bmi2,lzcnt")]
-    pub unsafe fn avx512<R>(f: impl FnOnce() -> R) -> R {
-        f()
-    }
+/// The instruction-set levels [`widest`] may run its closure at, widest first, each with every
+/// target feature its wrapper is compiled with. One list per level makes both the wrapper's
+/// `#[target_feature]` attributes and what [`level`] checks before choosing it, so the two cannot
+/// drift apart. The lists spell out what the features named imply (`rustc --print cfg -C
+/// target-feature=+avx512f` shows avx512f bringing avx2, fma and f16c, avx2 bringing avx, and so
+/// down to sse3): the wrapper is compiled with those too, so they are checked too.
+macro_rules! levels {
+    ($($(#[$doc:meta])* $level:ident => $wrapper:ident [$($feature:tt),+ $(,)?];)+) => {
+        /// An instruction-set level of [`widest`].
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub enum Level {
+            $($(#[$doc])* $level,)+
+            /// The target's baseline (SSE2 on x86-64 without `-C target-cpu`): `f` as compiled.
+            Baseline,
+        }
 
-    #[target_feature(enable = "avx2,avx,sse4.2,popcnt,bmi1,bmi2,lzcnt")]
-    pub unsafe fn avx2<R>(f: impl FnOnce() -> R) -> R {
-        f()
-    }
+        impl Level {
+            /// Every level, widest first.
+            pub const ALL: &[Level] = &[$(Level::$level,)+ Level::Baseline];
+
+            /// The target features this level's code is compiled with, and the CPU must have.
+            pub const fn features(self) -> &'static [&'static str] {
+                match self {
+                    $(Level::$level => &[$($feature),+],)+
+                    Level::Baseline => &[],
+                }
+            }
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        mod x86 {
+            $(
+                /// Runs `f` compiled with the features of the level of the same name.
+                ///
+                /// # Safety
+                /// The CPU must have every one of them.
+                $(#[target_feature(enable = $feature)])+
+                pub unsafe fn $wrapper<R>(f: impl FnOnce() -> R) -> R {
+                    f()
+                }
+            )+
+        }
+
+        /// Runs `f` through the wrapper of `level`.
+        ///
+        /// # Safety
+        /// The CPU must have every feature of `level`.
+        #[inline(always)]
+        unsafe fn run_at<R>(level: Level, f: impl FnOnce() -> R) -> R {
+            match level {
+                // SAFETY: the caller's contract.
+                $(#[cfg(target_arch = "x86_64")] Level::$level => unsafe { x86::$wrapper(f) },)+
+                _ => f(),
+            }
+        }
+
+        /// Whether the CPU has `feature` (and the OS supports it), for the features the levels
+        /// name; None for any other (and on other architectures).
+        fn cpu_has(feature: &str) -> Option<bool> {
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unreachable_patterns)] // a feature of several levels is tested where first named
+            match feature {
+                $($($feature => return Some(std::arch::is_x86_feature_detected!($feature)),)+)+
+                _ => {}
+            }
+            let _ = feature;
+            None
+        }
+    };
+}
+
+levels! {
+    /// AVX-512 (F, DQ, VL, BW) with AVX2 and the scalar extensions of x86-64-v3.
+    Avx512 => avx512 [
+        "avx512f", "avx512dq", "avx512vl", "avx512bw", "avx2", "avx", "fma", "f16c",
+        "sse4.2", "sse4.1", "ssse3", "sse3", "popcnt", "bmi1", "bmi2", "lzcnt",
+    ];
+    /// AVX2 with the scalar extensions of x86-64-v3.
+    Avx2 => avx2 ["avx2", "avx", "sse4.2", "sse4.1", "ssse3", "sse3", "popcnt", "bmi1", "bmi2", "lzcnt"];
+}
+
+/// The widest level for which `has` reports every feature (as `Some(true)`).
+fn choose(has: impl Fn(&str) -> Option<bool>) -> Level {
+    let every = |l: &&Level| l.features().iter().all(|f| has(f) == Some(true));
+    *Level::ALL.iter().find(every).expect("the baseline needs no feature")
+}
+
+/// The level [`widest`] runs at on this CPU: the widest whose every feature it has, detected once.
+#[inline]
+pub fn level() -> Level {
+    static LEVEL: std::sync::OnceLock<Level> = std::sync::OnceLock::new();
+    *LEVEL.get_or_init(|| choose(cpu_has))
 }
 
 #[cfg(test)]
@@ -115,6 +184,36 @@ mod tests {
         });
         assert_eq!(calls, 1);
         assert_eq!(v, (0..LANES).map(|i| (i as f32).sqrt()).sum::<f32>());
+    }
+
+    #[test]
+    fn a_level_is_chosen_only_if_the_cpu_has_every_feature_its_code_is_compiled_with() {
+        assert_eq!(choose(|_| Some(true)), Level::ALL[0], "every feature present: the widest level");
+        assert_eq!(choose(|_| Some(false)), Level::Baseline);
+        for &level in Level::ALL {
+            for &missing in level.features() {
+                // A CPU with every feature but `missing` gets the widest level compiled without it.
+                let chosen = choose(|f| Some(f != missing));
+                let want = Level::ALL.iter().copied().find(|l| !l.features().contains(&missing));
+                assert_eq!(Some(chosen), want, "without {missing} (a feature of {level:?})");
+                // A feature the detector cannot tell about counts as missing.
+                assert_eq!(choose(|f| (f != missing).then_some(true)), chosen, "{missing} unknown");
+            }
+        }
+    }
+
+    #[test]
+    fn the_detector_knows_every_feature_and_the_level_in_use_has_them_all() {
+        for &level in Level::ALL {
+            for &f in level.features() {
+                assert!(cpu_has(f).is_some(), "{level:?}: the detector does not know {f}");
+            }
+        }
+        assert!(cpu_has("no-such-feature").is_none());
+        let level = level();
+        for &f in level.features() {
+            assert_eq!(cpu_has(f), Some(true), "{level:?} in use without {f}");
+        }
     }
 
     #[test]

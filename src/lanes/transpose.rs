@@ -4,7 +4,8 @@
 //! elsewhere, lane by lane.
 //!
 //! The AVX-512 code sits in `#[target_feature]` functions, which only code compiled for AVX-512
-//! may inline; elsewhere they are calls. Use them at the end of a block, when few vector
+//! may inline; elsewhere they are calls. They run where [`widest`](super::widest) runs at
+//! AVX-512, whose features include everything theirs imply. Use them at the end of a block, when few vector
 //! registers are live: loads made this way at the start of a kernel measured slower than scalar
 //! loads.
 
@@ -13,12 +14,21 @@ use glam::Vec3;
 use super::LANES;
 use crate::spectrum::SampledSpectrum;
 
+/// Whether the CPU has every feature the `avx512` functions are compiled with: AVX-512F and what
+/// it implies (AVX2, FMA, F16C, AVX, SSE4.2 and down), all among the features of
+/// [`Level::Avx512`](super::Level), which is in use only if the CPU has each of them.
+#[inline(always)]
+fn has_avx512() -> bool {
+    super::level() == super::Level::Avx512
+}
+
 /// `out[l] = (c[0][l], c[1][l], c[2][l])`.
 #[inline(always)]
 pub fn store_vec3s(c: &[[f32; LANES]; 3], out: &mut [Vec3; LANES]) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        // SAFETY: the CPU has AVX-512F (checked above); `Vec3` is three f32, so `out` is 48.
+    if has_avx512() {
+        // SAFETY: the CPU has AVX-512F and all it implies (checked above); `Vec3` is three f32,
+        // so `out` is 48.
         return unsafe { avx512::store3(c, out.as_mut_ptr().cast()) };
     }
     portable::store_vec3s(c, out)
@@ -28,9 +38,9 @@ pub fn store_vec3s(c: &[[f32; LANES]; 3], out: &mut [Vec3; LANES]) {
 #[inline(always)]
 pub fn store_rgb_spectra(c: &[[f32; LANES]; 3], out: &mut [SampledSpectrum; LANES]) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        // SAFETY: the CPU has AVX-512F (checked above); `SampledSpectrum` is a transparent
-        // [f32; 4], so `out` is 64 f32.
+    if has_avx512() {
+        // SAFETY: the CPU has AVX-512F and all it implies (checked above); `SampledSpectrum` is
+        // a transparent [f32; 4], so `out` is 64 f32.
         return unsafe { avx512::store4(c, out.as_mut_ptr().cast()) };
     }
     portable::store_rgb_spectra(c, out)
@@ -128,6 +138,15 @@ mod avx512 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_avx512_stores_check_every_feature_avx512f_implies() {
+        // What `rustc --print cfg -C target-feature=+avx512f` adds to the x86-64 baseline.
+        let implied = ["avx512f", "avx2", "avx", "fma", "f16c", "sse4.2", "sse4.1", "ssse3", "sse3"];
+        for f in implied {
+            assert!(crate::lanes::Level::Avx512.features().contains(&f), "{f}");
+        }
+    }
 
     #[test]
     fn block_stores_match_lane_by_lane_stores() {
