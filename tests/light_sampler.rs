@@ -1,13 +1,14 @@
 //! Light samplers: pmfs sum to 1 (exactly for uniform and power, by a chi-square test of sample
 //! frequencies for the BVH), `pmf` equals the probability `sample` returns, a refit tree equals a
-//! fresh build of the same topology, zero-power lights are never chosen, the one-sample estimator
-//! is unbiased, and the ECS refits on moves and rebuilds on additions.
+//! fresh build of the same topology, refits past the cost ratio rebuild the tree, zero-power
+//! lights are never chosen, the one-sample estimator is unbiased, and the ECS refits on moves and
+//! rebuilds on additions.
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 use kelvin::geometry::Transform;
 use kelvin::light::{Amount, ColorQuery, DistantLight, LightId, LightSampleContext, LightTable, PointLight, SpotLight};
-use kelvin::light_sampler::{BvhSampler, BvhUpdate, LightSampler};
+use kelvin::light_sampler::{BvhSampler, BvhUpdate, LIGHT_TREE_REBUILD_RATIO, LightSampler};
 use kelvin::rng::SplitMix64;
 use kelvin::shading::{DirectLighting, LightSamplerKind, RunReport, Settings, ShadingBatch};
 use kelvin::spectrum::Spectrum;
@@ -348,6 +349,75 @@ fn one_sample_estimators_are_unbiased() {
             let mean = sum / samples as f64;
             let sigma = ((sum2 / samples as f64 - mean * mean).max(0.0) / samples as f64).sqrt();
             assert!((mean - exact).abs() <= 5.0 * sigma + 1e-6 * exact, "{:?}: {mean} vs {exact} +- {sigma}", s.kind());
+        }
+    }
+}
+
+/// Refits that stretch the tree past `LIGHT_TREE_REBUILD_RATIO` rebuild it: lights random-walk,
+/// the tree is only refitted while its cost ratio stays at or under the ratio (checked against a
+/// copy that never rebuilds), and the update whose refit passes it rebuilds instead. The rebuilt
+/// tree is a fresh build's (topology and pmfs), its cost ratio is back to 1, and its pmfs still
+/// sum to 1 (point lights seen from points without a normal: every light can reach every point)
+/// and are what `sample` returns.
+#[test]
+fn refits_past_the_cost_ratio_rebuild_the_tree() {
+    let mut rng = SplitMix64::new(22);
+    let mut lights: Vec<(Vec3, f32)> = (0..300)
+        .map(|_| {
+            (Vec3::new(rng.range(-20.0, 20.0), rng.range(2.0, 6.0), rng.range(-20.0, 20.0)), rng.range(1.0, 100.0))
+        })
+        .collect();
+    let mut table = table_of(&lights.iter().map(|&(p, cd)| L::Point(p, cd)).collect::<Vec<_>>());
+    let mut s = BvhSampler::build(&table);
+    assert_eq!(s.cost_ratio(), 1.0);
+    let mut last_refit_ratio = 1.0;
+    let mut frame = 0;
+    loop {
+        frame += 1;
+        assert!(frame <= 500, "no rebuild in 500 frames; cost ratio {}", s.cost_ratio());
+        table.clear_change_flags();
+        for _ in 0..30 {
+            let i = rng.below(lights.len());
+            let step = Vec3::new(rng.range(-2.0, 2.0), rng.range(-0.5, 0.5), rng.range(-2.0, 2.0));
+            lights[i].0 += step;
+            upsert(&mut table, i as u32, L::Point(lights[i].0, lights[i].1), false);
+        }
+        let mut refit_only = s.clone();
+        refit_only.rebuild_ratio = Some(f32::INFINITY);
+        refit_only.update(&table);
+        let BvhUpdate::Refit { cost_ratio, .. } = refit_only.last_update else {
+            panic!("frame {frame}: a refit expected, got {:?}", refit_only.last_update);
+        };
+        let note = s.update(&table);
+        if cost_ratio <= LIGHT_TREE_REBUILD_RATIO {
+            assert_eq!(s.last_update, refit_only.last_update, "frame {frame}: {note}");
+            assert_eq!(s.cost_ratio(), cost_ratio);
+            last_refit_ratio = cost_ratio;
+            continue;
+        }
+        assert_eq!(s.last_update, BvhUpdate::Rebuilt, "frame {frame}: cost ratio {cost_ratio}: {note}");
+        assert!(note.contains("cost ratio"), "{note}");
+        break;
+    }
+    assert!(frame > 2 && last_refit_ratio > 1.1, "the ratio grew over refits: {last_refit_ratio} by frame {frame}");
+    assert!((s.cost_ratio() - 1.0).abs() < 1e-6, "cost ratio {} after the rebuild", s.cost_ratio());
+    let fresh = BvhSampler::build(&table);
+    assert!(s.same_topology(&fresh), "the rebuilt tree is a fresh build's");
+    let sampler = LightSampler::Bvh(s);
+    for ctx in contexts(23, 20).into_iter().map(|c| LightSampleContext::at(c.p)) {
+        let mut sum = 0.0;
+        sampler.for_each_pmf(&ctx, |id, pmf| {
+            sum += pmf as f64;
+            let want = sampler.pmf(&ctx, id);
+            assert!((pmf - want).abs() <= 1e-5 * want, "{id:?} at {ctx:?}: {pmf} vs {want}");
+            assert_eq!(want, fresh.pmf(&ctx, id), "{id:?} at {ctx:?}");
+        });
+        assert!((sum - 1.0).abs() < 1e-5, "at {ctx:?}: pmfs sum to {sum}");
+        assert!((pmf_sum(&sampler, &table, &ctx) - 1.0).abs() < 1e-5, "at {ctx:?}");
+        for _ in 0..200 {
+            let (id, pmf) = sampler.sample(&ctx, rng.f32()).expect("every light reaches every point");
+            let want = sampler.pmf(&ctx, id);
+            assert!((pmf - want).abs() <= 1e-5 * want, "{id:?} at {ctx:?}: {pmf} vs {want}");
         }
     }
 }
