@@ -153,5 +153,72 @@ def ies_light_colour():
     g.write("ies_light_colour.gltf")
 
 
+# ---- mirrored_emitter.gltf and its unmirrored twin ----
+
+
+def front_normals(positions, indices, scale):
+    """World-space unit front normals of the triangles under a node `scale`, with the winding reversed when the
+    scale's determinant is negative (glTF 2.0 spec, section 3.7.4)."""
+    world = [[p[i] * scale[i] for i in range(3)] for p in positions]
+    out = []
+    for t in range(0, len(indices), 3):
+        a, b, c = (world[i] for i in indices[t : t + 3])
+        if scale[0] * scale[1] * scale[2] < 0:
+            b, c = c, b
+        out.append(normalize(cross(sub(b, a), sub(c, a))))
+    return out
+
+
+def mirror_x(positions):
+    return [[-p[0], p[1], p[2]] for p in positions]
+
+
+def reverse_winding(indices):
+    return [i for t in range(0, len(indices), 3) for i in (indices[t], indices[t + 2], indices[t + 1])]
+
+
+MIRROR = [-1.0, 1.0, 1.0]
+
+
+def mirrored_emitter(mirrored):
+    """A 4 x 4 m floor at y = 0; over it a one-sided emissive 1 x 1 m quad at y = 1 (centred over the origin,
+    4 nits, facing down, no NORMAL data) and a 0.4 x 0.4 m occluder at y = 0.5 over x in [-0.5, -0.1].
+
+    `mirrored`: the emitter's and the occluder's nodes have scale [-1, 1, 1] and their meshes are written in the
+    mirror image (the occluder's local x in [0.1, 0.5]), facing down in their own frame. A loader following the
+    spec (negative determinant: winding reversed) finds them facing down in the world too; one that keeps the
+    winding finds them facing up, and the one-sided emitter lights the sky. Otherwise (the twin): the same
+    world-space surfaces without any node transform. The two files light the floor alike."""
+    g = Gltf()
+    floor(g, 2.0)
+    g.doc["extensionsUsed"] = ["KHR_materials_emissive_strength"]
+    glow = g.material(
+        name="emitter",
+        pbrMetallicRoughness={"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0},
+        emissiveFactor=[1.0, 1.0, 1.0],
+        extensions={"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}},
+    )
+    grey = g.material(name="occluder", pbrMetallicRoughness={"baseColorFactor": [0.5, 0.5, 0.5, 1.0]})
+    # World space, facing down: (edge_u x edge_v) = (1, 0, 0) x (0, 0, 1) = -Y.
+    emitter = quad([-0.5, 1.0, -0.5], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0])
+    occluder = quad([-0.5, 0.5, -0.2], [0.4, 0.0, 0.0], [0.0, 0.0, 0.4])
+    for name, positions, material in [("emitter", emitter, glow), ("occluder", occluder, grey)]:
+        assert front_normals(positions, QUAD_INDICES, [1.0, 1.0, 1.0]) == [[0.0, -1.0, 0.0]] * 2
+        if mirrored:
+            # The mirror image, wound to face down in its own frame; the node's mirror puts it back in place, and
+            # by 3.7.4 it still faces down. Keeping the winding through the mirror would make it face up.
+            local, indices = mirror_x(positions), reverse_winding(QUAD_INDICES)
+            assert front_normals(local, indices, [1.0, 1.0, 1.0]) == [[0.0, -1.0, 0.0]] * 2
+            assert front_normals(local, indices, MIRROR) == [[0.0, -1.0, 0.0]] * 2
+            kept = front_normals([[p[i] * MIRROR[i] for i in range(3)] for p in local], indices, [1.0, 1.0, 1.0])
+            assert kept == [[0.0, 1.0, 0.0]] * 2
+            g.node(name=name, mesh=g.mesh(name, local, indices, material), scale=MIRROR)
+        else:
+            g.node(name=name, mesh=g.mesh(name, positions, QUAD_INDICES, material))
+    g.write("mirrored_emitter.gltf" if mirrored else "unmirrored_emitter.gltf")
+
+
 if __name__ == "__main__":
     ies_light_colour()
+    mirrored_emitter(True)
+    mirrored_emitter(False)

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use bevy_ecs::prelude::*;
 use glam::{Vec3, Vec4};
-use kelvin::geometry::Transform;
-use kelvin::light::GoniometricLight;
+use kelvin::geometry::{Mesh, Transform};
+use kelvin::light::{AreaLight, GoniometricLight};
 use kelvin::rng::SplitMix64;
 use kelvin::scene::gltf::{GltfError, GltfScene, IesSource, LightKind, load_gltf, load_gltf_from_bytes};
 use kelvin::scene::ies::IesProfile;
@@ -769,5 +769,64 @@ fn ies_light_takes_its_colour_luminance() {
     ];
     for (k, ((got, _), want)) in e.iter().zip(expected).enumerate() {
         assert!((got / want - 1.0).abs() < 2e-3, "point {k}: {got} lx, expected {want} lx");
+    }
+}
+
+/// Lambert's formula: irradiance at `p` (normal +Y) from a convex polygon of radiance `l` (unoccluded).
+fn lambert_polygon(vertices: &[Vec3], p: Vec3, l: f64) -> f64 {
+    let k = vertices.len();
+    let sum: f64 = (0..k)
+        .map(|i| {
+            let a = (vertices[i] - p).as_dvec3().normalize();
+            let b = (vertices[(i + 1) % k] - p).as_dvec3().normalize();
+            a.angle_between(b) * glam::DVec3::Y.dot(a.cross(b).normalize())
+        })
+        .sum();
+    sum.abs() * l / 2.0
+}
+
+/// glTF 2.0 spec 3.7.4: a node whose world transform has a negative determinant reverses its triangles' winding.
+/// mirrored_emitter.gltf has a one-sided emissive quad without NORMAL data and an occluder under scale
+/// [-1, 1, 1]; its twin has the same world-space surfaces unmirrored. The emitter faces down and the floor gets the
+/// same light from both (the occluder's shadow included).
+#[test]
+fn mirrored_emitter_faces_and_lights_as_its_unmirrored_twin() {
+    let points = [Vec3::new(-0.3, 0.0, 0.0), Vec3::ZERO, Vec3::new(0.4, 0.0, 0.0)];
+    let samples = 4096;
+    let mut lit = Vec::new();
+    for file in ["mirrored_emitter.gltf", "unmirrored_emitter.gltf"] {
+        let (mut world, mut schedule, report) = spawned(&test_data("gltf/kelvin").join(file));
+        assert!(report.warnings.is_empty(), "{file}: {:#?}", report.warnings);
+        assert_eq!((report.meshes, report.emissive_meshes), (3, 1), "{file}");
+        let normals: Vec<Vec3> = world
+            .query_filtered::<&Mesh, With<AreaLight>>()
+            .iter(&world)
+            .flat_map(|m| {
+                (0..m.triangle_count()).map(|t| {
+                    let [a, b, c] = m.triangle(t);
+                    (b - a).cross(c - a).normalize()
+                })
+            })
+            .collect();
+        assert_eq!(normals.len(), 2, "{file}");
+        assert!(normals.iter().all(|n| n.abs_diff_eq(Vec3::NEG_Y, 1e-6)), "{file}: emitter normals {normals:?}");
+        lit.push(floor_irradiance(&mut world, &mut schedule, &points, samples));
+    }
+    // 4 nits over the quad at y = 1; x = 0.4 is outside the occluder's shadow, the others are in part of it.
+    let emitter =
+        [Vec3::new(-0.5, 1.0, -0.5), Vec3::new(0.5, 1.0, -0.5), Vec3::new(0.5, 1.0, 0.5), Vec3::new(-0.5, 1.0, 0.5)];
+    for (k, &p) in points.iter().enumerate() {
+        let ((m, m_err), (u, u_err)) = (lit[0][k], lit[1][k]);
+        let unoccluded = lambert_polygon(&emitter, p, 4.0);
+        println!(
+            "x = {}: mirrored {m:.4} +- {m_err:.4} lx, unmirrored {u:.4} +- {u_err:.4} lx, unoccluded {unoccluded:.4} lx",
+            p.x
+        );
+        assert!((m - u).abs() < 5.0 * (m_err * m_err + u_err * u_err).sqrt() + 1e-3 * u, "x = {}: {m} vs {u} lx", p.x);
+        if k == 2 {
+            assert!((m - unoccluded).abs() < 5.0 * m_err + 1e-3 * unoccluded, "x = 0.4: {m} lx, Lambert {unoccluded}");
+        } else {
+            assert!(m < 0.9 * unoccluded, "x = {}: {m} lx, not shadowed (unoccluded {unoccluded})", p.x);
+        }
     }
 }

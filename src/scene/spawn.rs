@@ -1,5 +1,6 @@
-//! Turning an imported glTF scene into entities: meshes (baked to world space) with materials,
-//! emissive surfaces as area lights, KHR_lights_punctual / EXT_lights_ies lights, and cameras.
+//! Turning an imported glTF scene into entities: meshes (baked to world space, the winding reversed
+//! under mirroring node transforms, as glTF asks) with materials, emissive surfaces as area lights,
+//! KHR_lights_punctual / EXT_lights_ies lights, and cameras.
 //!
 //! Light units are glTF's: candela for point and spot lights, lux for directional ones, and for
 //! EXT_lights_ies lights a multiplier on the profile's candela values. A light's colour is its
@@ -64,11 +65,19 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
     let materials: Vec<Material> = scene.materials.iter().map(|m| material_of(m, scene)).collect();
     for inst in &scene.instances {
         let Some(mesh) = scene.meshes.get(inst.mesh) else { continue };
+        // Normals take the inverse transpose (right under mirrors too). A mirroring transform (negative
+        // determinant) reverses the winding (glTF 2.0 spec, section 3.7.4), so the world-space triangles
+        // swap two corners to keep their front face, which one-sided emitters emit from.
         let normal_matrix = inst.world.matrix3.inverse().transpose();
+        let mirrors = inst.world.matrix3.determinant() < 0.0;
         for (p, prim) in mesh.primitives.iter().enumerate() {
             let what = format!("mesh {} primitive {p}", mesh.name.as_deref().unwrap_or("?"));
             let positions: Vec<Vec3> = prim.positions.iter().map(|&v| inst.world.transform_point3(v)).collect();
-            let mut built = Mesh::new(positions, prim.indices.clone());
+            let mut indices = prim.indices.clone();
+            if mirrors {
+                indices.chunks_exact_mut(3).for_each(|t| t.swap(1, 2));
+            }
+            let mut built = Mesh::new(positions, indices);
             if let (Ok(m), Some(n)) = (&built, &prim.normals) {
                 let normals = n.iter().map(|&v| (normal_matrix * v).normalize_or_zero()).collect();
                 built = m.clone().with_normals(normals);
@@ -162,4 +171,50 @@ fn emissive_light(m: &MaterialData, scene: &GltfScene) -> Option<crate::light::A
     let (spectrum, _) = colour_spectrum(m.emissive);
     let texture = m.emissive_texture.and_then(|i| scene.textures.get(i).cloned());
     Some(crate::light::AreaLight::emissive(Amount::Nits(y), spectrum, texture, m.double_sided))
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Affine3A, Quat};
+
+    use super::*;
+    use crate::scene::gltf::{MeshData, MeshInstance, PrimitiveData};
+
+    /// A triangle with NORMAL data matching its winding (+Z), placed by `world`.
+    fn one_triangle(world: Affine3A) -> GltfScene {
+        let primitive = PrimitiveData {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: Some(vec![Vec3::Z; 3]),
+            uvs: None,
+            indices: vec![0, 1, 2],
+            material: None,
+        };
+        GltfScene {
+            meshes: vec![MeshData { name: None, primitives: vec![primitive] }],
+            instances: vec![MeshInstance { mesh: 0, world, node_name: None }],
+            ..Default::default()
+        }
+    }
+
+    /// Under mirroring (and non-mirroring) transforms, the spawned triangle's winding and its transformed
+    /// normals agree: both give the front face glTF means (spec section 3.7.4).
+    #[test]
+    fn mirrored_meshes_keep_winding_and_normals_in_agreement() {
+        let turn = Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
+        for scale in [Vec3::ONE, Vec3::new(-1.0, 1.0, 1.0), Vec3::new(2.0, -0.5, 3.0), Vec3::new(-1.0, -1.0, -1.0)] {
+            let world = Affine3A::from_scale_rotation_translation(scale, turn, Vec3::new(1.0, 2.0, 3.0));
+            let mut w = World::new();
+            let report = spawn_gltf(&mut w, &one_triangle(world));
+            assert_eq!(report.meshes, 1, "{:?}", report.warnings);
+            let mesh = w.query::<&Mesh>().single(&w).unwrap().clone();
+            let [a, b, c] = mesh.triangle(0);
+            let geometric = (b - a).cross(c - a).normalize();
+            // The front normal glTF means: the local +Z carried by the inverse transpose.
+            let front = (world.matrix3.inverse().transpose() * Vec3::Z).normalize();
+            assert!(geometric.abs_diff_eq(front, 1e-5), "scale {scale}: winding gives {geometric}, front is {front}");
+            for n in mesh.normals().unwrap() {
+                assert!(n.abs_diff_eq(front, 1e-5), "scale {scale}: normal {n}, front is {front}");
+            }
+        }
+    }
 }
