@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Fills fuzz/corpus/<target>/ with seeds: the real files from ../shared/data (small glTF/GLB files, IES
+# Fills fuzz/corpus/<target>/ with seeds: the real files from tests/data (small glTF/GLB files, IES
 # files, 4 KB prefixes of the environment maps) and the small synthetic files of examples/make_seeds.rs.
 # Usage: fuzz/seed.sh   (from anywhere; safe to re-run, existing corpus files are kept)
 set -euo pipefail
 fuzz_dir="$(cd "$(dirname "$0")" && pwd)"
-data="$fuzz_dir/../../shared/data"
+data="$fuzz_dir/../tests/data"
 corpus="$fuzz_dir/corpus"
 mkdir -p "$corpus/gltf_import" "$corpus/ies_parse" "$corpus/env_map"
 

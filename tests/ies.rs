@@ -2,8 +2,10 @@
 //! integration, every symmetry case on synthetic files with closed-form flux, the A/B frames, old
 //! formats, bad input (each error names its line), mutated files (no panics) and the CLI.
 
+mod common;
+
 use std::f64::consts::{PI, TAU};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use glam::Vec3;
 use kelvin::rng::SplitMix64;
@@ -42,18 +44,12 @@ fn numeric_flux(p: &IesProfile, n_theta: usize) -> f64 {
     total
 }
 
-fn data_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/ies");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipping: {} not found (real IES files live in ../shared/data/ies)", dir.display());
-        None
-    }
+fn data_dir() -> PathBuf {
+    common::files::test_data("ies")
 }
 
 fn real_files() -> Vec<PathBuf> {
-    let Some(dir) = data_dir() else { return Vec::new() };
+    let dir = data_dir();
     let mut files = Vec::new();
     for sub in std::fs::read_dir(&dir).unwrap().flatten() {
         for f in std::fs::read_dir(sub.path()).into_iter().flatten().flatten() {
@@ -140,7 +136,7 @@ fn real_files_equal_area_image_holds_the_flux() {
 
 #[test]
 fn real_file_header_and_counts() {
-    let Some(dir) = data_dir() else { return };
+    let dir = data_dir();
     let p = IesProfile::from_file(&dir.join("luxcore/ASA_15M_R2.ies")).unwrap();
     assert_eq!(p.version, IesVersion::Lm63_2002);
     assert_eq!(p.keyword("TEST"), Some("LTL16760"));
@@ -472,14 +468,7 @@ fn run_cli(args: &[&str]) -> std::process::Output {
 fn cli_prints_json_plots_and_reports_bad_files() {
     let tmp = std::env::temp_dir().join(format!("kelvin-ies-test-{}", std::process::id()));
     std::fs::create_dir_all(&tmp).unwrap();
-    let file = match real_files().into_iter().next() {
-        Some(f) => f,
-        None => {
-            let f = tmp.join("synthetic.ies");
-            std::fs::write(&f, small_file()).unwrap();
-            f
-        }
-    };
+    let file = real_files().into_iter().next().expect("a real IES file");
     let svg = tmp.join("polar.svg");
     let out = run_cli(&["ies", file.to_str().unwrap(), "--json", "--plot", svg.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));

@@ -1,4 +1,4 @@
-//! Image input and output: the real environment maps in ../shared/data/env, exact EXR round trips, PNG and HDR
+//! Image input and output: the real environment maps in tests/data/env, exact EXR round trips, PNG and HDR
 //! output, the validation policy on bad files, and the lat-long mapping.
 
 use std::path::{Path, PathBuf};
@@ -12,14 +12,14 @@ use kelvin::scene::image::{
 };
 
 mod common;
-use common::files::{TempDir, shared_data};
+use common::files::{TempDir, test_data};
 
 fn temp_dir(test: &str) -> TempDir {
     TempDir::new("image-io", test)
 }
 
-fn env_dir() -> Option<PathBuf> {
-    shared_data("env")
+fn env_dir() -> PathBuf {
+    test_data("env")
 }
 
 /// Writes an RGB f32 EXR directly with the exr crate, bypassing kelvin's writer (which has no say on NaN).
@@ -33,7 +33,7 @@ fn write_raw_exr(path: &Path, width: usize, height: usize, rgb: &[Vec3]) {
 
 #[test]
 fn real_env_maps_load_with_expected_size_and_dynamic_range() {
-    let Some(dir) = env_dir() else { return };
+    let dir = env_dir();
     // (file, width, height, expected max/mean luminance range or None)
     let cases = [
         ("spiaggia_di_mondello_1k.hdr", 1024, 512, Some((3e4, 3e5))),
@@ -253,14 +253,13 @@ fn truncated_files_give_errors_not_panics() {
         assert!(matches!(err, ImageError::Decode { .. }) && err.to_string().contains("cut."), "{err}");
         eprintln!("{err}");
     }
-    // A real map cut in half, when present.
-    if let Some(env) = env_dir() {
-        for file in ["spiaggia_di_mondello_1k.hdr", "luxcore/imagemap-00000.exr"] {
-            let bytes = std::fs::read(env.join(file)).unwrap();
-            let ext = Path::new(file).extension().unwrap().to_str().unwrap();
-            let err = load_image_from_bytes(&bytes[..bytes.len() / 2], ext, file).unwrap_err();
-            assert!(matches!(err, ImageError::Decode { .. }), "{err}");
-        }
+    // A real map cut in half.
+    let env = env_dir();
+    for file in ["spiaggia_di_mondello_1k.hdr", "luxcore/imagemap-00000.exr"] {
+        let bytes = std::fs::read(env.join(file)).unwrap();
+        let ext = Path::new(file).extension().unwrap().to_str().unwrap();
+        let err = load_image_from_bytes(&bytes[..bytes.len() / 2], ext, file).unwrap_err();
+        assert!(matches!(err, ImageError::Decode { .. }), "{err}");
     }
 }
 

@@ -1,4 +1,4 @@
-//! Infinite lights on the real environment maps in ../shared/data/env (skipped when absent):
+//! Infinite lights on the real environment maps in tests/data/env:
 //! chi-square tests of sampling against luminance * solid angle, pdf integrals and power.
 
 mod common;
@@ -6,7 +6,7 @@ mod common;
 mod support;
 
 use std::f64::consts::PI;
-use std::path::Path;
+
 use std::sync::Arc;
 
 use glam::{Quat, Vec2, Vec3};
@@ -15,14 +15,10 @@ use kelvin::rng::SplitMix64;
 use kelvin::scene::image::{LUMINANCE_WEIGHTS, RgbImage, direction_to_lat_long, lat_long_direction, load_image};
 use support::{Stats, rel_diff, resolve, surface_ctx, tilted, y_of};
 
-/// The real map at `rel` under ../shared/data/env, or None (with a message) when absent.
-fn env_map(rel: &str) -> Option<(String, Arc<RgbImage>)> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/env").join(rel);
-    if !path.is_file() {
-        eprintln!("skipping: {} not found (real test data absent)", path.display());
-        return None;
-    }
-    Some((rel.to_string(), Arc::new(load_image(&path).expect("env map loads").image)))
+/// The real map at `rel` under tests/data/env (the test fails when it is absent).
+fn env_map(rel: &str) -> (String, Arc<RgbImage>) {
+    let path = common::files::test_data(&format!("env/{rel}"));
+    (rel.to_string(), Arc::new(load_image(&path).expect("env map loads").image))
 }
 
 /// Luminance * sin(theta) of the lookup's radiance integrated over each cell of a `cw` x `ch`
@@ -115,12 +111,11 @@ fn check_sampling_matches_luminance(name: &str, img: &Arc<RgbImage>) {
     }
 }
 
-/// All checks on one real map (skipped when the data is absent).
+/// All checks on one real map.
 fn check_real_map(rel: &str) {
-    if let Some((name, img)) = env_map(rel) {
-        check_sampling_matches_luminance(&name, &img);
-        check_pdf_integral_and_power(&name, &img);
-    }
+    let (name, img) = env_map(rel);
+    check_sampling_matches_luminance(&name, &img);
+    check_pdf_integral_and_power(&name, &img);
 }
 
 #[test]

@@ -9,6 +9,9 @@
 
 #[path = "lights_projection_gonio/common.rs"]
 mod common;
+#[allow(dead_code)]
+#[path = "common/files.rs"]
+mod files;
 #[path = "lights_projection_gonio/goniometric.rs"]
 mod goniometric;
 #[path = "lights_projection_gonio/projection.rs"]

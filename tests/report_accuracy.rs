@@ -2,26 +2,26 @@
 //! (relative MSE falls as 1/spp for an unbiased estimator; the reference has no error against
 //! itself; RGB rendering under F11 is off the spectral answer by more than noise).
 
+mod common;
+
 use std::path::PathBuf;
 
 use kelvin::report::accuracy::{AccuracyOptions, Budget, Knob, SceneId, run_accuracy};
 
-/// The project's real test data, if present (the env scene needs it; the others do not).
+/// The repository's real test data (the env scene reads its sky from there).
 fn data_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data")
+    common::files::test_data("")
 }
 
 #[test]
 fn quick_report_is_written_and_its_numbers_are_sane() {
     let out = std::env::temp_dir().join(format!("kelvin-accuracy-test-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
-    if !data_dir().join("env").exists() {
-        eprintln!("{} absent: the env-sun scene will be skipped", data_dir().display());
-    }
     let opts = AccuracyOptions { scenes: Vec::new(), out: out.clone(), budget: Budget::QUICK, data_dir: data_dir() };
     let reports = run_accuracy(&opts, &mut |m| eprintln!("{m}")).expect("report runs");
     assert!(out.join("README.md").exists());
-    assert!(reports.len() >= 4, "{} scenes reported", reports.len());
+    assert_eq!(reports.len(), SceneId::ALL.len(), "{} scenes reported", reports.len());
+    assert!(reports.iter().any(|r| r.scene == SceneId::EnvSun), "env-sun scene not reported");
 
     for r in &reports {
         let name = r.scene.name();

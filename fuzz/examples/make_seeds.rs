@@ -1,12 +1,12 @@
 //! Writes small synthetic seed files for the fuzz corpora (run by `fuzz/seed.sh`; the real files from
-//! ../shared/data are copied by the script itself):
+//! tests/data are copied by the script itself):
 //! - `env_map`: tiny EXR files in every compression the `exr` crate writes, f16 / f32 / u32, tiled, layered and
 //!   grey; tiny Radiance HDR files (flat and run-length encoded).
 //! - `ies_parse`: LM-63 files of every version, photometric type and symmetry, with TILT=INCLUDE.
 //! - `gltf_import`: `.glb` files with an emissive textured triangle, every punctual light kind, an EXT_lights_ies
 //!   light whose profile is in the binary chunk, a camera, sparse accessors and a triangle strip.
 //!
-//! With the shared data folder as second argument, `renderling/shadow_mapping_sanity.gltf` and its `.bin` are also
+//! With the test data folder as second argument, `renderling/shadow_mapping_sanity.gltf` and its `.bin` are also
 //! packed into one `.glb` (the fuzz target loads from memory, where external buffers cannot be resolved).
 //!
 //! Usage: `cargo run --example make_seeds -- <corpus dir> [<data dir>]` (writes `<dir>/{env_map,ies_parse,gltf_import}/`).

@@ -30,8 +30,8 @@ struct AccuracyArgs {
     /// 32x32 images, 512-spp references, 8-spp baseline: under a minute.
     #[arg(long)]
     quick: bool,
-    /// Folder of the real test data (for the env map).
-    #[arg(long, default_value = "../shared/data")]
+    /// Folder of the real test data (for the env map); default: the repository's tests/data.
+    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"))]
     data: PathBuf,
     /// Worker threads (default: all cores).
     #[arg(long)]

@@ -1,4 +1,4 @@
-//! Temporary folders and the project's real test data, for tests that read and write files.
+//! Temporary folders and the repository's real test data, for tests that read and write files.
 
 use std::path::{Path, PathBuf};
 
@@ -25,13 +25,11 @@ impl Drop for TempDir {
     }
 }
 
-/// `../shared/data/<sub>` if it is there; otherwise None, after saying that the test skips.
-pub fn shared_data(sub: &str) -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(sub);
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipping: {} not found (real test data absent)", dir.display());
-        None
-    }
+/// `tests/data/<rel>`, the repository's real test data (origins and licenses in
+/// `tests/data/SOURCES.md`). Panics, naming the path, when it is absent: a test that needs real
+/// data fails rather than passing without it.
+pub fn test_data(rel: &str) -> PathBuf {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel);
+    assert!(path.exists(), "real test data missing: {} (see tests/data/SOURCES.md)", path.display());
+    path
 }

@@ -19,24 +19,18 @@ use kelvin::spectrum::{SampledWavelengths, Spectrum};
 
 use crate::common::*;
 
-/// The real IES files under ../shared/data/ies, or None (with a message) when the folder is absent.
-fn real_ies_files(test: &str) -> Option<Vec<PathBuf>> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/ies");
-    let Ok(dirs) = std::fs::read_dir(&root) else {
-        eprintln!("{test}: skipped, no IES data at {}", root.display());
-        return None;
-    };
+/// The real IES files under tests/data/ies (the test fails when there are none).
+fn real_ies_files(test: &str) -> Vec<PathBuf> {
+    let root = crate::files::test_data("ies");
+    let dirs = std::fs::read_dir(&root).unwrap_or_else(|e| panic!("{test}: {}: {e}", root.display()));
     let mut files: Vec<PathBuf> = dirs
         .flatten()
         .flat_map(|d| std::fs::read_dir(d.path()).into_iter().flatten().flatten().map(|f| f.path()))
         .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ies")))
         .collect();
     files.sort();
-    if files.is_empty() {
-        eprintln!("{test}: skipped, no .ies files under {}", root.display());
-        return None;
-    }
-    Some(files)
+    assert!(!files.is_empty(), "{test}: no .ies files under {}", root.display());
+    files
 }
 
 fn file_name(path: &Path) -> String {
@@ -92,7 +86,7 @@ fn check_gonio(test: &str, light: &ResolvedGoniometric, seed: u64) -> (f64, f64)
 #[test]
 fn gonio_ies_phi_matches_monte_carlo_and_pdfs_agree() {
     let test = "gonio_ies_phi_matches_monte_carlo";
-    let Some(files) = real_ies_files(test) else { return };
+    let files = real_ies_files(test);
     for (k, path) in files.iter().enumerate() {
         let ies = Arc::new(IesProfile::from_file(path).expect("real IES file parses"));
         let light = gonio(GonioProfile::Ies(ies), Amount::Candela(1.0), &tilted_transform());
@@ -103,7 +97,7 @@ fn gonio_ies_phi_matches_monte_carlo_and_pdfs_agree() {
 #[test]
 fn gonio_ies_default_amount_emits_the_files_flux() {
     let test = "gonio_ies_default_amount_emits_the_files_flux";
-    let Some(files) = real_ies_files(test) else { return };
+    let files = real_ies_files(test);
     let efficacy = Spectrum::d65().luminous_efficacy();
     for path in files {
         let ies = Arc::new(IesProfile::from_file(&path).expect("real IES file parses"));
@@ -191,7 +185,7 @@ fn gonio_ies_hard_case_single_vertical_angle() {
 #[test]
 fn gonio_ies_delta_irradiance_is_intensity_cos_over_r2() {
     let test = "gonio_ies_delta_irradiance";
-    let Some(files) = real_ies_files(test) else { return };
+    let files = real_ies_files(test);
     let ies = Arc::new(IesProfile::from_file(&files[0]).unwrap());
     // Aimed down from 3 m: local -Z is world -Y, local +X world -X, local +Y world +Z.
     let at = Vec3::new(0.0, 3.0, 0.0);

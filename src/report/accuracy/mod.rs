@@ -62,8 +62,8 @@ pub struct AccuracyOptions {
     /// Output folder (created if needed); references are cached there.
     pub out: PathBuf,
     pub budget: Budget,
-    /// Folder of the real test data (`../shared/data` from the project root); the env scene is
-    /// skipped when its map is not there.
+    /// Folder of the real test data (the repository's `tests/data`); the env scene is skipped,
+    /// with the reason, when its map is not there.
     pub data_dir: PathBuf,
 }
 
