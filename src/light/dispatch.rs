@@ -33,7 +33,12 @@ impl LightTable {
         match id.kind {
             LightKind::Point => self.points.sample_li_f64(i, ctx, query),
             LightKind::Spot => self.spots.sample_li_f64(i, ctx, query),
-            _ => self.sample_li(id, ctx, u, query),
+            LightKind::Area
+            | LightKind::Projection
+            | LightKind::Goniometric
+            | LightKind::Distant
+            | LightKind::UniformInfinite
+            | LightKind::ImageInfinite => self.sample_li(id, ctx, u, query),
         }
     }
 
@@ -54,7 +59,13 @@ impl LightTable {
     pub fn flags(&self, id: LightId) -> LightFlags {
         match id.kind {
             LightKind::Distant => self.distant.items[id.row as usize].flags(),
-            kind => kind.flags(),
+            kind @ (LightKind::Point
+            | LightKind::Spot
+            | LightKind::Area
+            | LightKind::Projection
+            | LightKind::Goniometric
+            | LightKind::UniformInfinite
+            | LightKind::ImageInfinite) => kind.flags(),
         }
     }
 
@@ -181,7 +192,9 @@ impl LightTable {
             LightKind::Distant => self.distant.items[id.row as usize].le(wi, query),
             LightKind::UniformInfinite => self.uniform_infinite.items[id.row as usize].le(wi, query),
             LightKind::ImageInfinite => self.image_infinite.items[id.row as usize].le(wi, query),
-            _ => Default::default(),
+            LightKind::Point | LightKind::Spot | LightKind::Area | LightKind::Projection | LightKind::Goniometric => {
+                Default::default()
+            }
         }
     }
 

@@ -110,16 +110,41 @@ pub struct LiSample {
     pub n_light: Vec3,
 }
 
-/// The closed set of light kinds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum LightKind {
+/// Declares [`LightKind`] from one list, so that [`LightKind::ALL`] and [`LightKind::COUNT`]
+/// cannot fall out of step with the variants.
+macro_rules! light_kinds {
+    ($($(#[$doc:meta])* $kind:ident),+ $(,)?) => {
+        /// The closed set of light kinds, in the order of their blocks in `LightTable::ids`.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum LightKind {
+            $($(#[$doc])* $kind,)+
+        }
+
+        impl LightKind {
+            /// Every kind, in declaration order (`ALL[k.index()] == k`).
+            pub const ALL: [LightKind; [$(stringify!($kind)),+].len()] = [$(LightKind::$kind),+];
+            /// The number of kinds: the length of per-kind arrays.
+            pub const COUNT: usize = Self::ALL.len();
+        }
+    };
+}
+
+light_kinds! {
+    /// [`PointLight`].
     Point,
+    /// [`SpotLight`].
     Spot,
-    Projection,
-    Goniometric,
-    Distant,
+    /// [`AreaLight`] on a mesh or shape.
     Area,
+    /// [`ProjectionLight`].
+    Projection,
+    /// [`GoniometricLight`].
+    Goniometric,
+    /// [`DistantLight`].
+    Distant,
+    /// [`UniformInfiniteLight`].
     UniformInfinite,
+    /// [`ImageInfiniteLight`].
     ImageInfinite,
 }
 
@@ -152,18 +177,10 @@ impl LightFlags {
 }
 
 impl LightKind {
-    /// Position of this kind's block in `LightTable::ids` order.
-    pub const fn order(self) -> usize {
-        match self {
-            Self::Point => 0,
-            Self::Spot => 1,
-            Self::Area => 2,
-            Self::Projection => 3,
-            Self::Goniometric => 4,
-            Self::Distant => 5,
-            Self::UniformInfinite => 6,
-            Self::ImageInfinite => 7,
-        }
+    /// Position of this kind in [`Self::ALL`]: the index of its row in per-kind arrays and of its
+    /// block in `LightTable::ids` order.
+    pub const fn index(self) -> usize {
+        self as usize
     }
 
     /// The flags of this kind. A distant light with an angular diameter is not delta: see

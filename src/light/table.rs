@@ -108,39 +108,47 @@ pub struct LightTable {
     pub changes_since: u64,
 }
 
+/// Runs `$body` with `$b` bound to the block of `$kind` (`&mut` unless the table is given as
+/// `ref table`): one exhaustive match, so a new kind is a compile error until it has a block.
 macro_rules! for_block {
+    (ref $table:expr, $kind:expr, |$b:ident| $body:expr) => {
+        for_block!(@ $table, $kind, |$b| $body, &)
+    };
     ($table:expr, $kind:expr, |$b:ident| $body:expr) => {
+        for_block!(@ $table, $kind, |$b| $body, &mut)
+    };
+    (@ $table:expr, $kind:expr, |$b:ident| $body:expr, $($borrow:tt)+) => {
         match $kind {
             LightKind::Point => {
-                let $b = &mut $table.points;
+                let $b = $($borrow)+ $table.points;
                 $body
             }
             LightKind::Spot => {
-                let $b = &mut $table.spots;
+                let $b = $($borrow)+ $table.spots;
                 $body
             }
             LightKind::Area => {
-                let $b = &mut $table.area;
+                let $b = $($borrow)+ $table.area;
                 $body
             }
             LightKind::Projection => {
-                let $b = &mut $table.projection;
+                let $b = $($borrow)+ $table.projection;
                 $body
             }
             LightKind::Goniometric => {
-                let $b = &mut $table.goniometric;
+                let $b = $($borrow)+ $table.goniometric;
                 $body
             }
             LightKind::Distant => {
-                let $b = &mut $table.distant;
+                let $b = $($borrow)+ $table.distant;
                 $body
             }
             LightKind::UniformInfinite => {
-                let $b = &mut $table.uniform_infinite;
+                let $b = $($borrow)+ $table.uniform_infinite;
                 $body
             }
             LightKind::ImageInfinite => {
-                let $b = &mut $table.image_infinite;
+                let $b = $($borrow)+ $table.image_infinite;
                 $body
             }
         }
@@ -150,14 +158,11 @@ macro_rules! for_block {
 impl LightTable {
     /// Number of lights (rows) of every kind.
     pub fn len(&self) -> usize {
-        self.points.len()
-            + self.spots.len()
-            + self.area.len()
-            + self.projection.len()
-            + self.goniometric.len()
-            + self.distant.len()
-            + self.uniform_infinite.len()
-            + self.image_infinite.len()
+        LightKind::ALL.iter().map(|&kind| self.kind_len(kind)).sum()
+    }
+    /// Number of rows of one kind.
+    pub fn kind_len(&self, kind: LightKind) -> usize {
+        for_block!(ref self, kind, |b| b.len())
     }
     /// True with no lights.
     pub fn is_empty(&self) -> bool {
@@ -171,31 +176,13 @@ impl LightTable {
     pub fn entity_count(&self) -> usize {
         self.rows_of.len()
     }
-    /// Every light id, kind by kind.
+    /// Every light id, kind by kind in [`LightKind::ALL`] order.
     pub fn ids(&self) -> impl Iterator<Item = LightId> + '_ {
-        let block = |kind, n: usize| (0..n as u32).map(move |row| LightId { kind, row });
-        block(LightKind::Point, self.points.len())
-            .chain(block(LightKind::Spot, self.spots.len()))
-            .chain(block(LightKind::Area, self.area.len()))
-            .chain(block(LightKind::Projection, self.projection.len()))
-            .chain(block(LightKind::Goniometric, self.goniometric.len()))
-            .chain(block(LightKind::Distant, self.distant.len()))
-            .chain(block(LightKind::UniformInfinite, self.uniform_infinite.len()))
-            .chain(block(LightKind::ImageInfinite, self.image_infinite.len()))
+        LightKind::ALL.into_iter().flat_map(|kind| (0..self.kind_len(kind) as u32).map(move |row| LightId { kind, row }))
     }
     /// The entity that owns light `id`.
     pub fn owner(&self, id: LightId) -> Entity {
-        let i = id.row as usize;
-        match id.kind {
-            LightKind::Point => self.points.owner(i),
-            LightKind::Spot => self.spots.owner(i),
-            LightKind::Area => self.area.owner(i),
-            LightKind::Projection => self.projection.owner(i),
-            LightKind::Goniometric => self.goniometric.owner(i),
-            LightKind::Distant => self.distant.owner(i),
-            LightKind::UniformInfinite => self.uniform_infinite.owner(i),
-            LightKind::ImageInfinite => self.image_infinite.owner(i),
-        }
+        for_block!(ref self, id.kind, |b| b.owner(id.row as usize))
     }
 
     /// Inserts or replaces the single light row of `entity` in block `kind`: in place when the
@@ -348,21 +335,11 @@ impl LightTable {
     }
 
     /// Where each kind's rows start in the order of [`Self::ids`], indexed by
-    /// [`LightKind::order`]: light `id` is number `offsets[id.kind.order()] + id.row`.
-    pub fn kind_offsets(&self) -> [u32; 8] {
-        let lengths = [
-            self.points.len(),
-            self.spots.len(),
-            self.area.len(),
-            self.projection.len(),
-            self.goniometric.len(),
-            self.distant.len(),
-            self.uniform_infinite.len(),
-            self.image_infinite.len(),
-        ];
-        let mut offsets = [0u32; 8];
-        for k in 1..8 {
-            offsets[k] = offsets[k - 1] + lengths[k - 1] as u32;
+    /// [`LightKind::index`]: light `id` is number `offsets[id.kind.index()] + id.row`.
+    pub fn kind_offsets(&self) -> [u32; LightKind::COUNT] {
+        let mut offsets = [0u32; LightKind::COUNT];
+        for k in 1..LightKind::COUNT {
+            offsets[k] = offsets[k - 1] + self.kind_len(LightKind::ALL[k - 1]) as u32;
         }
         offsets
     }

@@ -24,7 +24,7 @@ use glam::Vec3;
 use super::bvh_build::{BuildItem, Node, build_tree};
 use super::importance::{ClusterQuery, cluster_cost_with, orientation_measure, union};
 use super::wide::{WideTree, choose_lane, lane_probability};
-use crate::light::{LightBounds, LightId, LightSampleContext, LightTable};
+use crate::light::{LightBounds, LightId, LightKind, LightSampleContext, LightTable};
 use crate::prefetch::prefetch;
 
 /// Rebuild after refits once [`BvhSampler::cost_ratio`] passes this: up to here the variance stays
@@ -34,8 +34,6 @@ pub const LIGHT_TREE_REBUILD_RATIO: f32 = 1.5;
 /// How many changed lights ahead a refit prefetches leaf nodes.
 const PREFETCH_DISTANCE: usize = 8;
 
-/// Number of [`LightKind`]s (rows of `leaf_of`).
-const KINDS: usize = 8;
 /// `parent` of the root.
 const NO_PARENT: u32 = u32::MAX;
 /// `leaf_of` entry of a row that is not in the sampler.
@@ -95,7 +93,7 @@ pub struct BvhSampler {
     wide: WideTree,
     infinite: Vec<LightId>,
     /// Per kind, per row: the leaf node, [`AT_INFINITY`] or [`ABSENT`].
-    leaf_of: [Vec<u32>; KINDS],
+    leaf_of: [Vec<u32>; LightKind::COUNT],
     /// Sum of `NodeMeta::growth` over all nodes (f64: refits add and subtract into it), and the
     /// number of nodes with a cost at build.
     growth_sum: f64,
@@ -153,7 +151,7 @@ impl BvhSampler {
         self.leaf_of.iter_mut().for_each(Vec::clear);
         let mut items = Vec::with_capacity(table.len());
         for id in table.ids() {
-            let rows = &mut self.leaf_of[id.kind as usize];
+            let rows = &mut self.leaf_of[id.kind.index()];
             if rows.len() <= id.row as usize {
                 rows.resize(id.row as usize + 1, ABSENT);
             }
@@ -185,7 +183,7 @@ impl BvhSampler {
                 growth: 0.0,
             });
             if let Some(id) = node.light() {
-                self.leaf_of[id.kind as usize][id.row as usize] = i as u32;
+                self.leaf_of[id.kind.index()][id.row as usize] = i as u32;
             }
         }
         for i in 0..self.nodes.len() {
@@ -304,7 +302,7 @@ impl BvhSampler {
     /// The leaf entry of light `id` (a node, [`AT_INFINITY`] or [`ABSENT`]).
     #[inline]
     fn leaf_at(&self, id: LightId) -> Option<&u32> {
-        self.leaf_of.get(id.kind as usize)?.get(id.row as usize)
+        self.leaf_of.get(id.kind.index())?.get(id.row as usize)
     }
 
     /// The highest dirty node below `n`.
@@ -424,7 +422,7 @@ impl BvhSampler {
     /// Probability that `sample` returns `light` at `ctx`: the product of the child choices on
     /// the path from the root to its leaf (0 for a light not in this sampler).
     pub fn pmf(&self, ctx: &LightSampleContext, light: LightId) -> f32 {
-        let leaf = self.leaf_of.get(light.kind as usize).and_then(|r| r.get(light.row as usize)).copied();
+        let leaf = self.leaf_of.get(light.kind.index()).and_then(|r| r.get(light.row as usize)).copied();
         let leaf = match leaf {
             None | Some(ABSENT) => return 0.0,
             Some(AT_INFINITY) => return self.infinite_probability() / self.infinite.len() as f32,

@@ -2,7 +2,7 @@
 //! sample. pbrt-v4 weighs by radiometric power over visible wavelengths; luminous power is the
 //! same idea weighted by what the eye (and the photometric image) sees.
 
-use crate::light::{LightId, LightTable};
+use crate::light::{LightId, LightKind, LightTable};
 use crate::sampling::AliasTable;
 
 /// Power-proportional choice. Zero-power lights are never chosen.
@@ -11,7 +11,7 @@ pub struct PowerSampler {
     ids: Vec<LightId>,
     alias: AliasTable,
     /// `LightTable::kind_offsets` when built: maps a light to its alias-table index.
-    offsets: [u32; 8],
+    offsets: [u32; LightKind::COUNT],
     generation: u64,
 }
 
@@ -60,7 +60,7 @@ impl PowerSampler {
 
     /// Probability of choosing `light`.
     pub fn pmf(&self, light: LightId) -> f32 {
-        let i = (self.offsets[light.kind.order()] + light.row) as usize;
+        let i = (self.offsets[light.kind.index()] + light.row) as usize;
         if self.ids.get(i) == Some(&light) { self.alias.pmf(i) } else { 0.0 }
     }
 }

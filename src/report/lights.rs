@@ -300,7 +300,12 @@ pub fn move_light(table: &mut LightTable, id: LightId, delta: Vec3) -> bool {
             let shadows = table.spots.casts_shadows[i];
             table.upsert_spot(owner, row, shadows, false);
         }
-        _ => return false,
+        LightKind::Area
+        | LightKind::Projection
+        | LightKind::Goniometric
+        | LightKind::Distant
+        | LightKind::UniformInfinite
+        | LightKind::ImageInfinite => return false,
     }
     true
 }
