@@ -5,7 +5,7 @@ use bevy_ecs::entity::EntityHashMap;
 use bevy_ecs::prelude::*;
 
 use crate::geometry::{
-    Disk, GeometryInstance, GeometryRef, Mesh, Rectangle, SceneBvh, Shape, Sphere, Transform, UpdateKind,
+    Disk, GeometryInstance, GeometryRef, Mesh, Placement, Rectangle, SceneBvh, Shape, Sphere, Transform, UpdateKind,
 };
 use crate::light::SceneSphere;
 use crate::shading::{RunReport, SceneBounds};
@@ -41,9 +41,9 @@ type ShapeChanged = Or<(Changed<Mesh>, Changed<Sphere>, Changed<Disk>, Changed<R
 /// Decides between rebuild (geometry added, removed or reshaped), refit (only transforms moved)
 /// and nothing.
 #[allow(clippy::too_many_arguments)]
-pub fn plan_bvh(
+pub fn plan_bvh<P: Placement>(
     reshaped: Query<(), (ShapeChanged, AnyShape)>,
-    moved: Query<(), (Changed<Transform>, AnyShape)>,
+    moved: Query<(), (Changed<P>, AnyShape)>,
     mut removed_mesh: RemovedComponents<Mesh>,
     mut removed_sphere: RemovedComponents<Sphere>,
     mut removed_disk: RemovedComponents<Disk>,
@@ -84,9 +84,9 @@ fn shape_of<'a>(
 
 /// Rebuilds or refits the BVH as planned, and updates the scene's bounding sphere.
 #[allow(clippy::type_complexity)]
-pub fn update_scene_bvh(
-    all: Query<(Entity, &Transform, Option<&Mesh>, Option<&Sphere>, Option<&Disk>, Option<&Rectangle>), AnyShape>,
-    moved: Query<(Entity, &Transform), (Changed<Transform>, AnyShape)>,
+pub fn update_scene_bvh<P: Placement>(
+    all: Query<(Entity, &P, Option<&Mesh>, Option<&Sphere>, Option<&Disk>, Option<&Rectangle>), AnyShape>,
+    moved: Query<(Entity, &P), (Changed<P>, AnyShape)>,
     work: Res<Work>,
     mut bvh: ResMut<SceneBvh>,
     mut index: ResMut<GeometryIndex>,
@@ -101,7 +101,7 @@ pub fn update_scene_bvh(
                 let geometry = shape_of(m, s, d, r)?;
                 let slot = entities.len() as u32;
                 entities.push(e);
-                Some(GeometryInstance { geometry, transform: *t, entity_index: e.index_u32(), material: slot })
+                Some(GeometryInstance { geometry, transform: t.placement(), entity_index: e.index_u32(), material: slot })
             })
             .collect();
         *bvh = SceneBvh::build(&instances);
@@ -112,7 +112,7 @@ pub fn update_scene_bvh(
         BvhWork::Rebuild => rebuild(&mut bvh, &mut index),
         BvhWork::Refit => {
             let moved: Vec<(u32, Transform)> =
-                moved.iter().filter_map(|(e, t)| Some((index.instance_of(e)?, *t))).collect();
+                moved.iter().filter_map(|(e, t)| Some((index.instance_of(e)?, t.placement()))).collect();
             match bvh.update_transforms(&moved) {
                 Ok(UpdateKind::Refitted { cost_ratio }) => {
                     report.record("bvh_refit", true, format!("cost ratio {cost_ratio:.2}"))

@@ -2,7 +2,7 @@
 
 use bevy_ecs::prelude::*;
 
-use crate::geometry::{Disk, Mesh, Rectangle, Sphere, Transform};
+use crate::geometry::{Disk, Mesh, Placement, Rectangle, Sphere, Transform};
 use crate::light::area::sphere_from_point_light;
 use crate::light::table::AreaRow;
 use crate::light::{
@@ -17,12 +17,13 @@ fn reject(table: &mut LightTable, report: &mut RunReport, entity: Entity, e: Lig
 }
 
 /// Upserts point lights that were added or changed, or whose transform moved.
-pub fn sync_point_lights(
-    query: Query<(Entity, Ref<PointLight>, Ref<Transform>), Or<(Changed<PointLight>, Changed<Transform>)>>,
+pub fn sync_point_lights<P: Placement>(
+    query: Query<(Entity, Ref<PointLight>, Ref<P>), Or<(Changed<PointLight>, Changed<P>)>>,
     mut table: ResMut<LightTable>,
     mut report: ResMut<RunReport>,
 ) {
-    for (entity, light, transform) in &query {
+    for (entity, light, placement) in &query {
+        let transform = placement.placement();
         // A point light with a radius is a sphere area light of the same power.
         let result = sphere_from_point_light(&light, &transform).map(|sphere| match sphere {
             Some(s) => {
@@ -69,16 +70,16 @@ fn area_rows(
 /// Upserts area lights whose light, transform or shape changed (one row per emitting shape or
 /// mesh triangle).
 #[allow(clippy::type_complexity)]
-pub fn sync_area_lights(
+pub fn sync_area_lights<P: Placement>(
     query: Query<
-        (Entity, Ref<AreaLight>, &Transform, Option<&Mesh>, Option<&Sphere>, Option<&Disk>, Option<&Rectangle>),
-        Or<(Changed<AreaLight>, Changed<Transform>, Changed<Mesh>, Changed<Sphere>, Changed<Disk>, Changed<Rectangle>)>,
+        (Entity, Ref<AreaLight>, &P, Option<&Mesh>, Option<&Sphere>, Option<&Disk>, Option<&Rectangle>),
+        Or<(Changed<AreaLight>, Changed<P>, Changed<Mesh>, Changed<Sphere>, Changed<Disk>, Changed<Rectangle>)>,
     >,
     mut table: ResMut<LightTable>,
     mut report: ResMut<RunReport>,
 ) {
     for (entity, light, t, mesh, sphere, disk, rect) in &query {
-        match area_rows(&light, t, mesh, sphere, disk, rect) {
+        match area_rows(&light, &t.placement(), mesh, sphere, disk, rect) {
             Ok((rows, skipped)) => {
                 if skipped > 0 {
                     report.warnings.push(format!("area light {entity}: {skipped} degenerate triangles skipped"));
@@ -91,13 +92,13 @@ pub fn sync_area_lights(
 }
 
 /// Upserts spot lights that were added or changed, or whose transform moved.
-pub fn sync_spot_lights(
-    query: Query<(Entity, Ref<SpotLight>, Ref<Transform>), Or<(Changed<SpotLight>, Changed<Transform>)>>,
+pub fn sync_spot_lights<P: Placement>(
+    query: Query<(Entity, Ref<SpotLight>, Ref<P>), Or<(Changed<SpotLight>, Changed<P>)>>,
     mut table: ResMut<LightTable>,
     mut report: ResMut<RunReport>,
 ) {
-    for (entity, light, transform) in &query {
-        match light.resolve(&transform) {
+    for (entity, light, placement) in &query {
+        match light.resolve(&placement.placement()) {
             Ok(row) => table.upsert_spot(entity, row, light.casts_shadows, light.is_changed()),
             Err(e) => reject(&mut table, &mut report, entity, e),
         }
@@ -105,13 +106,13 @@ pub fn sync_spot_lights(
 }
 
 /// Upserts projection lights that were added or changed, or whose transform moved.
-pub fn sync_projection_lights(
-    query: Query<(Entity, Ref<ProjectionLight>, Ref<Transform>), Or<(Changed<ProjectionLight>, Changed<Transform>)>>,
+pub fn sync_projection_lights<P: Placement>(
+    query: Query<(Entity, Ref<ProjectionLight>, Ref<P>), Or<(Changed<ProjectionLight>, Changed<P>)>>,
     mut table: ResMut<LightTable>,
     mut report: ResMut<RunReport>,
 ) {
-    for (entity, light, transform) in &query {
-        match light.resolve(&transform) {
+    for (entity, light, placement) in &query {
+        match light.resolve(&placement.placement()) {
             Ok(row) => table.upsert_projection(entity, row, light.casts_shadows, light.is_changed()),
             Err(e) => reject(&mut table, &mut report, entity, e),
         }
@@ -119,13 +120,13 @@ pub fn sync_projection_lights(
 }
 
 /// Upserts goniometric lights that were added or changed, or whose transform moved.
-pub fn sync_goniometric_lights(
-    query: Query<(Entity, Ref<GoniometricLight>, Ref<Transform>), Or<(Changed<GoniometricLight>, Changed<Transform>)>>,
+pub fn sync_goniometric_lights<P: Placement>(
+    query: Query<(Entity, Ref<GoniometricLight>, Ref<P>), Or<(Changed<GoniometricLight>, Changed<P>)>>,
     mut table: ResMut<LightTable>,
     mut report: ResMut<RunReport>,
 ) {
-    for (entity, light, transform) in &query {
-        match light.resolve(&transform) {
+    for (entity, light, placement) in &query {
+        match light.resolve(&placement.placement()) {
             Ok(row) => table.upsert_goniometric(entity, row, light.casts_shadows, light.is_changed()),
             Err(e) => reject(&mut table, &mut report, entity, e),
         }
@@ -134,17 +135,17 @@ pub fn sync_goniometric_lights(
 
 /// Upserts distant lights that changed; all of them when the scene bounds changed (their power
 /// and far sample points depend on it).
-pub fn sync_distant_lights(
-    query: Query<(Entity, Ref<DistantLight>, Ref<Transform>)>,
+pub fn sync_distant_lights<P: Placement>(
+    query: Query<(Entity, Ref<DistantLight>, Ref<P>)>,
     bounds: Res<SceneBounds>,
     mut table: ResMut<LightTable>,
     mut report: ResMut<RunReport>,
 ) {
-    for (entity, light, transform) in &query {
-        if !(bounds.is_changed() || light.is_changed() || transform.is_changed()) {
+    for (entity, light, placement) in &query {
+        if !(bounds.is_changed() || light.is_changed() || placement.is_changed()) {
             continue;
         }
-        match light.resolve(&transform, bounds.sphere) {
+        match light.resolve(&placement.placement(), bounds.sphere) {
             Ok(row) => {
                 table.upsert_distant(entity, row, light.casts_shadows, light.is_changed() || bounds.is_changed())
             }
@@ -173,8 +174,8 @@ pub fn sync_uniform_infinite_lights(
 
 /// Upserts image lights that changed (with the tables `build_env_tables` made), or whose
 /// transform moved, or all of them when the scene bounds changed.
-pub fn sync_image_infinite_lights(
-    query: Query<(Entity, Ref<ImageInfiniteLight>, Option<Ref<Transform>>)>,
+pub fn sync_image_infinite_lights<P: Placement>(
+    query: Query<(Entity, Ref<ImageInfiniteLight>, Option<Ref<P>>)>,
     bounds: Res<SceneBounds>,
     tables: Res<super::EnvTables>,
     mut table: ResMut<LightTable>,
@@ -189,7 +190,7 @@ pub fn sync_image_infinite_lights(
             table.remove(entity); // its tables failed to build; the warning says why
             continue;
         };
-        let transform = transform.map_or(Transform::IDENTITY, |t| *t);
+        let transform = transform.map_or(Transform::IDENTITY, |t| t.placement());
         match light.resolve_with_tables(&transform, bounds.sphere, t.clone()) {
             Ok(row) => table.upsert_image_infinite(entity, row, true),
             Err(e) => reject(&mut table, &mut report, entity, e),

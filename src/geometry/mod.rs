@@ -21,7 +21,7 @@ pub use flat_lanes::{FlatHitBlock, HitSink, RayLanes};
 pub use mesh::Mesh;
 pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin, triangle_surface_point};
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};
-pub use transform::Transform;
+pub use transform::{Placement, Transform};
 pub use triangle::MAX_COORDINATE;
 pub use visibility::{Hit, RAY_CHUNK, closest_hits, occluded};
 

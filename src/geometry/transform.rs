@@ -77,3 +77,28 @@ impl Transform {
         self.rotation.inverse() * v
     }
 }
+
+/// Where the light system reads an entity's placement from: kelvin's own [`Transform`] (the
+/// bevy_ecs entry, `LightingPlugin::build`), or with the `bevy` feature Bevy's `GlobalTransform`
+/// (the `bevy_app::Plugin`). Its systems are generic over this one type, so an entity keeps one
+/// transform, whichever app it lives in.
+pub trait Placement: Component {
+    /// The world-space transform of the entity.
+    fn placement(&self) -> Transform;
+}
+
+impl Placement for Transform {
+    #[inline]
+    fn placement(&self) -> Transform {
+        *self
+    }
+}
+
+#[cfg(feature = "bevy")]
+impl Placement for bevy_transform::components::GlobalTransform {
+    fn placement(&self) -> Transform {
+        // Bevy's glam is another version than kelvin's: pass the matrix as plain floats.
+        Transform::from_affine(Affine3A::from_cols_array(&self.affine().to_cols_array()))
+    }
+}
+
