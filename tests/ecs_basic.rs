@@ -28,6 +28,28 @@ fn point_light_gives_inverse_square_luminance_in_rgb_mode() {
     assert!(world.resource::<RunReport>().ran("sample_direct_lighting"));
 }
 
+/// Hard case: a light and an occluder spawned without a transform. Each gets its required
+/// `Transform` (the identity), so the light shines from the origin and the sphere blocks it,
+/// instead of both being silently ignored.
+#[test]
+fn lights_and_geometry_spawned_without_a_transform_sit_at_the_origin() {
+    let (mut world, mut schedule) = world_and_schedule();
+    let light = world.spawn(PointLight::candela(100.0)).id();
+    let ball = world.spawn(kelvin::geometry::Sphere { radius: 0.5 }).id();
+    assert_eq!(world.get::<Transform>(light), Some(&Transform::IDENTITY));
+    assert_eq!(world.get::<Transform>(ball), Some(&Transform::IDENTITY));
+    // 2 m above the light, facing it: its light passes through the ball at the origin.
+    world.resource_mut::<ShadingBatch>().push(Vec3::new(0.0, 2.0, 0.0), Vec3::NEG_Y, 0, 0);
+    schedule.run(&mut world);
+    assert_eq!(world.resource::<LightTable>().entity_count(), 1);
+    assert!(world.resource::<DirectLighting>().occluded[0], "the ball at the origin should block the light");
+    world.despawn(ball);
+    schedule.run(&mut world);
+    let out = world.resource::<DirectLighting>();
+    let y = out.radiance[0].0[1] * 0.7152 + out.radiance[0].0[0] * 0.2126 + out.radiance[0].0[2] * 0.0722;
+    assert!((y - 25.0).abs() < 0.05, "Y = {y}, expected 100 cd / (2 m)^2 from the origin");
+}
+
 #[test]
 fn all_lights_mode_gives_one_entry_per_light_and_removal_keeps_the_table_dense() {
     let (mut world, mut schedule) = world_and_schedule();
