@@ -124,7 +124,9 @@ def floor(g, half_size):
     s = half_size
     positions = quad([-s, 0.0, -s], [0.0, 0.0, 2 * s], [2 * s, 0.0, 0.0])
     assert normalize(cross(sub(positions[1], positions[0]), sub(positions[2], positions[0]))) == [0.0, 1.0, 0.0]
-    grey = g.material(name="floor", pbrMetallicRoughness={"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0})
+    grey = g.material(
+        name="floor", pbrMetallicRoughness={"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0}
+    )
     return g.node(name="floor", mesh=g.mesh("floor", positions, QUAD_INDICES, grey))
 
 

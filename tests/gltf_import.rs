@@ -375,8 +375,83 @@ fn unsupported_image_types_and_uv_sets_warn() {
     write_json(&dir.join("tri.gltf"), &json);
     let scene = load_ok(&dir.join("tri.gltf"));
     assert_eq!(scene.materials[0].base_color_texture, None);
-    assert!(scene.warnings.iter().any(|w| w.contains("tex.ktx2") && w.contains("unsupported image type")));
+    assert!(scene.warnings.iter().any(|w| w.contains("tex.ktx2") && w.contains("KTX2")), "{:?}", scene.warnings);
     assert!(scene.warnings.iter().any(|w| w.contains("UV set 1")), "{:?}", scene.warnings);
+}
+
+/// KTX2 textures (KHR_texture_basisu, or an image that is KTX2 by mimeType, .ktx2 uri or data: URI) are named as
+/// such, with the material and the texture slot that goes without and the factors it keeps; a texture with a
+/// PNG `source` beside its KHR_texture_basisu one uses the PNG, as the extension intends.
+#[test]
+fn ktx2_textures_are_named_with_their_material_and_slot() {
+    let dir = temp_dir("ktx2-named");
+    let magic = b"\xABKTX 20\xBB\r\n\x1A\n";
+    std::fs::write(dir.join("tex.ktx2"), magic).unwrap();
+    std::fs::write(dir.join("rough.ktx2"), magic).unwrap();
+    write_png(&dir.join("fallback.png"), [255, 255, 255]);
+    let json = json!({
+        "asset": { "version": "2.0" },
+        "extensionsUsed": ["KHR_texture_basisu"],
+        "materials": [
+            {
+                "name": "painted",
+                "pbrMetallicRoughness": {
+                    "baseColorTexture": { "index": 0 },
+                    "metallicRoughnessTexture": { "index": 1 }
+                },
+                "emissiveFactor": [1.0, 1.0, 1.0],
+                "emissiveTexture": { "index": 2 }
+            },
+            { "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } }, "emissiveTexture": { "index": 3 } }
+        ],
+        "textures": [
+            { "extensions": { "KHR_texture_basisu": { "source": 0 } } },
+            { "source": 1 },
+            { "source": 2 },
+            { "source": 3, "extensions": { "KHR_texture_basisu": { "source": 0 } } }
+        ],
+        "images": [
+            { "uri": "tex.ktx2", "mimeType": "image/ktx2" },
+            { "uri": "rough.ktx2" },
+            { "uri": format!("data:image/ktx2;base64,{}", base64_encode(magic)) },
+            { "uri": "fallback.png" }
+        ]
+    });
+    let path = dir.join("ktx2.gltf");
+    write_json(&path, &json);
+    let scene = load_ok(&path);
+    let what = path.display().to_string();
+    for w in &scene.warnings {
+        println!("{w}");
+    }
+    let painted = &scene.materials[0];
+    assert_eq!(
+        (painted.base_color_texture, painted.metallic_roughness_texture, painted.emissive_texture),
+        (None, None, None)
+    );
+    assert_eq!((painted.base_color, painted.emissive), (Vec4::ONE, Vec3::ONE), "factors kept");
+    assert!(scene.materials[1].emissive_texture.is_some(), "the PNG source beside KHR_texture_basisu is used");
+    let expect = [
+        ("/materials/0/pbrMetallicRoughness/baseColorTexture", "material 0 \"painted\"", "baseColorFactor"),
+        ("/materials/0/pbrMetallicRoughness/metallicRoughnessTexture", "material 0 \"painted\"", "metallicFactor"),
+        ("/materials/0/emissiveTexture", "material 0 \"painted\"", "emissiveFactor"),
+        ("/materials/1/pbrMetallicRoughness/baseColorTexture", "material 1", "baseColorFactor"),
+    ];
+    for (pointer, material, factor) in expect {
+        let slot = pointer.rsplit('/').next().unwrap();
+        assert!(
+            scene.warnings.iter().any(|w| warning_pointer(w, &what) == pointer
+                && w.contains("KTX2 (Basis Universal, KHR_texture_basisu) textures are not supported")
+                && w.contains(material)
+                && w.contains(slot)
+                && w.contains(factor)),
+            "no KTX2 warning at {pointer} naming {material}, {slot} and {factor}: {:#?}",
+            scene.warnings
+        );
+    }
+    assert!(!scene.warnings.iter().any(|w| w.contains("unsupported image type")), "{:#?}", scene.warnings);
+    // The four above and /extensionsUsed (KHR_texture_basisu is not read).
+    assert_eq!(scene.warnings.len(), 5, "{:#?}", scene.warnings);
 }
 
 #[test]
@@ -819,7 +894,7 @@ fn mirrored_emitter_faces_and_lights_as_its_unmirrored_twin() {
         let ((m, m_err), (u, u_err)) = (lit[0][k], lit[1][k]);
         let unoccluded = lambert_polygon(&emitter, p, 4.0);
         println!(
-            "x = {}: mirrored {m:.4} +- {m_err:.4} lx, unmirrored {u:.4} +- {u_err:.4} lx, unoccluded {unoccluded:.4} lx",
+            "x = {}: mirrored {m:.4} +- {m_err:.4}, unmirrored {u:.4} +- {u_err:.4}, unoccluded {unoccluded:.4} lx",
             p.x
         );
         assert!((m - u).abs() < 5.0 * (m_err * m_err + u_err * u_err).sqrt() + 1e-3 * u, "x = {}: {m} vs {u} lx", p.x);

@@ -85,27 +85,28 @@ fn read_material(
         ior = 1.5;
     }
 
-    let mut texture = |info: Option<&::gltf::json::texture::Info>, field: &str, encoding: Encoding| {
-        info.and_then(|info| texture_index(doc, info, &format!("{pointer}/{field}"), encoding, cache, warnings))
+    let label = match &material.name {
+        Some(name) => format!("material {index} {name:?}"),
+        None => format!("material {index}"),
+    };
+    let mut texture = |info: Option<&::gltf::json::texture::Info>, slot: SlotKind, encoding: Encoding| {
+        let slot = Slot { pointer: format!("{pointer}/{}", slot.field()), material: &label, kind: slot };
+        info.and_then(|info| texture_index(doc, info, &slot, encoding, cache, warnings))
     };
     MaterialData {
         name: material.name.clone(),
         base_color,
-        base_color_texture: texture(
-            pbr.base_color_texture.as_ref(),
-            "pbrMetallicRoughness/baseColorTexture",
-            Encoding::Srgb,
-        ),
+        base_color_texture: texture(pbr.base_color_texture.as_ref(), SlotKind::BaseColor, Encoding::Srgb),
         metallic,
         roughness,
         metallic_roughness_texture: texture(
             pbr.metallic_roughness_texture.as_ref(),
-            "pbrMetallicRoughness/metallicRoughnessTexture",
+            SlotKind::MetallicRoughness,
             Encoding::Linear,
         ),
         emissive: emissive_factor * emissive_strength,
         emissive_strength,
-        emissive_texture: texture(material.emissive_texture.as_ref(), "emissiveTexture", Encoding::Srgb),
+        emissive_texture: texture(material.emissive_texture.as_ref(), SlotKind::Emissive, Encoding::Srgb),
         specular_factor,
         ior,
         double_sided: material.double_sided,
@@ -122,15 +123,91 @@ fn clamp_unit(value: f32, pointer: &str, warnings: &mut Warnings) -> f32 {
     fixed
 }
 
+/// The texture slots kelvin reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum SlotKind {
+    BaseColor,
+    MetallicRoughness,
+    Emissive,
+}
+
+impl SlotKind {
+    /// The slot's path under the material.
+    fn field(self) -> &'static str {
+        match self {
+            Self::BaseColor => "pbrMetallicRoughness/baseColorTexture",
+            Self::MetallicRoughness => "pbrMetallicRoughness/metallicRoughnessTexture",
+            Self::Emissive => "emissiveTexture",
+        }
+    }
+
+    /// The slot's property name.
+    fn name(self) -> &'static str {
+        self.field().rsplit('/').next().unwrap_or_default()
+    }
+
+    /// The factors the material is drawn with when the texture is not used.
+    fn factors(self) -> &'static str {
+        match self {
+            Self::BaseColor => "baseColorFactor",
+            Self::MetallicRoughness => "metallicFactor and roughnessFactor",
+            Self::Emissive => "emissiveFactor",
+        }
+    }
+}
+
+/// A material's texture slot, for pointers and messages.
+struct Slot<'a> {
+    /// JSON pointer of the slot's textureInfo.
+    pointer: String,
+    /// `material <index>`, with its name in quotes when it has one.
+    material: &'a str,
+    kind: SlotKind,
+}
+
+impl Slot<'_> {
+    /// What the material does without this texture.
+    fn fallback(&self) -> String {
+        format!("{} keeps its {} without its {}", self.material, self.kind.factors(), self.kind.name())
+    }
+}
+
+/// The media type of KTX2 images (KHR_texture_basisu).
+const KTX2_MIME: &str = "image/ktx2";
+/// The first 12 bytes of every KTX2 file.
+const KTX2_MAGIC: &[u8] = b"\xABKTX 20\xBB\r\n\x1A\n";
+const KTX2_UNSUPPORTED: &str = "KTX2 (Basis Universal, KHR_texture_basisu) textures are not supported";
+
+/// Whether glTF image `index` is KTX2: by its mimeType, its uri (a `.ktx2` path or a `data:image/ktx2` URI) or,
+/// in a buffer view, its first bytes.
+fn is_ktx2(doc: &Doc, index: usize) -> bool {
+    let image = &doc.root.images[index];
+    if image.mime_type.as_ref().is_some_and(|m| m.0.trim().eq_ignore_ascii_case(KTX2_MIME)) {
+        return true;
+    }
+    match (&image.uri, image.buffer_view) {
+        (Some(uri), _) => match uri.strip_prefix("data:") {
+            Some(rest) => rest.split([';', ',']).next().is_some_and(|m| m.trim().eq_ignore_ascii_case(KTX2_MIME)),
+            None => {
+                let path = uri.split(['?', '#']).next().unwrap_or_default();
+                Path::new(path).extension().is_some_and(|e| e.eq_ignore_ascii_case("ktx2"))
+            }
+        },
+        (None, Some(view)) => view_bytes(doc, view.value()).is_ok_and(|(bytes, _)| bytes.starts_with(KTX2_MAGIC)),
+        (None, None) => false,
+    }
+}
+
 /// The index in `cache.images` of the texture `info` refers to, or `None` (with a warning) if it cannot be used.
 fn texture_index(
     doc: &Doc,
     info: &::gltf::json::texture::Info,
-    pointer: &str,
+    slot: &Slot,
     encoding: Encoding,
     cache: &mut TextureCache,
     warnings: &mut Warnings,
 ) -> Option<usize> {
+    let pointer = slot.pointer.as_str();
     if info.tex_coord != 0 {
         warnings.push(pointer, format!("uses UV set {}; only TEXCOORD_0 is read, texture ignored", info.tex_coord));
         return None;
@@ -140,16 +217,30 @@ fn texture_index(
     }
     let t = info.index.value();
     let Some(texture) = doc.root.textures.get(t) else {
-        warnings.push(pointer, format!("texture {t} does not exist; material keeps its factors"));
+        warnings.push(pointer, format!("texture {t} does not exist: {}", slot.fallback()));
         return None;
     };
     let image = texture.source.value();
+    let basisu = doc.raw(&format!("/textures/{t}/extensions/KHR_texture_basisu")).is_some();
     if image >= doc.root.images.len() {
-        warnings.push(
-            &format!("/textures/{t}"),
-            "no usable source image (extension-only sources such as KHR_texture_basisu or EXT_texture_webp are not \
-             supported); material keeps its factors",
-        );
+        // A texture whose only source is an extension's (a `source` beside it is a fallback, used above).
+        let msg = if basisu {
+            format!("{KTX2_UNSUPPORTED}: {} (texture {t} has only a KHR_texture_basisu source)", slot.fallback())
+        } else if doc.raw(&format!("/textures/{t}/source")).is_none() {
+            format!(
+                "texture {t} has no source image (extension-only sources such as EXT_texture_webp are not \
+                 supported): {}",
+                slot.fallback()
+            )
+        } else {
+            format!("texture {t}: source image {image} does not exist: {}", slot.fallback())
+        };
+        warnings.push(pointer, msg);
+        return None;
+    }
+    if is_ktx2(doc, image) {
+        let uri = doc.root.images[image].uri.as_deref().map(|u| format!(" {}", shorten(u))).unwrap_or_default();
+        warnings.push(pointer, format!("{KTX2_UNSUPPORTED}: {} (texture {t}, image {image}{uri})", slot.fallback()));
         return None;
     }
     if let Some(&loaded) = cache.loaded.get(&(image, encoding)) {

@@ -27,7 +27,8 @@
 //!
 //! | problem | fallback |
 //! |---|---|
-//! | texture file missing, unreadable or undecodable; KTX2, WebP or unknown type | texture `None`, factors kept |
+//! | texture file missing, unreadable or undecodable; WebP or unknown type | texture `None`, factors kept |
+//! | KTX2 texture (KHR_texture_basisu; image/ktx2 or `.ktx2`) | same; warning names material, slot, factors |
 //! | texture on a UV set other than 0 | texture `None` |
 //! | KHR_texture_transform on a texture | transform ignored |
 //! | extension in `extensionsUsed` that kelvin does not read | ignored |
