@@ -95,13 +95,19 @@ impl LightTable {
         let mut out = Vec::new();
         if let Some(reference) = self.node_refs.get(&node) {
             let pointer = format!("/nodes/{node}/extensions/{PUNCTUAL}");
+            // The validator reports a missing root extension at the node's object (a failed dependency), beside
+            // any error in the reference itself.
+            if !self.punctual_defined {
+                let light = reference.get("light").map_or(String::new(), |l| format!(" (light {l})"));
+                warnings.push(
+                    &pointer,
+                    format!("the root {PUNCTUAL} extension must be defined; reference{light} unresolved, dropped"),
+                );
+            }
             match reference.get("light").map(|l| (l, l.as_u64())) {
                 None => warnings.push(&pointer, "'light' must be defined; reference dropped"),
                 Some((l, None)) => warnings.push(&format!("{pointer}/light"), format!("{l} is not a light index")),
-                Some((_, Some(i))) if !self.punctual_defined => warnings.push(
-                    &format!("{pointer}/light"),
-                    format!("light {i} unresolved: the root {PUNCTUAL} extension is missing; reference dropped"),
-                ),
+                Some((_, Some(_))) if !self.punctual_defined => {} // dropped above
                 Some((_, Some(i))) => match self.punctual.get(i as usize) {
                     None => warnings.push(
                         &format!("{pointer}/light"),
@@ -224,11 +230,16 @@ fn parse_punctual(light: &Value, pointer: &str, warnings: &mut Warnings) -> Opti
 fn spot_angles(obj: &Map<String, Value>, pointer: &str, warnings: &mut Warnings) -> LightKind {
     let spot_pointer = format!("{pointer}/spot");
     let empty = Map::new();
+    let defaults = "glTF defaults used (inner 0, outer pi/4)";
+    // A missing property is reported at its parent object (as the validator does), a bad one at itself.
     let spot = match obj.get("spot") {
         Some(Value::Object(spot)) => spot,
-        other => {
-            let why = if other.is_some() { "is not an object" } else { "must be defined for a spot light" };
-            warnings.push(&spot_pointer, format!("{why}; glTF defaults used (inner 0, outer pi/4)"));
+        Some(_) => {
+            warnings.push(&spot_pointer, format!("is not an object; {defaults}"));
+            &empty
+        }
+        None => {
+            warnings.push(pointer, format!("'spot' must be defined for a spot light; {defaults}"));
             &empty
         }
     };

@@ -43,10 +43,11 @@
 //! | orthographic or invalid camera | skipped |
 //! | EXT_lights_ies profile missing or unreadable; light index unresolved | light dropped |
 //!
-//! # Policy per Khronos glTF-Validator case (`../shared/data/gltf/khronos-validator`)
+//! # Policy per Khronos glTF-Validator case (`tests/data/gltf/khronos-validator`)
 //!
-//! No validator file gives a [`GltfError`]: each error the validator reports becomes a warning at its JSON pointer
-//! (or one under or above it), with the fallback below; lights not attached to a node are checked but not placed.
+//! No validator file gives a [`GltfError`]: each error the validator reports becomes a warning at exactly its JSON
+//! pointer (one warning per error, so two errors at one pointer give two warnings), with the fallback below; lights
+//! not attached to a node are checked but not placed.
 //!
 //! | validator case (errors) | kelvin |
 //! |---|---|
@@ -60,7 +61,7 @@
 //! | light/empty_object (1: no `lights`) | warning |
 //! | light/spot_invalid_angles (1: outer <= inner) | warning, inner set to outer (hard-edged cone) |
 //! | light/spot_light_without_spot_object (1) | warning, glTF defaults (inner 0, outer pi/4) |
-//! | node/empty_object (2: no `light`, no root extension) | warning, reference dropped |
+//! | node/empty_object (2: no `light`, no root extension) | a warning for each, reference dropped |
 //! | node/unexpected_extension (1: light on a scene) | warning, ignored |
 //! | node/unresolved_light_* (1-2) | warning per cause, reference dropped |
 //! | material/out_of_range (1: emissiveStrength < 0) | warning, strength 1 used |
