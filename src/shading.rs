@@ -16,15 +16,17 @@ pub enum ColorMode {
     Spectral,
 }
 
-/// How a light is chosen for each sample.
+/// How a light is chosen for each sample. Defaults to the light BVH, as in pbrt-v4: it weighs
+/// each light by what reaches the point, where power sampling spends samples on bright lights
+/// the point cannot see (the default scene's sky, behind the room's walls).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LightSamplerKind {
     /// Every light equally likely.
     Uniform,
     /// Proportional to emitted power (alias table).
-    #[default]
     Power,
     /// Light BVH with orientation-cone importance (Conty & Kulla 2018).
+    #[default]
     Bvh,
 }
 
@@ -51,6 +53,7 @@ pub enum LightPrecision {
 #[derive(Resource, Clone, Debug, PartialEq)]
 pub struct Settings {
     pub color_mode: ColorMode,
+    /// How lights are chosen. Defaults to the light BVH.
     pub light_sampler: LightSamplerKind,
     pub selection: LightSelection,
     /// Trace shadow rays (when there is geometry that can occlude).
@@ -73,7 +76,7 @@ impl Default for Settings {
     fn default() -> Self {
         Self {
             color_mode: ColorMode::Rgb,
-            light_sampler: LightSamplerKind::Power,
+            light_sampler: LightSamplerKind::Bvh,
             selection: LightSelection::OneSampled,
             shadows: true,
             samples_per_point: 1,

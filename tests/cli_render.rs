@@ -42,3 +42,11 @@ fn report_covers_every_batch_of_the_render() {
     assert!(stderr.contains("36864 points"), "points summed over batches: {stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn light_sampler_defaults_to_the_light_bvh() {
+    let output = Command::new(env!("CARGO_BIN_EXE_kelvin")).args(["render", "--help"]).output().expect("kelvin runs");
+    let help = String::from_utf8_lossy(&output.stdout);
+    let line = help.lines().skip_while(|l| !l.contains("--light-sampler")).take(3).collect::<Vec<_>>().join("\n");
+    assert!(line.contains("[default: bvh]"), "{help}");
+}

@@ -4,8 +4,9 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use kelvin::geometry::Transform;
 use kelvin::light::{LightKind, LightTable, PointLight};
+use kelvin::light_sampler::LightSampler;
 use kelvin::render::renderer::{RenderOptions, Strategy, render};
-use kelvin::shading::RunReport;
+use kelvin::shading::{LightSamplerKind, RunReport, Settings};
 use kelvin::systems::LightingPlugin;
 
 #[test]
@@ -21,6 +22,9 @@ fn default_scene_has_area_spot_blackbody_point_and_sky_lights_and_renders() {
         |_| {},
     );
     assert!(stats.report.warnings.is_empty(), "{}", stats.report);
+    // Lights are chosen by the light BVH unless the settings say otherwise (as in pbrt-v4).
+    assert_eq!(Settings::default().light_sampler, LightSamplerKind::Bvh);
+    assert_eq!(world.resource::<LightSampler>().kind(), LightSamplerKind::Bvh);
     let table = world.resource::<LightTable>();
     let kinds: Vec<LightKind> = table.ids().map(|id| id.kind).collect();
     for k in [LightKind::Area, LightKind::Spot, LightKind::Point, LightKind::UniformInfinite] {

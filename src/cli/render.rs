@@ -49,7 +49,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1.0)]
     env_intensity: f32,
     /// How a light is chosen per sample.
-    #[arg(long, value_enum, default_value = "power")]
+    #[arg(long, value_enum, default_value = "bvh")]
     light_sampler: SamplerArg,
     /// Colour mode.
     #[arg(long, value_enum, default_value = "rgb")]

@@ -25,9 +25,10 @@ pub enum LightSampler {
     Bvh(BvhSampler),
 }
 
+/// An empty sampler of the default kind (the light BVH, as `Settings` default to).
 impl Default for LightSampler {
     fn default() -> Self {
-        Self::Power(PowerSampler::default())
+        Self::Bvh(BvhSampler::default())
     }
 }
 

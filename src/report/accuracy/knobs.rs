@@ -23,17 +23,18 @@ pub struct Config {
 }
 
 impl Config {
-    /// kelvin's defaults (RGB, power sampler, one light per sample, MIS, error-bound offsets, f32)
-    /// at `spp` in colour mode `color`.
+    /// kelvin's defaults (light-BVH sampler, one light per sample, MIS, error-bound offsets, f32:
+    /// the light system's from `Settings::default`) at `spp` in colour mode `color`.
     pub fn baseline(spp: u32, color: ColorMode) -> Self {
+        let settings = Settings::default();
         Self {
             spp,
             color,
-            sampler: LightSamplerKind::Power,
-            selection: LightSelection::OneSampled,
+            sampler: settings.light_sampler,
+            selection: settings.selection,
             strategy: Strategy::Mis,
-            offset: ShadowOffset::ErrorBound,
-            precision: LightPrecision::F32,
+            offset: settings.shadow_offset,
+            precision: settings.light_precision,
             env_table_width: None,
         }
     }
@@ -194,6 +195,10 @@ mod tests {
                 assert!(s.len() >= 2 && s.iter().filter(|(_, c)| *c == base).count() == 1, "{knob:?}");
             }
         }
+        // The light-sampler knob turns away from kelvin's default sampler, the light BVH.
+        let base = Config::baseline(16, ColorMode::Rgb);
+        let samplers = Knob::LightSampler.settings(&base, 64, 4);
+        assert_eq!(samplers.iter().find(|(_, c)| *c == base).map(|(l, _)| l.as_str()), Some("bvh"));
         let spps: Vec<u32> =
             Knob::Spp.settings(&Config::baseline(16, ColorMode::Rgb), 64, 4).iter().map(|s| s.1.spp).collect();
         assert_eq!(spps, [1, 2, 4, 8, 16, 32, 64]);

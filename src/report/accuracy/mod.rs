@@ -154,8 +154,8 @@ pub fn report_scene(
     let budget = opts.budget;
     let (w, h) = (budget.width, budget.height);
     let knobs = scene.id.knobs();
-    let base =
-        Config { sampler: scene.id.baseline_sampler(), ..Config::baseline(budget.base_spp, scene.id.baseline_color()) };
+    // kelvin's defaults (the light-BVH sampler among them) in the scene's colour mode.
+    let base = Config::baseline(budget.base_spp, scene.id.baseline_color());
     let main_ref_config = Config { spp: budget.reference_spp, ..base };
     let main_ref = reference::reference(scene, &main_ref_config, w, h, &opts.out, progress)?;
     let mut references = vec![main_ref];

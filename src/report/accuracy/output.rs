@@ -109,7 +109,7 @@ pub fn markdown(report: &SceneReport) -> String {
         report.n_lights,
         refs.join(", "),
         report.rows.first().map(|r| r.config.color).unwrap_or_default(),
-        format!("{:?}", report.scene.baseline_sampler()).to_lowercase(),
+        format!("{:?}", report.rows.first().map(|r| r.config.sampler).unwrap_or_default()).to_lowercase(),
         b.base_spp,
         b.reps,
         report.spp_slope,

@@ -10,7 +10,7 @@ use super::AccuracyError;
 use super::knobs::Knob;
 use crate::light::LightTable;
 use crate::scenes::color_checker::{ColorChecker, spawn_color_checker};
-use crate::shading::{ColorMode, LightSamplerKind, Settings};
+use crate::shading::{ColorMode, Settings};
 use crate::spectrum::Spectrum;
 use crate::systems::LightingPlugin;
 
@@ -80,16 +80,6 @@ impl SceneId {
         match self {
             SceneId::CheckerBlackbody | SceneId::CheckerF11 => ColorMode::Spectral,
             _ => ColorMode::Rgb,
-        }
-    }
-
-    /// The light sampler of the baseline and of the references: the BVH where there are many
-    /// lights (power sampling leaves a 512-spp reference of the scaling scene too noisy to
-    /// measure against), kelvin's default elsewhere.
-    pub fn baseline_sampler(self) -> LightSamplerKind {
-        match self {
-            SceneId::ManyLights => LightSamplerKind::Bvh,
-            _ => LightSamplerKind::Power,
         }
     }
 
