@@ -165,7 +165,7 @@ fn load_ies(source: Option<&IesSource>) -> Result<IesProfile, String> {
 /// The area light an emissive material makes, if any.
 fn emissive_light(m: &MaterialData, scene: &GltfScene) -> Option<crate::light::AreaLight> {
     let y = luminance(m.emissive);
-    if !(y > 0.0) {
+    if y.is_nan() || y <= 0.0 {
         return None;
     }
     let (spectrum, _) = colour_spectrum(m.emissive);
