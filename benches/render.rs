@@ -1,9 +1,12 @@
 //! Renderer throughput: camera samples per second for the default scene and the point light over
-//! a plane, at 128x128 and 64 spp (1M samples per render).
+//! a plane, at 128x128 and 64 spp (1M samples per render), and for the render suite's real glTF
+//! files (`kelvin::report::render_bench::SUITE`, as `kelvin bench render` renders them) at
+//! 128x128 and 4 spp.
 
 use bevy_ecs::prelude::*;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use kelvin::render::renderer::{RenderOptions, Strategy, render};
+use kelvin::report::render_bench::{RenderBenchConfig, SUITE, suite_options};
 use kelvin::systems::LightingPlugin;
 
 fn world_with(spawn: fn(&mut World)) -> (World, Schedule) {
@@ -28,5 +31,24 @@ fn bench_render(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_render);
+/// Samples per pixel of the suite's criterion runs: small, so that the eight scenes take about a
+/// minute; `kelvin bench render` times them at about a second per render.
+const SUITE_SPP: u32 = 4;
+
+fn bench_suite(c: &mut Criterion) {
+    let data_dir = RenderBenchConfig::default().data_dir;
+    let opts = suite_options(128, 128, SUITE_SPP);
+    let mut group = c.benchmark_group("suite_128x128_4spp");
+    group.sample_size(10).throughput(Throughput::Elements(128 * 128 * SUITE_SPP as u64));
+    group.warm_up_time(std::time::Duration::from_secs(1)).measurement_time(std::time::Duration::from_secs(3));
+    for scene in SUITE {
+        let (mut world, mut schedule, _) = scene.world(&data_dir).unwrap_or_else(|e| panic!("{}: {e}", scene.name));
+        // The first render builds the scene BVH, light table and sampler; the timed ones reuse them.
+        render(&mut world, &mut schedule, &suite_options(128, 128, 1), |_| {});
+        group.bench_function(scene.name, |b| b.iter(|| render(&mut world, &mut schedule, &opts, |_| {})));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_render, bench_suite);
 criterion_main!(benches);

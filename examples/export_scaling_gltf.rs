@@ -8,9 +8,9 @@
 //! ground and each sphere's centre and radius. What glTF cannot hold is converted:
 //! - lumens become candela as kelvin converts them (point: lm / 4 pi; spot: lm over the solid
 //!   angle of its smoothstep falloff, 2 pi ((1 - cos inner) + (cos inner - cos outer) / 2));
-//! - a blackbody spectrum becomes its linear sRGB colour (luminance 1, `srgb_normalized`), written
-//!   as `color` = rgb / max(rgb) with the intensity times max(rgb), so that glTF's intensity x
-//!   colour luminance is the light's candela;
+//! - a blackbody spectrum becomes its linear sRGB colour (`srgb_normalized`), written as `color`
+//!   = rgb / max(rgb) with the intensity divided by that colour's luminance, so that glTF's
+//!   intensity x colour luminance is the light's candela;
 //! - the analytic ground rectangle becomes a two-triangle quad, and each analytic sphere an
 //!   instance (node translation and uniform scale) of one unit UV sphere of 16 x 8 segments
 //!   (224 triangles, smooth normals);
@@ -118,12 +118,14 @@ fn candela(amount: Amount, solid_angle: f32) -> f32 {
     }
 }
 
-/// glTF `color` (max component 1) and the factor the intensity takes.
+/// glTF `color` (max component 1) and the factor the intensity takes: 1 / its luminance, with the
+/// Rec. 709 weights kelvin's import multiplies the intensity by (`scene::spawn`), so that the
+/// imported light has the scene's candela.
 fn colour(spectrum: &Spectrum) -> ([f32; 3], f32) {
     let rgb = spectrum.srgb_normalized().as_vec3();
     assert!(rgb.min_element() >= 0.0, "colour {rgb} outside sRGB");
-    let max = rgb.max_element();
-    ((rgb / max).to_array(), max)
+    let color = rgb / rgb.max_element();
+    (color.to_array(), 1.0 / color.dot(Vec3::new(0.2126, 0.7152, 0.0722)))
 }
 
 /// An f32 as the shortest decimal that reads back as the same f32 (serde_json would print the

@@ -1,10 +1,12 @@
 //! `kelvin bench lights`: the many-lights scaling report (table + plots).
+//! `kelvin bench render`: the render suite of real glTF files (table, or JSON).
 
 use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
 use kelvin::report::lights::{LightBenchConfig, format_tables, run_light_bench, write_plots};
+use kelvin::report::render_bench::{RenderBenchConfig, SUITE, format_table, run_render_bench, to_json};
 
 use super::CliError;
 
@@ -19,6 +21,47 @@ enum BenchCommand {
     /// Light samplers against the number of lights: time per sample, relative RMSE at equal
     /// time, and update time when lights move (scaling scene + emissive-panel room).
     Lights(LightsArgs),
+    /// Render throughput on the suite of real glTF files (direct lighting, MIS, light BVH):
+    /// seconds, M samples/s, M shadow rays/s and M BSDF rays/s per scene.
+    Render(RenderArgs),
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "128x128", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Samples per pixel for every scene; default: each scene's own (about a second of rendering
+    /// on a 2-core machine, the same samples per image at any size).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Scenes to run, comma-separated; default: the whole suite.
+    #[arg(long, value_delimiter = ',')]
+    scenes: Vec<String>,
+    /// Timed renders per scene after a 1-spp warm-up; the fastest counts.
+    #[arg(long, default_value_t = 3)]
+    repeat: usize,
+    /// Folder of the real test data; default: the repository's tests/data.
+    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"))]
+    data: PathBuf,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// After the table, print every row (counts, pass times, warnings) as one line of JSON.
+    #[arg(long)]
+    json: bool,
+    /// List the suite's scenes and files, and exit.
+    #[arg(long)]
+    list: bool,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT, e.g. 128x128"))?;
+    let parse = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
+    match (parse(w), parse(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("'{s}': width and height must be whole numbers in 1..=16384")),
+    }
 }
 
 #[derive(Args)]
@@ -52,7 +95,38 @@ struct LightsArgs {
 pub fn run(args: BenchArgs) -> Result<(), CliError> {
     match args.what {
         BenchCommand::Lights(a) => lights(a),
+        BenchCommand::Render(a) => render(a),
     }
+}
+
+fn render(a: RenderArgs) -> Result<(), CliError> {
+    if a.list {
+        for s in SUITE {
+            let env = s.env.map(|(m, x)| format!(" --env {m} --env-intensity {x}")).unwrap_or_default();
+            println!("{}: {}{env}, {} spp at 128x128: {}", s.name, s.file, s.spp_128, s.about);
+        }
+        return Ok(());
+    }
+    if let Some(t) = a.threads {
+        rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global()?;
+    }
+    if cfg!(debug_assertions) {
+        eprintln!("note: a debug build; timings are only meaningful with --release");
+    }
+    let cfg = RenderBenchConfig {
+        data_dir: a.data,
+        width: a.size.0,
+        height: a.size.1,
+        spp: a.spp,
+        repeat: a.repeat.max(1),
+        scenes: a.scenes,
+    };
+    let rows = run_render_bench(&cfg, |line| eprintln!("{line}")).map_err(|e| e.to_string())?;
+    print!("{}", format_table(&rows));
+    if a.json {
+        println!("{}", to_json(&rows));
+    }
+    Ok(())
 }
 
 fn lights(a: LightsArgs) -> Result<(), CliError> {

@@ -25,7 +25,7 @@ enum Command {
     Render(render::RenderArgs),
     /// Reports: `report accuracy` prices each accuracy knob in render time.
     Report(report::ReportArgs),
-    /// Benchmarks with a printed table and plots.
+    /// Benchmarks: `bench lights` (many-lights table and plots), `bench render` (the render suite).
     Bench(bench::BenchArgs),
 }
 

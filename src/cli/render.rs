@@ -2,12 +2,9 @@
 //! [--light-sampler uniform|power|bvh] [--color rgb|spectral] [--seed S] [--threads T] [--report]`.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 use bevy_ecs::prelude::*;
 use indicatif::{ProgressBar, ProgressStyle};
-use kelvin::geometry::Transform;
-use kelvin::light::ImageInfiniteLight;
 use kelvin::render::camera::CameraModel;
 use kelvin::render::film_io::{write_exr, write_png};
 use kelvin::render::renderer::{RenderOptions, Strategy, render_with};
@@ -118,8 +115,7 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
     LightingPlugin::build(&mut world, &mut schedule);
     match &args.scene {
         Some(path) => {
-            let scene = kelvin::scene::gltf::load_gltf(path)?;
-            let report = kelvin::scene::spawn::spawn_gltf(&mut world, &scene);
+            let report = kelvin::render::scene_file::spawn_gltf_file(&mut world, path)?;
             for w in &report.warnings {
                 eprintln!("warning: {w}");
             }
@@ -136,13 +132,9 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
         None => kelvin::scenes::default_scene::spawn_default_scene(&mut world),
     }
     if let Some(path) = &args.env {
-        let loaded = kelvin::scene::image::load_image(path)?;
-        for w in &loaded.warnings {
+        for w in kelvin::render::scene_file::spawn_env_map(&mut world, path, args.env_intensity)? {
             eprintln!("warning: {w}");
         }
-        let mut light = ImageInfiniteLight::new(Arc::new(loaded.image));
-        light.scale = args.env_intensity;
-        world.spawn((light, Transform::IDENTITY));
     }
     Ok((world, schedule))
 }

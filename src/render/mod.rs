@@ -6,4 +6,5 @@ pub mod film;
 pub mod film_io;
 pub mod material;
 pub mod renderer;
+pub mod scene_file;
 mod shade_lanes;

@@ -2,3 +2,4 @@
 pub mod accuracy;
 pub mod lights;
 pub mod plot;
+pub mod render_bench;
