@@ -89,7 +89,11 @@ pub fn app(demo: &Demo) -> App {
         let candela = 20.0 + 180.0 * hash(i, 8);
         let transform = Transform::from_translation(to_bevy(position(&orbit, 0)));
         if i % 2 == 0 {
-            world.spawn((PointLight { amount: Amount::Candela(candela), spectrum, ..Default::default() }, transform, orbit));
+            world.spawn((
+                PointLight { amount: Amount::Candela(candela), spectrum, ..Default::default() },
+                transform,
+                orbit,
+            ));
         } else {
             let spot = SpotLight {
                 amount: Amount::Candela(candela),
@@ -127,9 +131,15 @@ pub fn to_bevy(v: Vec3) -> bevy_math::Vec3 {
     bevy_math::Vec3::from_array(v.to_array())
 }
 
-/// Moves every light to its place on its orbit for the next frame.
-fn move_lights(mut frame: ResMut<FrameCount>, mut lights: Query<(&Orbit, &mut Transform)>) {
+/// Moves every light to its place on its orbit for the next frame, and gives the frame its own
+/// random numbers (the light system's are keyed by seed, point and sample).
+fn move_lights(
+    mut frame: ResMut<FrameCount>,
+    mut settings: ResMut<Settings>,
+    mut lights: Query<(&Orbit, &mut Transform)>,
+) {
     frame.0 += 1;
+    settings.seed = u64::from(frame.0);
     for (orbit, mut transform) in &mut lights {
         transform.translation = to_bevy(position(orbit, frame.0));
     }

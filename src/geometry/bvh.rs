@@ -36,6 +36,7 @@ use super::mesh::Mesh;
 use super::shapes::{PlacedShape, Shape};
 use super::transform::Transform;
 use super::triangle::is_degenerate;
+use super::wide::{LeafSource, WideBvh};
 
 /// Rebuild after refits once the tree's SAH cost has grown by this factor since the last build.
 pub const REBUILD_COST_RATIO: f32 = 1.5;
@@ -139,6 +140,8 @@ pub struct SceneBvh {
     /// Leaf slot data, in `cwbvh.primitive_indices` order (slot -> input primitive).
     pub(crate) leaf: Vec<LeafPrim>,
     pub(crate) slot_of_prim: Vec<u32>,
+    /// The tree queries traverse: the same hierarchy, 8 children per node with exact boxes.
+    pub(crate) wide: WideBvh,
     /// Exact (unquantised) box of every node, kept for incremental refits.
     pub(crate) node_bounds: Vec<Aabb>,
     /// Parent of every node (the root is its own parent) and the node holding each leaf slot.
@@ -210,6 +213,7 @@ impl SceneBvh {
             cwbvh: CwBvh::default(),
             leaf: Vec::new(),
             slot_of_prim: Vec::new(),
+            wide: WideBvh::default(),
             node_bounds: Vec::new(),
             parent: Vec::new(),
             slot_node: Vec::new(),
@@ -344,6 +348,7 @@ impl SceneBvh {
         for (slot, &p) in self.cwbvh.primitive_indices.iter().enumerate() {
             self.slot_of_prim[p as usize] = slot as u32;
         }
+        self.wide = WideBvh::from_bvh2(&bvh2, &self.slot_of_prim, &LeafView(self));
         self.link_nodes();
         self.dirty.clear();
         self.dirty.resize(self.cwbvh.nodes.len(), true);
@@ -405,6 +410,22 @@ impl SceneBvh {
             Source::Mesh(m) => Some(&self.meshes[m as usize]),
             Source::Shape(_) => None,
         }
+    }
+}
+
+/// The leaf slots of a `SceneBvh` as the wide tree reads them.
+pub(crate) struct LeafView<'a>(pub(crate) &'a SceneBvh);
+
+impl LeafSource for LeafView<'_> {
+    fn leaf_count(&self) -> usize {
+        self.0.leaf.len()
+    }
+    fn triangle(&self, slot: usize) -> Option<[Vec3; 3]> {
+        let p = &self.0.leaf[slot];
+        (p.shape == NO_SHAPE).then_some(p.v)
+    }
+    fn bounds(&self, slot: usize) -> Aabb {
+        self.0.prim_bounds(&self.0.leaf[slot])
     }
 }
 

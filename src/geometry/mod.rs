@@ -15,6 +15,7 @@ pub mod shapes;
 pub mod transform;
 mod triangle;
 pub mod visibility;
+mod wide;
 
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
 pub use flat_lanes::{FlatHitBlock, HitSink, RayLanes};

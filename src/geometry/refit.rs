@@ -92,6 +92,9 @@ impl SceneBvh {
             }
         }
         self.cost = self.refit_nodes(true);
+        let mut wide = std::mem::take(&mut self.wide);
+        wide.refit(&super::bvh::LeafView(self));
+        self.wide = wide;
         Ok(self.cost_ratio())
     }
 

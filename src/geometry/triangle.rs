@@ -33,7 +33,7 @@ pub(crate) struct TriangleHit {
 
 /// Ray parameter range check slack for the early `t_scaled` rejection: loose by 2^-20 so it only
 /// rejects hits that the exact `t <= t_max` test on the computed `t` would reject too.
-const EARLY_REJECT_SLACK: f32 = 1.0 + 1.0 / (1u32 << 20) as f32;
+pub(crate) const EARLY_REJECT_SLACK: f32 = 1.0 + 1.0 / (1u32 << 20) as f32;
 
 impl ShearedRay {
     /// Precomputes the permutation and shear. The ray must be valid ([`Ray::is_valid`]).
@@ -48,6 +48,13 @@ impl ShearedRay {
         };
         let d = swizzle(ray.dir, kz);
         Self { origin: ray.origin, kz, shear: Vec3::new(-d.x / d.z, -d.y / d.z, 1.0 / d.z) }
+    }
+
+    /// The ray origin, the axis that became z, and the shear: what a lane kernel of the same
+    /// test needs (`wide::triangle_block_hits`).
+    #[inline(always)]
+    pub(crate) fn parts(&self) -> (Vec3, u8, Vec3) {
+        (self.origin, self.kz, self.shear)
     }
 
     #[inline(always)]

@@ -1,35 +1,25 @@
 //! Ray queries on a [`SceneBvh`]: any-hit (shadow rays) and closest-hit (camera rays), one at a
 //! time or batched over rayon chunks, plus brute-force references for tests.
 //!
-//! Traversal uses obvhs's `traverse!` loop with our own node test. obvhs's node test clamps box
-//! entry to t >= 1e-4 (which would drop occluders right next to a shadow-ray origin) and replaces
-//! tiny direction components by +-1/f32::EPSILON; ours honours t in [0, t_max] exactly and pads
-//! each slab by a bound on its own rounding (see `NODE_PAD`), so it never culls a box the exact
-//! ray meets. With primitive tests shared between the two paths, BVH queries then return exactly
-//! what testing every primitive returns (closest-hit ties go to the lowest input primitive index).
+//! Queries walk the wide tree (`wide.rs`: 8 exact child boxes per node, leaf triangles in lane
+//! blocks), compiled for the widest instruction set the CPU has. Its node test never culls a box
+//! the exact ray meets over [0, t_max] (obvhs's own clamps box entry to t >= 1e-4, which would drop
+//! occluders right next to a shadow-ray origin), and its triangle lanes decide as the scalar test
+//! does, so BVH queries return exactly what testing every primitive returns (closest-hit ties go to
+//! the lowest input primitive index).
 
 use std::cell::OnceCell;
 
-use glam::{DVec3, UVec2, Vec2, Vec3, Vec3A, Vec4};
-use obvhs::cwbvh::node::{CwBvhNode, extract_byte64};
+use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::bvh::{GeometryId, NO_SHAPE, SceneBvh};
 use super::ray::{Ray, SurfacePoint, triangle_point_error};
 use super::triangle::ShearedRay;
+use super::wide::{PrimBlock, triangle_block_hits};
 
 /// Rays per rayon task in the batched queries.
 pub const RAY_CHUNK: usize = 256;
-
-/// Relative padding of each slab and of `t_max` in the node test (2^-18, 64 f32 ulps). A slab
-/// parameter `q e / d + (p - o) / d` is computed with at most 5 roundings (error below
-/// gamma(5) (|p - o| + 255 e) / |d|), and quantising child boxes can shave up to ~1000 ulps of
-/// `e`; 2^-18 (|p - o| + 256 e) / |d| covers both with room to spare.
-const NODE_PAD: f32 = 1.0 / (1u32 << 18) as f32;
-
-/// Cap on |1/d| so that zero direction components give huge but finite slab parameters
-/// (never inf * 0 = NaN): 2^100, valid for scene coordinates below 2^20.
-const MAX_INV_DIR: f32 = 1.267_650_6e30;
 
 /// Up to this many primitives, queries test each one rather than walk the tree: the same answers
 /// (see the module docs), without the traversal's setup.
@@ -89,61 +79,6 @@ pub fn closest_hits(bvh: &SceneBvh, rays: &[Ray], out: &mut Vec<Option<Hit>>) {
     });
 }
 
-/// Per-ray constants of the node test.
-struct NodeRay {
-    origin: Vec3A,
-    inv_dir: Vec3A,
-    inv_abs: Vec3A,
-    neg: [bool; 3],
-}
-
-impl NodeRay {
-    fn new(ray: &Ray) -> Self {
-        let inv = |d: f32| {
-            let i = 1.0 / d;
-            if i.is_finite() && i.abs() <= MAX_INV_DIR { i } else { MAX_INV_DIR.copysign(d) }
-        };
-        let inv_dir = Vec3A::new(inv(ray.dir.x), inv(ray.dir.y), inv(ray.dir.z));
-        let neg = [inv_dir.x < 0.0, inv_dir.y < 0.0, inv_dir.z < 0.0];
-        Self { origin: ray.origin.into(), inv_dir, inv_abs: inv_dir.abs(), neg }
-    }
-
-    /// Hit mask of the node's children over t in [0, t_max], in obvhs's layout: inner children
-    /// in the high byte (by traversal priority), leaf primitives in the low 24 bits.
-    #[inline(always)]
-    fn intersect(&self, node: &CwBvhNode, t_max: f32, oct_inv4: u32) -> u32 {
-        let e = node.compute_extent();
-        let rel = Vec3A::from(node.p) - self.origin;
-        let scale = e * self.inv_dir;
-        let adj = rel * self.inv_dir;
-        let pad = (rel.abs() + 256.0 * e) * self.inv_abs * NODE_PAD;
-        let (near, far) = (adj - pad, adj + pad);
-        let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-        let t_max = Vec4::splat(t_max * (1.0 + NODE_PAD));
-        let mut hit_mask = 0;
-        for half in 0..2 {
-            let q = |a: &[u8; 8]| {
-                let i = 4 * half;
-                Vec4::new(a[i] as f32, a[i + 1] as f32, a[i + 2] as f32, a[i + 3] as f32)
-            };
-            let slab = |lo: &[u8; 8], hi: &[u8; 8], neg: bool| if neg { (q(hi), q(lo)) } else { (q(lo), q(hi)) };
-            let (nx, fx) = slab(&node.child_min_x, &node.child_max_x, self.neg[0]);
-            let (ny, fy) = slab(&node.child_min_y, &node.child_max_y, self.neg[1]);
-            let (nz, fz) = slab(&node.child_min_z, &node.child_max_z, self.neg[2]);
-            let t_near = (nx * scale.x + near.x).max(ny * scale.y + near.y).max(nz * scale.z + near.z).max(Vec4::ZERO);
-            let t_far = (fx * scale.x + far.x).min(fy * scale.y + far.y).min(fz * scale.z + far.z).min(t_max);
-            let mask = t_near.cmple(t_far).bitmask();
-            for j in 0..4 {
-                if mask & (1 << j) != 0 {
-                    let c = 4 * half + j;
-                    hit_mask |= extract_byte64(child_bits8, c) << extract_byte64(bit_index8, c);
-                }
-            }
-        }
-        hit_mask
-    }
-}
-
 /// The best hit so far: parameter, input primitive index (tie-breaker), slot, barycentrics.
 #[derive(Clone, Copy)]
 struct Best {
@@ -174,21 +109,10 @@ impl SceneBvh {
         if self.leaf.len() <= FEW_PRIMITIVES {
             return self.occluded_each(ray, origin);
         }
-        let tri_ray = OnceCell::new();
-        let node_ray = NodeRay::new(ray);
-        let mut state = self.cwbvh.new_traversal(Vec3A::from(ray.dir));
-        let mut node;
-        let mut blocked = false;
-        'traversal: {
-            obvhs::traverse!(self.cwbvh, node, state, node_ray.intersect(node, ray.t_max, state.oct_inv4), {
-                let slot = state.primitive_id as usize;
-                if !self.ignores(slot, origin) && self.slot_hit(slot, ray, &tri_ray, ray.t_max).is_some() {
-                    blocked = true;
-                    break 'traversal;
-                }
-            });
-        }
-        blocked
+        crate::lanes::widest(
+            #[inline(always)]
+            || self.occluded_wide(ray, origin),
+        )
     }
 
     /// The nearest hit of `ray` in (0, t_max], or `None`.
@@ -199,26 +123,109 @@ impl SceneBvh {
         if self.leaf.len() <= FEW_PRIMITIVES {
             return self.closest_hit_each(ray);
         }
-        let tri_ray = OnceCell::new();
-        let node_ray = NodeRay::new(ray);
-        let mut state = self.cwbvh.new_traversal(Vec3A::from(ray.dir));
-        let mut node;
+        crate::lanes::widest(
+            #[inline(always)]
+            || self.closest_hit_wide(ray),
+        )
+    }
+
+    /// [`Self::occluded_from`] of a valid ray over the wide tree.
+    #[inline(always)]
+    fn occluded_wide(&self, ray: &Ray, origin: GeometryId) -> bool {
+        let sheared = ShearedRay::new(ray);
+        let mut t_max = ray.t_max;
+        let mut blocked = false;
+        let complete = self.wide.traverse(ray, &mut t_max, |block, &mut t_max| {
+            blocked = self.block_blocks(block, ray, &sheared, t_max, origin);
+            blocked
+        });
+        if complete { blocked } else { self.occluded_each(ray, origin) }
+    }
+
+    /// Whether a primitive of `block` other than a flat `origin` blocks `ray` over (0, t_max].
+    #[inline(always)]
+    fn block_blocks(&self, block: &PrimBlock, ray: &Ray, sheared: &ShearedRay, t_max: f32, origin: GeometryId) -> bool {
+        if block.triangles != 0 {
+            let (hit, exact, ..) = triangle_block_hits(block, sheared, t_max);
+            let mut lanes = hit | exact;
+            while lanes != 0 {
+                let l = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let slot = block.slot[l] as usize;
+                if self.ignores(slot, origin) {
+                    continue;
+                }
+                if hit & (1 << l) != 0 || sheared.intersect(&self.leaf[slot].v, t_max).is_some() {
+                    return true;
+                }
+            }
+        }
+        let mut lanes = block.shapes;
+        while lanes != 0 {
+            let l = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            let slot = block.slot[l] as usize;
+            if !self.ignores(slot, origin) && self.shape_in_slot(slot).local_hit(ray, t_max).is_some() {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// [`Self::closest_hit`] of a valid ray over the wide tree.
+    #[inline(always)]
+    fn closest_hit_wide(&self, ray: &Ray) -> Option<Hit> {
+        let sheared = ShearedRay::new(ray);
         let mut best: Option<Best> = None;
         // The object-space point of the best shape hit, so that `make_hit` need not find it again.
         let mut best_local = None;
         let mut t_max = ray.t_max;
-        obvhs::traverse!(self.cwbvh, node, state, node_ray.intersect(node, t_max, state.oct_inv4), {
-            let slot = state.primitive_id as usize;
-            if let Some((t, b, local)) = self.slot_hit(slot, ray, &tri_ray, t_max) {
-                let candidate = Best { t, prim: self.prim_of_slot(slot), slot, b };
-                if candidate.improves_on(&best) {
-                    best = Some(candidate);
-                    best_local = local;
-                    t_max = t;
+        let complete = self.wide.traverse(ray, &mut t_max, |block, t_max| {
+            if block.triangles != 0 {
+                let (hit, exact, t, b) = triangle_block_hits(block, &sheared, *t_max);
+                let mut lanes = hit | exact;
+                while lanes != 0 {
+                    let l = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let slot = block.slot[l] as usize;
+                    let (t, b) = if hit & (1 << l) != 0 {
+                        (t[l], [b[0][l], b[1][l], b[2][l]])
+                    } else {
+                        match sheared.intersect(&self.leaf[slot].v, *t_max) {
+                            Some(h) => (h.t, h.b),
+                            None => continue,
+                        }
+                    };
+                    let candidate = Best { t, prim: self.prim_of_slot(slot), slot, b };
+                    if candidate.improves_on(&best) {
+                        (best, best_local, *t_max) = (Some(candidate), None, t);
+                    }
                 }
             }
+            let mut lanes = block.shapes;
+            while lanes != 0 {
+                let l = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let slot = block.slot[l] as usize;
+                if let Some((t, p)) = self.shape_in_slot(slot).local_hit(ray, *t_max) {
+                    let candidate = Best { t, prim: self.prim_of_slot(slot), slot, b: [0.0; 3] };
+                    if candidate.improves_on(&best) {
+                        (best, best_local, *t_max) = (Some(candidate), Some(p), t);
+                    }
+                }
+            }
+            false
         });
+        if !complete {
+            return self.closest_hit_each(ray);
+        }
         best.map(|b| self.make_hit(ray, b, best_local))
+    }
+
+    /// The shape in leaf slot `slot` (which must hold one).
+    #[inline(always)]
+    fn shape_in_slot(&self, slot: usize) -> &super::shapes::PlacedShape {
+        &self.shapes[self.leaf[slot].shape as usize]
     }
 
     /// Reference any-hit: tests every primitive. For tests and benchmarks.

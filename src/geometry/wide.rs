@@ -1,0 +1,540 @@
+//! The traversal tree of a [`SceneBvh`]: obvhs's binary tree collapsed to 8 children per node,
+//! with exact f32 child boxes in structure-of-arrays form (one slab test covers all 8), and leaves
+//! of up to [`LEAF_PRIMS`] primitives whose triangles sit in lane blocks (one watertight test
+//! covers the block; see [`triangle_block_hits`]).
+//!
+//! The node test is pbrt-v4's conservative slab test (section 6.8.2): each slab parameter carries
+//! at most 3 roundings, so stretching the far end by 1 + 2 gamma(3) never culls a box that the
+//! exact ray meets. Triangle lanes run the same operations as the scalar test, so they decide
+//! exactly as it does; lanes where an edge function rounds to zero take the scalar test itself
+//! (its f64 recomputation). A query therefore returns what testing every primitive returns.
+
+use std::mem::MaybeUninit;
+
+use glam::Vec3;
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::Bvh2;
+
+use super::ray::{Ray, gamma};
+use super::triangle::EARLY_REJECT_SLACK;
+
+/// Children per node.
+pub(crate) const WIDTH: usize = 8;
+/// Largest number of primitives in a leaf (the lanes of one [`PrimBlock`]).
+pub(crate) const LEAF_PRIMS: usize = 4;
+/// `child` of a slot with nothing in it.
+const EMPTY: u32 = u32::MAX;
+/// Set in `child` for a leaf: the rest is its block index.
+const LEAF: u32 = 1 << 31;
+/// Lane `slot` of a block with no primitive.
+pub(crate) const NO_SLOT: u32 = u32::MAX;
+/// Cap on |1/d| so that zero direction components give huge but finite slab parameters
+/// (never inf * 0 = NaN): 2^100, valid for scene coordinates below 2^20.
+const MAX_INV_DIR: f32 = 1.267_650_6e30;
+/// Entries of the traversal stack; deeper trees fall back to testing every primitive.
+const STACK: usize = 512;
+
+/// Up to 8 children: their boxes (lower and upper corners, axis by axis) and what each is.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct WideNode {
+    lo: [[f32; WIDTH]; 3],
+    hi: [[f32; WIDTH]; 3],
+    /// A node index, `LEAF | block`, or `EMPTY` (whose box is empty, so no ray meets it).
+    child: [u32; WIDTH],
+}
+
+impl WideNode {
+    const EMPTY: Self =
+        Self { lo: [[f32::INFINITY; WIDTH]; 3], hi: [[f32::NEG_INFINITY; WIDTH]; 3], child: [EMPTY; WIDTH] };
+
+    fn set_box(&mut self, c: usize, b: &Aabb) {
+        for a in 0..3 {
+            (self.lo[a][c], self.hi[a][c]) = (b.min[a], b.max[a]);
+        }
+    }
+
+    fn child_box(&self, c: usize) -> Aabb {
+        Aabb::new(
+            Vec3::new(self.lo[0][c], self.lo[1][c], self.lo[2][c]).into(),
+            Vec3::new(self.hi[0][c], self.hi[1][c], self.hi[2][c]).into(),
+        )
+    }
+}
+
+/// A leaf's primitives, one per lane: each lane's leaf slot, and the triangles' vertices axis by
+/// axis (lanes that hold a shape or nothing keep zero vertices and are masked out).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub(crate) struct PrimBlock {
+    /// `v[vertex][axis][lane]`.
+    v: [[[f32; LEAF_PRIMS]; 3]; 3],
+    /// The `SceneBvh::leaf` slot of each lane, or `NO_SLOT`.
+    pub(crate) slot: [u32; LEAF_PRIMS],
+    /// Lanes holding a triangle, and lanes holding an analytic shape.
+    pub(crate) triangles: u8,
+    pub(crate) shapes: u8,
+}
+
+/// The collapsed tree. Node 0 is the root; parents come before their children.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct WideBvh {
+    nodes: Vec<WideNode>,
+    blocks: Vec<PrimBlock>,
+    /// Per node: its parent and its slot there (the root's parent is itself).
+    parent: Vec<(u32, u8)>,
+    /// Per block: the node and slot that hold it.
+    block_parent: Vec<(u32, u8)>,
+}
+
+/// What the tree needs to know of each primitive: its box, and for triangles their vertices.
+pub(crate) trait LeafSource {
+    fn leaf_count(&self) -> usize;
+    /// World-space vertices of the triangle in leaf slot `slot`, or None for a shape.
+    fn triangle(&self, slot: usize) -> Option<[Vec3; 3]>;
+    fn bounds(&self, slot: usize) -> Aabb;
+}
+
+impl WideBvh {
+    /// Collapses `bvh2` (whose leaves hold primitive `i` as leaf slot `slot_of_prim[i]`).
+    pub(crate) fn from_bvh2(bvh2: &Bvh2, slot_of_prim: &[u32], leaves: &impl LeafSource) -> Self {
+        let mut tree = Self::default();
+        if leaves.leaf_count() == 0 || bvh2.nodes.is_empty() {
+            return tree;
+        }
+        let counts = subtree_counts(bvh2);
+        tree.nodes.push(WideNode::EMPTY);
+        tree.parent.push((0, 0));
+        // Work list of (BVH2 node, wide node to fill).
+        let mut work = vec![(0usize, 0usize)];
+        let is_leaf = |n: usize| bvh2.nodes[n].is_leaf() || counts[n] as usize <= LEAF_PRIMS;
+        while let Some((n2, wide)) = work.pop() {
+            let children = if is_leaf(n2) { vec![n2] } else { widen(bvh2, &counts, n2) };
+            for (c, &child) in children.iter().enumerate() {
+                tree.nodes[wide].set_box(c, bvh2.nodes[child].aabb());
+                if is_leaf(child) {
+                    let mut slots = Vec::with_capacity(LEAF_PRIMS);
+                    collect_prims(bvh2, child, &mut |p| slots.push(slot_of_prim[p as usize]));
+                    tree.add_leaf(wide, c, &slots, leaves);
+                } else {
+                    let id = tree.add_node(wide, c);
+                    work.push((child, id));
+                }
+            }
+        }
+        tree
+    }
+
+    /// A new empty node as child `c` of node `parent`; its index.
+    fn add_node(&mut self, parent: usize, c: usize) -> usize {
+        let id = self.nodes.len();
+        self.nodes.push(WideNode::EMPTY);
+        self.parent.push((parent as u32, c as u8));
+        self.nodes[parent].child[c] = id as u32;
+        id
+    }
+
+    /// Makes child `c` of `node` the leaf of `slots`: one block, or (for a binary leaf of more
+    /// primitives than a block holds) a node over blocks of them.
+    fn add_leaf(&mut self, node: usize, c: usize, slots: &[u32], leaves: &impl LeafSource) {
+        if slots.len() <= LEAF_PRIMS {
+            self.nodes[node].child[c] = LEAF | self.blocks.len() as u32;
+            self.block_parent.push((node as u32, c as u8));
+            self.blocks.push(make_block(slots, leaves));
+            return;
+        }
+        let id = self.add_node(node, c);
+        for (k, group) in slots.chunks(slots.len().div_ceil(WIDTH).max(LEAF_PRIMS)).enumerate() {
+            let bounds = group.iter().fold(Aabb::empty(), |b, &s| b.union(&leaves.bounds(s as usize)));
+            self.nodes[id].set_box(k, &bounds);
+            self.add_leaf(id, k, group, leaves);
+        }
+    }
+
+    /// Rewrites every block's vertices and every box from `leaves` (after triangles moved), bottom
+    /// up. Returns the sum of the child boxes' half areas (the tree's SAH-style cost).
+    pub(crate) fn refit(&mut self, leaves: &impl LeafSource) -> f64 {
+        for (b, block) in self.blocks.iter_mut().enumerate() {
+            let slots: Vec<u32> = block.slot.iter().copied().filter(|&s| s != NO_SLOT).collect();
+            *block = make_block(&slots, leaves);
+            let (node, c) = self.block_parent[b];
+            let mut bounds = Aabb::empty();
+            for &s in &slots {
+                bounds = bounds.union(&leaves.bounds(s as usize));
+            }
+            self.nodes[node as usize].set_box(c as usize, &bounds);
+        }
+        // Children come after their parents, so a reverse walk sees every child first.
+        for n in (1..self.nodes.len()).rev() {
+            let node = &self.nodes[n];
+            let bounds =
+                (0..WIDTH).filter(|&c| node.child[c] != EMPTY).fold(Aabb::empty(), |b, c| b.union(&node.child_box(c)));
+            let (parent, c) = self.parent[n];
+            self.nodes[parent as usize].set_box(c as usize, &bounds);
+        }
+        self.cost()
+    }
+
+    /// Sum of the half areas of every child box.
+    pub(crate) fn cost(&self) -> f64 {
+        let half_area = |b: &Aabb| {
+            let d = b.max - b.min;
+            f64::from(d.x * d.y + d.y * d.z + d.z * d.x)
+        };
+        self.nodes
+            .iter()
+            .flat_map(|n| (0..WIDTH).filter(|&c| n.child[c] != EMPTY).map(|c| half_area(&n.child_box(c))))
+            .sum()
+    }
+
+    /// Visits the blocks whose leaf boxes `ray` may meet over [0, t_max()], nearest box first,
+    /// skipping boxes beyond the current `t_max()` (which `visit` may lower). `visit` returns true
+    /// to stop. Returns false if the tree was too deep for the stack (the caller then tests every
+    /// primitive).
+    #[inline(always)]
+    pub(crate) fn traverse(
+        &self,
+        ray: &Ray,
+        t_max: &mut f32,
+        mut visit: impl FnMut(&PrimBlock, &mut f32) -> bool,
+    ) -> bool {
+        if self.nodes.is_empty() {
+            return true;
+        }
+        let inv = |d: f32| {
+            let i = 1.0 / d;
+            if i.is_finite() && i.abs() <= MAX_INV_DIR { i } else { MAX_INV_DIR.copysign(d) }
+        };
+        let inv_dir = [inv(ray.dir.x), inv(ray.dir.y), inv(ray.dir.z)];
+        let origin = ray.origin.to_array();
+        let neg = inv_dir.map(|i| i < 0.0);
+        let far_pad = 1.0 + 2.0 * gamma(3);
+        // Left uninitialised: zeroing 4 KB per ray cost more than the traversal of a small scene.
+        let mut stack = [const { MaybeUninit::<(u32, f32)>::uninit() }; STACK];
+        stack[0].write((0, 0.0));
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            // SAFETY: entries below `sp` are written (the root above, children below).
+            let (entry, near) = unsafe { stack[sp].assume_init_read() };
+            if near > *t_max * far_pad {
+                continue;
+            }
+            if entry & LEAF != 0 {
+                if visit(&self.blocks[(entry & !LEAF) as usize], t_max) {
+                    return true;
+                }
+                continue;
+            }
+            let node = &self.nodes[entry as usize];
+            let mut t_near = [0f32; WIDTH];
+            let mut t_far = [0f32; WIDTH];
+            for c in 0..WIDTH {
+                t_near[c] = 0.0;
+                t_far[c] = *t_max;
+            }
+            for a in 0..3 {
+                // Which corner the ray enters the slab at.
+                let (lo, hi) = if neg[a] { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
+                for c in 0..WIDTH {
+                    t_near[c] = t_near[c].max((lo[c] - origin[a]) * inv_dir[a]);
+                    t_far[c] = t_far[c].min((hi[c] - origin[a]) * inv_dir[a]);
+                }
+            }
+            let mut mask = 0u32;
+            for c in 0..WIDTH {
+                mask |= u32::from(t_near[c] <= t_far[c] * far_pad) << c;
+            }
+            if sp + WIDTH > STACK {
+                return false;
+            }
+            // Push the hit children farthest first, so the nearest is popped first.
+            let first = sp;
+            while mask != 0 {
+                let c = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let item = (node.child[c], t_near[c]);
+                let mut k = sp;
+                // SAFETY: entries `first..sp` were written in this loop.
+                while k > first && unsafe { stack[k - 1].assume_init_ref() }.1 < item.1 {
+                    stack[k] = stack[k - 1];
+                    k -= 1;
+                }
+                stack[k].write(item);
+                sp += 1;
+            }
+        }
+        true
+    }
+}
+
+/// The lanes of `block` whose triangle `ray` (as `sheared`) hits over (delta_t, t_max], with their
+/// t and barycentrics: bit `l` of the mask for lane `l`. The same operations as
+/// [`super::triangle::ShearedRay::intersect`], lane by lane; lanes where an edge function is
+/// exactly zero are reported in the second mask, for the scalar test to decide.
+#[inline(always)]
+pub(crate) fn triangle_block_hits(
+    block: &PrimBlock,
+    sheared: &super::triangle::ShearedRay,
+    t_max: f32,
+) -> (u8, u8, [f32; LEAF_PRIMS], [[f32; LEAF_PRIMS]; 3]) {
+    const L: usize = LEAF_PRIMS;
+    let (origin, kz, s) = sheared.parts();
+    // Axis order after the permutation that makes the ray's dominant axis z.
+    let (ax, ay, az) = match kz {
+        0 => (1, 2, 0),
+        1 => (2, 0, 1),
+        _ => (0, 1, 2),
+    };
+    let o = origin.to_array();
+    let mut p = [[[0f32; L]; 3]; 3];
+    for (vertex, pv) in p.iter_mut().enumerate() {
+        for (dst, src) in [ax, ay, az].into_iter().enumerate() {
+            for l in 0..L {
+                pv[dst][l] = block.v[vertex][src][l] - o[src];
+            }
+        }
+        for l in 0..L {
+            pv[0][l] += s.x * pv[2][l];
+            pv[1][l] += s.y * pv[2][l];
+        }
+    }
+    let mut e = [[0f32; L]; 3];
+    for l in 0..L {
+        e[0][l] = p[1][0][l] * p[2][1][l] - p[1][1][l] * p[2][0][l];
+        e[1][l] = p[2][0][l] * p[0][1][l] - p[2][1][l] * p[0][0][l];
+        e[2][l] = p[0][0][l] * p[1][1][l] - p[0][1][l] * p[1][0][l];
+    }
+    let (mut hit, mut exact) = (0u8, 0u8);
+    let mut t = [0f32; L];
+    let mut b = [[0f32; L]; 3];
+    let t_reject = t_max * EARLY_REJECT_SLACK;
+    for l in 0..L {
+        if block.triangles & (1 << l) == 0 {
+            continue;
+        }
+        let (e0, e1, e2) = (e[0][l], e[1][l], e[2][l]);
+        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+            exact |= 1 << l;
+            continue;
+        }
+        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+            continue;
+        }
+        let det = e0 + e1 + e2;
+        if det == 0.0 {
+            continue;
+        }
+        let (z0, z1, z2) = (p[0][2][l] * s.z, p[1][2][l] * s.z, p[2][2][l] * s.z);
+        let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
+        if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_reject * det) {
+            continue;
+        }
+        if det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_reject * det) {
+            continue;
+        }
+        let inv_det = 1.0 / det;
+        let tl = t_scaled * inv_det;
+        if tl.is_nan() || tl > t_max {
+            continue;
+        }
+        let max_z = z0.abs().max(z1.abs()).max(z2.abs());
+        let max_x = p[0][0][l].abs().max(p[1][0][l].abs()).max(p[2][0][l].abs());
+        let max_y = p[0][1][l].abs().max(p[1][1][l].abs()).max(p[2][1][l].abs());
+        let delta_z = gamma(3) * max_z;
+        let delta_x = gamma(5) * (max_x + max_z);
+        let delta_y = gamma(5) * (max_y + max_z);
+        let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+        let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+        let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
+        if tl <= delta_t {
+            continue;
+        }
+        hit |= 1 << l;
+        t[l] = tl;
+        b[0][l] = e0 * inv_det;
+        b[1][l] = e1 * inv_det;
+        b[2][l] = e2 * inv_det;
+    }
+    (hit, exact, t, b)
+}
+
+/// The block of the leaf slots `slots` (at most [`LEAF_PRIMS`]).
+fn make_block(slots: &[u32], leaves: &impl LeafSource) -> PrimBlock {
+    debug_assert!(slots.len() <= LEAF_PRIMS);
+    let mut block = PrimBlock { v: [[[0.0; LEAF_PRIMS]; 3]; 3], slot: [NO_SLOT; LEAF_PRIMS], triangles: 0, shapes: 0 };
+    for (l, &slot) in slots.iter().enumerate() {
+        block.slot[l] = slot;
+        match leaves.triangle(slot as usize) {
+            Some(v) => {
+                block.triangles |= 1 << l;
+                for (vertex, p) in v.iter().enumerate() {
+                    for a in 0..3 {
+                        block.v[vertex][a][l] = p[a];
+                    }
+                }
+            }
+            None => block.shapes |= 1 << l,
+        }
+    }
+    block
+}
+
+/// Primitives under each BVH2 node.
+fn subtree_counts(bvh2: &Bvh2) -> Vec<u32> {
+    let mut counts = vec![0u32; bvh2.nodes.len()];
+    // Children sit after their parents in obvhs's layout, so a reverse walk sees them first.
+    for n in (0..bvh2.nodes.len()).rev() {
+        let node = &bvh2.nodes[n];
+        counts[n] = if node.is_leaf() {
+            node.prim_count
+        } else {
+            let c = node.first_index as usize;
+            counts[c] + counts[c + 1]
+        };
+    }
+    counts
+}
+
+/// Up to [`WIDTH`] BVH2 nodes under `n` that cover it: its two children, then repeatedly the
+/// largest-area child that is not to be a leaf, opened into its two children.
+fn widen(bvh2: &Bvh2, counts: &[u32], n: usize) -> Vec<usize> {
+    let first = bvh2.nodes[n].first_index as usize;
+    let mut children = vec![first, first + 1];
+    while children.len() < WIDTH {
+        let open = children
+            .iter()
+            .enumerate()
+            .filter(|&(_, &c)| !bvh2.nodes[c].is_leaf() && counts[c] as usize > LEAF_PRIMS)
+            .max_by(|a, b| bvh2.nodes[*a.1].aabb().half_area().total_cmp(&bvh2.nodes[*b.1].aabb().half_area()));
+        let Some((i, &c)) = open else { break };
+        let grand = bvh2.nodes[c].first_index as usize;
+        children[i] = grand;
+        children.push(grand + 1);
+    }
+    children
+}
+
+/// Calls `f` with every primitive (input index) under BVH2 node `n`.
+fn collect_prims(bvh2: &Bvh2, n: usize, f: &mut impl FnMut(u32)) {
+    let node = &bvh2.nodes[n];
+    if node.is_leaf() {
+        let first = node.first_index as usize;
+        for &p in &bvh2.primitive_indices[first..first + node.prim_count as usize] {
+            f(p);
+        }
+    } else {
+        collect_prims(bvh2, node.first_index as usize, f);
+        collect_prims(bvh2, node.first_index as usize + 1, f);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::geometry::triangle::ShearedRay;
+    use crate::geometry::{GeometryInstance, GeometryRef, Mesh, SceneBvh, Transform};
+    use crate::rng::SplitMix64;
+
+    struct Triangles(Vec<[Vec3; 3]>);
+
+    impl LeafSource for Triangles {
+        fn leaf_count(&self) -> usize {
+            self.0.len()
+        }
+        fn triangle(&self, slot: usize) -> Option<[Vec3; 3]> {
+            Some(self.0[slot])
+        }
+        fn bounds(&self, slot: usize) -> Aabb {
+            let v = self.0[slot];
+            Aabb::new(v[0].min(v[1]).min(v[2]).into(), v[0].max(v[1]).max(v[2]).into())
+        }
+    }
+
+    fn v(rng: &mut SplitMix64, r: f32) -> Vec3 {
+        Vec3::new(rng.range(-r, r), rng.range(-r, r), rng.range(-r, r))
+    }
+
+    /// The lanes decide as the scalar watertight test, bit for bit: random triangles, and the
+    /// hard case of rays through a shared edge and a shared vertex (edge functions exactly zero,
+    /// where the lanes defer to the scalar test's f64 recomputation).
+    #[test]
+    fn triangle_lanes_match_the_scalar_test() {
+        let mut rng = SplitMix64::new(5);
+        let mut checked = [0usize; 2];
+        for case in 0..4000 {
+            let tris: Vec<[Vec3; 3]> = if case % 4 == 0 {
+                // A fan around the origin: the ray down the z axis meets shared edges and vertices.
+                let c = Vec3::new(0.0, 0.0, rng.range(-2.0, 2.0));
+                (0..4)
+                    .map(|k| {
+                        let a = k as f32 * std::f32::consts::FRAC_PI_2;
+                        [
+                            c,
+                            c + Vec3::new(a.cos(), a.sin(), 0.0),
+                            c + Vec3::new((a + 1.5708).cos(), (a + 1.5708).sin(), 0.0),
+                        ]
+                    })
+                    .collect()
+            } else {
+                (0..1 + case % 4).map(|_| [v(&mut rng, 3.0), v(&mut rng, 3.0), v(&mut rng, 3.0)]).collect()
+            };
+            let ray = if case % 4 == 0 {
+                Ray { origin: Vec3::new(0.0, 0.0, 5.0), dir: Vec3::NEG_Z, t_max: f32::INFINITY }
+            } else {
+                // Aimed near the first triangle, so that about half the rays hit something.
+                let origin = v(&mut rng, 5.0);
+                let aim = (tris[0][0] + tris[0][1] + tris[0][2]) / 3.0 + v(&mut rng, 0.5);
+                Ray { origin, dir: aim - origin, t_max: rng.range(0.5, 2.0) }
+            };
+            let source = Triangles(tris.clone());
+            let slots: Vec<u32> = (0..tris.len() as u32).collect();
+            let block = make_block(&slots, &source);
+            let sheared = ShearedRay::new(&ray);
+            let (hit, exact, t, b) = triangle_block_hits(&block, &sheared, ray.t_max);
+            for (l, tri) in tris.iter().enumerate() {
+                let scalar = sheared.intersect(tri, ray.t_max);
+                if exact & (1 << l) != 0 {
+                    checked[1] += 1;
+                    continue; // decided by the scalar test itself
+                }
+                let lane = (hit & (1 << l) != 0).then(|| (t[l], [b[0][l], b[1][l], b[2][l]]));
+                assert_eq!(lane, scalar.map(|h| (h.t, h.b)), "case {case}, lane {l}");
+                checked[0] += scalar.is_some() as usize;
+            }
+        }
+        assert!(checked[0] > 200 && checked[1] > 100, "hits compared {}, exact lanes {}", checked[0], checked[1]);
+    }
+
+    /// Hard case: many triangles with one box (a binary leaf of more primitives than a block
+    /// holds) and a degenerate distribution (all on a line) still give the brute-force answers.
+    #[test]
+    fn stacked_and_collinear_triangles_match_brute_force() {
+        let stacked: Vec<[Vec3; 3]> = (0..37).map(|_| [Vec3::ZERO, Vec3::X, Vec3::Y]).collect();
+        let line: Vec<[Vec3; 3]> = (0..300)
+            .map(|i| {
+                let x = i as f32 * 0.01;
+                [Vec3::new(x, 0.0, 0.0), Vec3::new(x + 0.005, 0.0, 0.0), Vec3::new(x, 0.005, 0.0)]
+            })
+            .collect();
+        let mut rng = SplitMix64::new(9);
+        for tris in [stacked, line] {
+            let mesh = Mesh::from_triangles(&tris).unwrap();
+            let bvh = SceneBvh::build(&[GeometryInstance {
+                geometry: GeometryRef::Mesh(&mesh),
+                transform: Transform::IDENTITY,
+                entity_index: 0,
+                material: 0,
+            }]);
+            for _ in 0..500 {
+                let target = Vec3::new(rng.range(-0.1, 3.1), rng.range(-0.1, 1.1), 0.0);
+                let origin = v(&mut rng, 4.0) + Vec3::Z * 5.0;
+                let ray = Ray { origin, dir: target - origin, t_max: 1.5 };
+                assert_eq!(bvh.closest_hit(&ray), bvh.closest_hit_brute_force(&ray), "{ray:?}");
+                assert_eq!(bvh.occluded(&ray), bvh.occluded_brute_force(&ray), "{ray:?}");
+            }
+        }
+    }
+}
