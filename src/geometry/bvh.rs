@@ -1,4 +1,4 @@
-//! `SceneBvh`: one compressed wide BVH (obvhs CWBVH) over all world-space geometry.
+//! `SceneBvh`: one wide BVH over all world-space geometry (built by obvhs, traversed as `wide.rs`).
 //!
 //! **One flat, world-space BVH.** Mesh triangles are transformed to world space once, at build or
 //! refit, so traversal needs no per-instance ray transforms and the intersection error bounds of
@@ -10,12 +10,12 @@
 //! every ray, so nothing is saved; one tree also gives one any-hit loop that stops at the first
 //! occluder of either kind. The cost is a single, well-predicted branch per primitive.
 //!
-//! **Build.** obvhs PLOC + parallel reinsertion, converted to an 8-wide compressed BVH (CWBVH),
+//! **Build.** obvhs PLOC + parallel reinsertion, collapsed to 8 children per node (`wide.rs`),
 //! with the `fast_build` preset: dynamic scenes rebuild when geometry is added or removed, and
 //! `medium_build` buys little trace speed for a much slower build.
 //!
 //! **Refit, not rebuild, when only transforms change** (`refit.rs`). A refit rewrites the moved
-//! instances' world triangles and re-quantises only the nodes on their paths to the root, keeping
+//! instances' world triangles and recomputes only the boxes on their paths to the root, keeping
 //! the topology, at a small fraction of a rebuild's cost. Small motions barely hurt the tree, but
 //! objects that jump across the scene wreck it. So [`SceneBvh::update_transforms`] refits, tracks that
 //! cost (sum of node surface areas over the root's) and rebuilds once it passes
@@ -27,7 +27,6 @@ use glam::{Affine3A, Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
-use obvhs::cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh};
 use obvhs::ploc::PlocBuilder;
 use std::collections::HashMap;
 
@@ -136,22 +135,15 @@ pub struct SceneBvh {
     /// Per primitive in input order: owning instance and triangle index in its mesh.
     pub(crate) prim_instance: Vec<u32>,
     pub(crate) prim_local: Vec<u32>,
-    pub(crate) cwbvh: CwBvh,
-    /// Leaf slot data, in `cwbvh.primitive_indices` order (slot -> input primitive).
+    /// Leaf slot data, in the order of the build's leaves (slot -> input primitive:
+    /// `prim_of_slot`).
     pub(crate) leaf: Vec<LeafPrim>,
+    prim_of_slot: Vec<u32>,
     pub(crate) slot_of_prim: Vec<u32>,
     /// The tree queries traverse: the same hierarchy, 8 children per node with exact boxes.
     pub(crate) wide: WideBvh,
-    /// Exact (unquantised) box of every node, kept for incremental refits.
-    pub(crate) node_bounds: Vec<Aabb>,
-    /// Parent of every node (the root is its own parent) and the node holding each leaf slot.
-    pub(crate) parent: Vec<u32>,
-    pub(crate) slot_node: Vec<u32>,
-    /// Refit scratch: nodes whose boxes must be recomputed.
-    pub(crate) dirty: Vec<bool>,
     params: BvhBuildParams,
-    /// Sum of node half-areas now and right after the last build.
-    pub(crate) area_sum: f64,
+    /// Sum of child box half-areas right after the last build, and now.
     pub(crate) built_cost: f32,
     pub(crate) cost: f32,
     report: BuildReport,
@@ -210,15 +202,10 @@ impl SceneBvh {
             shapes: Vec::new(),
             prim_instance: Vec::new(),
             prim_local: Vec::new(),
-            cwbvh: CwBvh::default(),
             leaf: Vec::new(),
+            prim_of_slot: Vec::new(),
             slot_of_prim: Vec::new(),
             wide: WideBvh::default(),
-            node_bounds: Vec::new(),
-            parent: Vec::new(),
-            slot_node: Vec::new(),
-            dirty: Vec::new(),
-            area_sum: 0.0,
             params: BvhBuildParams { pre_split: false, ..params },
             built_cost: 0.0,
             cost: 0.0,
@@ -269,7 +256,7 @@ impl SceneBvh {
 
     /// World-space bounding box of everything in the tree, or None when it is empty.
     pub fn world_bounds(&self) -> Option<(Vec3, Vec3)> {
-        (self.primitive_count() > 0).then(|| (self.cwbvh.total_aabb.min.into(), self.cwbvh.total_aabb.max.into()))
+        self.wide.bounds().map(|b| (b.min.into(), b.max.into()))
     }
 
     /// SAH-style cost of the tree now, relative to its value after the last build (1 = as built).
@@ -342,20 +329,15 @@ impl SceneBvh {
             params.search_depth_threshold,
         );
         ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-        self.cwbvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
-        self.leaf = self.cwbvh.primitive_indices.iter().map(|&p| prims[p as usize]).collect();
+        // Slots follow the binary tree's leaf order, which keeps neighbours in space together.
+        self.prim_of_slot = bvh2.primitive_indices.clone();
+        self.leaf = self.prim_of_slot.iter().map(|&p| prims[p as usize]).collect();
         self.slot_of_prim = vec![0; prims.len()];
-        for (slot, &p) in self.cwbvh.primitive_indices.iter().enumerate() {
+        for (slot, &p) in self.prim_of_slot.iter().enumerate() {
             self.slot_of_prim[p as usize] = slot as u32;
         }
         self.wide = WideBvh::from_bvh2(&bvh2, &self.slot_of_prim, &LeafView(self));
-        self.link_nodes();
-        self.dirty.clear();
-        self.dirty.resize(self.cwbvh.nodes.len(), true);
-        self.node_bounds.clear();
-        self.node_bounds.resize(self.cwbvh.nodes.len(), Aabb::empty());
-        self.area_sum = 0.0;
-        self.cost = self.refit_nodes(false);
+        self.cost = self.wide.cost() as f32;
         self.built_cost = self.cost;
     }
 
@@ -390,7 +372,7 @@ impl SceneBvh {
     /// Input index of the primitive in leaf slot `slot` (stable across refits; the tie-breaker
     /// that makes BVH and brute-force closest hits agree exactly).
     pub(crate) fn prim_of_slot(&self, slot: usize) -> u32 {
-        self.cwbvh.primitive_indices[slot]
+        self.prim_of_slot[slot]
     }
 
     pub(crate) fn slot_of(&self, prim: u32) -> usize {

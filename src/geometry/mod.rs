@@ -1,8 +1,9 @@
 //! Shapes, transforms, the scene BVH and batched visibility queries.
 //!
 //! - [`Mesh`], [`Sphere`], [`Disk`], [`Rectangle`]: geometry components, placed by a [`Transform`].
-//! - [`SceneBvh`]: one CWBVH (obvhs) over every world-space triangle and analytic shape; see
-//!   `bvh.rs` for the build / refit choices (their measured costs: docs/performance.md), `refit.rs` for updates.
+//! - [`SceneBvh`]: one wide BVH (built by obvhs, 8 children per node: `wide.rs`) over every
+//!   world-space triangle and analytic shape; see `bvh.rs` for the build / refit choices (their
+//!   measured costs: docs/performance.md), `refit.rs` for updates.
 //! - [`occluded`] and [`closest_hits`]: batched any-hit and closest-hit queries (rayon);
 //!   `SceneBvh::closest_hits_lanes` and `occluded_lanes` answer 16 rays at once (`flat_lanes.rs`).
 //! - [`offset_ray_origin`], [`SurfacePoint`]: robust shadow-ray endpoints with stated error bounds.

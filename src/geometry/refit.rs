@@ -1,18 +1,12 @@
-//! Moving instances: refit the CWBVH in place, or rebuild when the tree has degraded.
+//! Moving instances: refit the wide tree in place, or rebuild when the tree has degraded.
 //!
-//! A refit rewrites the moved instances' world-space primitives, flags the nodes on their paths
-//! to the root, and recomputes those nodes' exact boxes bottom-up (children always follow their
-//! parent in `nodes`), re-quantising their 8-bit child planes exactly as obvhs's BVH2 -> CWBVH
-//! conversion does. The topology is kept; the SAH-style cost (sum of node areas over the root's)
-//! is updated incrementally so [`SceneBvh::update_transforms`] can decide when to rebuild.
-
-use glam::Vec3A;
-use obvhs::PerComponent;
-use obvhs::aabb::Aabb;
-use obvhs::cwbvh::node::CwBvhNode;
+//! A refit rewrites the moved instances' world-space primitives and the lane blocks that hold
+//! them, then recomputes the boxes on their paths to the root (`WideBvh::refit`). The topology is
+//! kept; the SAH-style cost (sum of child box areas) tells [`SceneBvh::update_transforms`] when to
+//! rebuild.
 
 use super::GeometryError;
-use super::bvh::{REBUILD_COST_RATIO, SceneBvh, Source, UpdateKind, mesh_transform_ok, world_positions};
+use super::bvh::{LeafView, REBUILD_COST_RATIO, SceneBvh, Source, UpdateKind, mesh_transform_ok, world_positions};
 use super::shapes::PlacedShape;
 use super::transform::Transform;
 use super::triangle::is_degenerate;
@@ -60,6 +54,7 @@ impl SceneBvh {
                 return Err(GeometryError::RefitNeedsRebuild { instance: i });
             }
         }
+        let mut moved_slots = Vec::new();
         for (&(i, t), placed) in moved.iter().zip(placed) {
             let rec = &mut self.instances[i as usize];
             rec.transform = t;
@@ -82,18 +77,16 @@ impl SceneBvh {
                         }
                         let slot = self.slot_of_prim[p as usize];
                         self.leaf[slot as usize].v = v;
-                        mark_dirty(&mut self.dirty, &self.parent, self.slot_node[slot as usize]);
+                        moved_slots.push(slot);
                     }
                 }
             }
             if let Source::Shape(_) = rec.source {
-                let slot = self.slot_of_prim[rec.prims.start as usize];
-                mark_dirty(&mut self.dirty, &self.parent, self.slot_node[slot as usize]);
+                moved_slots.push(self.slot_of_prim[rec.prims.start as usize]);
             }
         }
-        self.cost = self.refit_nodes(true);
         let mut wide = std::mem::take(&mut self.wide);
-        wide.refit(&super::bvh::LeafView(self));
+        self.cost = wide.refit(moved_slots, &LeafView(self)) as f32;
         self.wide = wide;
         Ok(self.cost_ratio())
     }
@@ -103,102 +96,6 @@ impl SceneBvh {
             Some(&(instance, _)) => Err(GeometryError::UnknownInstance { instance, count: self.instances.len() }),
             None => Ok(()),
         }
-    }
-
-    /// Fills `parent` and `slot_node` from the CWBVH's child links.
-    pub(crate) fn link_nodes(&mut self) {
-        let nodes = &self.cwbvh.nodes;
-        self.parent.clear();
-        self.parent.resize(nodes.len(), 0);
-        self.slot_node.clear();
-        self.slot_node.resize(self.leaf.len(), 0);
-        for (i, node) in nodes.iter().enumerate() {
-            for ch in (0..8).filter(|&ch| !node.is_child_empty(ch)) {
-                if node.is_leaf(ch) {
-                    let (start, count) = node.child_primitives(ch);
-                    self.slot_node[start as usize..(start + count) as usize].fill(i as u32);
-                } else {
-                    self.parent[node.child_node_index(ch) as usize] = i as u32;
-                }
-            }
-        }
-    }
-
-    /// Recomputes the exact box of every dirty node bottom-up (children always follow their
-    /// parent in `nodes`) and, if `requantize`, re-quantises its children as obvhs's BVH2 ->
-    /// CWBVH conversion does (Ylitie et al. 2017, section 3.2). Clears the dirty flags. Returns
-    /// the SAH-style cost: the sum of node surface areas over the root's.
-    pub(crate) fn refit_nodes(&mut self, requantize: bool) -> f32 {
-        let n = self.cwbvh.nodes.len();
-        for i in (0..n).rev() {
-            if !std::mem::take(&mut self.dirty[i]) {
-                continue;
-            }
-            let node = self.cwbvh.nodes[i];
-            let mut child = [Aabb::empty(); 8];
-            let mut total = Aabb::empty();
-            for (ch, child_box) in child.iter_mut().enumerate() {
-                if node.is_child_empty(ch) {
-                    continue;
-                }
-                *child_box = if node.is_leaf(ch) {
-                    let (start, count) = node.child_primitives(ch);
-                    (start..start + count)
-                        .fold(Aabb::empty(), |b, s| b.union(&self.prim_bounds(&self.leaf[s as usize])))
-                } else {
-                    self.node_bounds[node.child_node_index(ch) as usize]
-                };
-                total = total.union(child_box);
-            }
-            let old = self.node_bounds[i];
-            if old.valid() {
-                self.area_sum -= old.half_area() as f64;
-            }
-            self.area_sum += total.half_area() as f64;
-            self.node_bounds[i] = total;
-            if requantize {
-                quantize_node(&mut self.cwbvh.nodes[i], &total, &child);
-            }
-        }
-        if n > 0 {
-            self.cwbvh.total_aabb = self.node_bounds[0];
-        }
-        let root = self.node_bounds.first().map_or(0.0, |b| b.half_area() as f64);
-        if root > 0.0 { (self.area_sum / root) as f32 } else { 0.0 }
-    }
-}
-
-/// Flags `node` and its ancestors up to the first already-flagged one.
-fn mark_dirty(dirty: &mut [bool], parent: &[u32], mut node: u32) {
-    while !dirty[node as usize] {
-        dirty[node as usize] = true;
-        if node == 0 {
-            break;
-        }
-        node = parent[node as usize];
-    }
-}
-
-/// Sets `node.p`, `node.e` and the 8-bit child planes from exact boxes, rounding outward.
-fn quantize_node(node: &mut CwBvhNode, total: &Aabb, child: &[Aabb; 8]) {
-    const DENOM: f32 = 1.0 / 255.0;
-    node.p = total.min.into();
-    let e = ((total.max - total.min).max(Vec3A::splat(1e-20)) * DENOM).log2().ceil().exp2();
-    let rcp_e = 1.0 / e;
-    let bits: glam::UVec3 = e.per_comp(|c: f32| c.to_bits() >> 23);
-    node.e = [bits.x as u8, bits.y as u8, bits.z as u8];
-    for (i, b) in child.iter().enumerate() {
-        if node.is_child_empty(i) {
-            continue;
-        }
-        let lo = ((b.min - total.min) * rcp_e).floor().clamp(Vec3A::ZERO, Vec3A::splat(255.0));
-        let hi = ((b.max - total.min) * rcp_e).ceil().clamp(Vec3A::ZERO, Vec3A::splat(255.0));
-        node.child_min_x[i] = lo.x as u8;
-        node.child_min_y[i] = lo.y as u8;
-        node.child_min_z[i] = lo.z as u8;
-        node.child_max_x[i] = hi.x as u8;
-        node.child_max_y[i] = hi.y as u8;
-        node.child_max_z[i] = hi.z as u8;
     }
 }
 
@@ -229,17 +126,16 @@ mod tests {
     }
 
     #[test]
-    fn refit_without_motion_reproduces_the_converted_tree() {
+    fn refit_without_motion_reproduces_the_built_tree() {
         let mesh = Mesh::uv_sphere(1.0, 8, 6);
         let inst = scene(&mesh);
-        // The build keeps obvhs's quantisation; refitting every instance in place re-quantises
-        // every node and must reproduce it bit for bit.
+        // Refitting every instance in place recomputes every block and box from the primitives,
+        // as the build did, and must reproduce them bit for bit.
         let bvh = SceneBvh::build(&inst);
         let mut again = bvh.clone();
         let all: Vec<(u32, Transform)> = inst.iter().enumerate().map(|(i, g)| (i as u32, g.transform)).collect();
         assert_eq!(again.refit(&all), Ok(1.0));
-        assert!(again.dirty.iter().all(|d| !d));
-        assert_eq!(bvh.cwbvh.nodes, again.cwbvh.nodes);
+        assert_eq!(format!("{:?}", bvh.wide), format!("{:?}", again.wide));
         assert_eq!(bvh.meshes.len(), 1, "instances of one mesh share its copy");
         assert_eq!(bvh.primitive_count(), 20 * mesh.triangle_count() + 1);
     }
@@ -255,7 +151,7 @@ mod tests {
         let all: Vec<(u32, Transform)> =
             (0..inst.len() as u32).map(|i| (i, full.instances[i as usize].transform)).collect();
         let ratio = full.refit(&all).unwrap();
-        assert_eq!(bvh.cwbvh.nodes, full.cwbvh.nodes);
+        assert_eq!(format!("{:?}", bvh.wide), format!("{:?}", full.wide));
         assert!((partial - ratio).abs() < 1e-5 && partial > 1.0, "{partial} vs {ratio}");
     }
 

@@ -101,4 +101,3 @@ impl Placement for bevy_transform::components::GlobalTransform {
         Transform::from_affine(Affine3A::from_cols_array(&self.affine().to_cols_array()))
     }
 }
-

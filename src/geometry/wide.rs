@@ -85,6 +85,10 @@ pub(crate) struct WideBvh {
     parent: Vec<(u32, u8)>,
     /// Per block: the node and slot that hold it.
     block_parent: Vec<(u32, u8)>,
+    /// Per leaf slot: the block that holds it.
+    block_of_slot: Vec<u32>,
+    /// Refit scratch: nodes whose box in their parent must be recomputed.
+    dirty: Vec<bool>,
 }
 
 /// What the tree needs to know of each primitive: its box, and for triangles their vertices.
@@ -98,7 +102,7 @@ pub(crate) trait LeafSource {
 impl WideBvh {
     /// Collapses `bvh2` (whose leaves hold primitive `i` as leaf slot `slot_of_prim[i]`).
     pub(crate) fn from_bvh2(bvh2: &Bvh2, slot_of_prim: &[u32], leaves: &impl LeafSource) -> Self {
-        let mut tree = Self::default();
+        let mut tree = Self { block_of_slot: vec![u32::MAX; leaves.leaf_count()], ..Self::default() };
         if leaves.leaf_count() == 0 || bvh2.nodes.is_empty() {
             return tree;
         }
@@ -122,6 +126,7 @@ impl WideBvh {
                 }
             }
         }
+        tree.dirty = vec![false; tree.nodes.len()];
         tree
     }
 
@@ -138,6 +143,9 @@ impl WideBvh {
     /// primitives than a block holds) a node over blocks of them.
     fn add_leaf(&mut self, node: usize, c: usize, slots: &[u32], leaves: &impl LeafSource) {
         if slots.len() <= LEAF_PRIMS {
+            for &s in slots {
+                self.block_of_slot[s as usize] = self.blocks.len() as u32;
+            }
             self.nodes[node].child[c] = LEAF | self.blocks.len() as u32;
             self.block_parent.push((node as u32, c as u8));
             self.blocks.push(make_block(slots, leaves));
@@ -151,28 +159,44 @@ impl WideBvh {
         }
     }
 
-    /// Rewrites every block's vertices and every box from `leaves` (after triangles moved), bottom
-    /// up. Returns the sum of the child boxes' half areas (the tree's SAH-style cost).
-    pub(crate) fn refit(&mut self, leaves: &impl LeafSource) -> f64 {
-        for (b, block) in self.blocks.iter_mut().enumerate() {
+    /// Rewrites the blocks holding leaf slots `slots` from `leaves` (after their primitives
+    /// moved) and the boxes above them, keeping the topology; every other box stays as it is.
+    /// Returns the sum of the child boxes' half areas (the tree's SAH-style cost).
+    pub(crate) fn refit(&mut self, slots: impl IntoIterator<Item = u32>, leaves: &impl LeafSource) -> f64 {
+        let mut blocks: Vec<u32> = slots.into_iter().map(|s| self.block_of_slot[s as usize]).collect();
+        blocks.sort_unstable();
+        blocks.dedup();
+        let mut dirty_nodes = Vec::new();
+        for b in blocks {
+            let block = &mut self.blocks[b as usize];
             let slots: Vec<u32> = block.slot.iter().copied().filter(|&s| s != NO_SLOT).collect();
             *block = make_block(&slots, leaves);
-            let (node, c) = self.block_parent[b];
-            let mut bounds = Aabb::empty();
-            for &s in &slots {
-                bounds = bounds.union(&leaves.bounds(s as usize));
-            }
+            let bounds = slots.iter().fold(Aabb::empty(), |acc, &s| acc.union(&leaves.bounds(s as usize)));
+            let (node, c) = self.block_parent[b as usize];
             self.nodes[node as usize].set_box(c as usize, &bounds);
+            let mut n = node;
+            while n != 0 && !std::mem::replace(&mut self.dirty[n as usize], true) {
+                dirty_nodes.push(n);
+                n = self.parent[n as usize].0;
+            }
         }
-        // Children come after their parents, so a reverse walk sees every child first.
-        for n in (1..self.nodes.len()).rev() {
-            let node = &self.nodes[n];
+        // Children come after their parents, so the highest index first sees every child first.
+        dirty_nodes.sort_unstable_by(|a, b| b.cmp(a));
+        for n in dirty_nodes {
+            self.dirty[n as usize] = false;
+            let node = &self.nodes[n as usize];
             let bounds =
                 (0..WIDTH).filter(|&c| node.child[c] != EMPTY).fold(Aabb::empty(), |b, c| b.union(&node.child_box(c)));
-            let (parent, c) = self.parent[n];
+            let (parent, c) = self.parent[n as usize];
             self.nodes[parent as usize].set_box(c as usize, &bounds);
         }
         self.cost()
+    }
+
+    /// The box around everything in the tree, or None when it is empty.
+    pub(crate) fn bounds(&self) -> Option<Aabb> {
+        let root = self.nodes.first()?;
+        Some((0..WIDTH).filter(|&c| root.child[c] != EMPTY).fold(Aabb::empty(), |b, c| b.union(&root.child_box(c))))
     }
 
     /// Sum of the half areas of every child box.
