@@ -135,10 +135,15 @@ impl SceneBvh {
         let sheared = ShearedRay::new(ray);
         let mut t_max = ray.t_max;
         let mut blocked = false;
-        let complete = self.wide.traverse(ray, &mut t_max, |block, &mut t_max| {
-            blocked = self.block_blocks(block, ray, &sheared, t_max, origin);
-            blocked
-        });
+        let complete = self.wide.traverse(
+            ray,
+            &mut t_max,
+            #[inline(always)]
+            |block: &PrimBlock, t_max: &mut f32| {
+                blocked = self.block_blocks(block, ray, &sheared, *t_max, origin);
+                blocked
+            },
+        );
         if complete { blocked } else { self.occluded_each(ray, origin) }
     }
 
@@ -180,46 +185,65 @@ impl SceneBvh {
         // The object-space point of the best shape hit, so that `make_hit` need not find it again.
         let mut best_local = None;
         let mut t_max = ray.t_max;
-        let complete = self.wide.traverse(ray, &mut t_max, |block, t_max| {
-            if block.triangles != 0 {
-                let (hit, exact, t, b) = triangle_block_hits(block, &sheared, *t_max);
-                let mut lanes = hit | exact;
-                while lanes != 0 {
-                    let l = lanes.trailing_zeros() as usize;
-                    lanes &= lanes - 1;
-                    let slot = block.slot[l] as usize;
-                    let (t, b) = if hit & (1 << l) != 0 {
-                        (t[l], [b[0][l], b[1][l], b[2][l]])
-                    } else {
-                        match sheared.intersect(&self.leaf[slot].v, *t_max) {
-                            Some(h) => (h.t, h.b),
-                            None => continue,
-                        }
-                    };
-                    let candidate = Best { t, prim: self.prim_of_slot(slot), slot, b };
-                    if candidate.improves_on(&best) {
-                        (best, best_local, *t_max) = (Some(candidate), None, t);
-                    }
-                }
-            }
-            let mut lanes = block.shapes;
-            while lanes != 0 {
-                let l = lanes.trailing_zeros() as usize;
-                lanes &= lanes - 1;
-                let slot = block.slot[l] as usize;
-                if let Some((t, p)) = self.shape_in_slot(slot).local_hit(ray, *t_max) {
-                    let candidate = Best { t, prim: self.prim_of_slot(slot), slot, b: [0.0; 3] };
-                    if candidate.improves_on(&best) {
-                        (best, best_local, *t_max) = (Some(candidate), Some(p), t);
-                    }
-                }
-            }
-            false
-        });
+        let complete = self.wide.traverse(
+            ray,
+            &mut t_max,
+            #[inline(always)]
+            |block: &PrimBlock, t_max: &mut f32| {
+                self.closest_in_block(block, ray, &sheared, t_max, &mut best, &mut best_local);
+                false
+            },
+        );
         if !complete {
             return self.closest_hit_each(ray);
         }
         best.map(|b| self.make_hit(ray, b, best_local))
+    }
+
+    /// Folds the hits of `block`'s primitives over (0, t_max] into `best` (lowering `t_max`).
+    #[inline(always)]
+    fn closest_in_block(
+        &self,
+        block: &PrimBlock,
+        ray: &Ray,
+        sheared: &ShearedRay,
+        t_max: &mut f32,
+        best: &mut Option<Best>,
+        best_local: &mut Option<DVec3>,
+    ) {
+        if block.triangles != 0 {
+            let (hit, exact, t, b) = triangle_block_hits(block, sheared, *t_max);
+            let mut lanes = hit | exact;
+            while lanes != 0 {
+                let l = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let slot = block.slot[l] as usize;
+                let (t, b) = if hit & (1 << l) != 0 {
+                    (t[l], [b[0][l], b[1][l], b[2][l]])
+                } else {
+                    match sheared.intersect(&self.leaf[slot].v, *t_max) {
+                        Some(h) => (h.t, h.b),
+                        None => continue,
+                    }
+                };
+                let candidate = Best { t, prim: self.prim_of_slot(slot), slot, b };
+                if candidate.improves_on(best) {
+                    (*best, *best_local, *t_max) = (Some(candidate), None, t);
+                }
+            }
+        }
+        let mut lanes = block.shapes;
+        while lanes != 0 {
+            let l = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            let slot = block.slot[l] as usize;
+            if let Some((t, p)) = self.shape_in_slot(slot).local_hit(ray, *t_max) {
+                let candidate = Best { t, prim: self.prim_of_slot(slot), slot, b: [0.0; 3] };
+                if candidate.improves_on(best) {
+                    (*best, *best_local, *t_max) = (Some(candidate), Some(p), t);
+                }
+            }
+        }
     }
 
     /// The shape in leaf slot `slot` (which must hold one).

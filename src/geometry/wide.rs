@@ -107,13 +107,28 @@ impl WideBvh {
             return tree;
         }
         let counts = subtree_counts(bvh2);
+        // Shapes are tested one at a time, so a leaf holds more than one primitive only if they are
+        // all triangles (whose lanes cost one test).
+        let mut shapes = vec![0u32; bvh2.nodes.len()];
+        for n in (0..bvh2.nodes.len()).rev() {
+            let node = &bvh2.nodes[n];
+            shapes[n] = if node.is_leaf() {
+                let first = node.first_index as usize;
+                let prims = &bvh2.primitive_indices[first..first + node.prim_count as usize];
+                prims.iter().filter(|&&p| leaves.triangle(slot_of_prim[p as usize] as usize).is_none()).count() as u32
+            } else {
+                shapes[node.first_index as usize] + shapes[node.first_index as usize + 1]
+            };
+        }
         tree.nodes.push(WideNode::EMPTY);
         tree.parent.push((0, 0));
         // Work list of (BVH2 node, wide node to fill).
         let mut work = vec![(0usize, 0usize)];
-        let is_leaf = |n: usize| bvh2.nodes[n].is_leaf() || counts[n] as usize <= LEAF_PRIMS;
+        let is_leaf = |n: usize| {
+            bvh2.nodes[n].is_leaf() || counts[n] <= 1 || (counts[n] as usize <= LEAF_PRIMS && shapes[n] == 0)
+        };
         while let Some((n2, wide)) = work.pop() {
-            let children = if is_leaf(n2) { vec![n2] } else { widen(bvh2, &counts, n2) };
+            let children = if is_leaf(n2) { vec![n2] } else { widen(bvh2, &is_leaf, n2) };
             for (c, &child) in children.iter().enumerate() {
                 tree.nodes[wide].set_box(c, bvh2.nodes[child].aabb());
                 if is_leaf(child) {
@@ -421,15 +436,15 @@ fn subtree_counts(bvh2: &Bvh2) -> Vec<u32> {
 }
 
 /// Up to [`WIDTH`] BVH2 nodes under `n` that cover it: its two children, then repeatedly the
-/// largest-area child that is not to be a leaf, opened into its two children.
-fn widen(bvh2: &Bvh2, counts: &[u32], n: usize) -> Vec<usize> {
+/// largest-area child that is not to be a leaf (`is_leaf`), opened into its two children.
+fn widen(bvh2: &Bvh2, is_leaf: &impl Fn(usize) -> bool, n: usize) -> Vec<usize> {
     let first = bvh2.nodes[n].first_index as usize;
     let mut children = vec![first, first + 1];
     while children.len() < WIDTH {
         let open = children
             .iter()
             .enumerate()
-            .filter(|&(_, &c)| !bvh2.nodes[c].is_leaf() && counts[c] as usize > LEAF_PRIMS)
+            .filter(|&(_, &c)| !is_leaf(c))
             .max_by(|a, b| bvh2.nodes[*a.1].aabb().half_area().total_cmp(&bvh2.nodes[*b.1].aabb().half_area()));
         let Some((i, &c)) = open else { break };
         let grand = bvh2.nodes[c].first_index as usize;
