@@ -135,7 +135,7 @@ impl SceneBvh {
         let sheared = ShearedRay::new(ray);
         let mut t_max = ray.t_max;
         let mut blocked = false;
-        let complete = self.wide.traverse(
+        let complete = self.wide.traverse::<false>(
             ray,
             &mut t_max,
             #[inline(always)]
@@ -185,7 +185,7 @@ impl SceneBvh {
         // The object-space point of the best shape hit, so that `make_hit` need not find it again.
         let mut best_local = None;
         let mut t_max = ray.t_max;
-        let complete = self.wide.traverse(
+        let complete = self.wide.traverse::<true>(
             ray,
             &mut t_max,
             #[inline(always)]

@@ -106,27 +106,16 @@ impl WideBvh {
         if leaves.leaf_count() == 0 || bvh2.nodes.is_empty() {
             return tree;
         }
-        let counts = subtree_counts(bvh2);
         // Shapes are tested one at a time, so a leaf holds more than one primitive only if they are
         // all triangles (whose lanes cost one test).
-        let mut shapes = vec![0u32; bvh2.nodes.len()];
-        for n in (0..bvh2.nodes.len()).rev() {
-            let node = &bvh2.nodes[n];
-            shapes[n] = if node.is_leaf() {
-                let first = node.first_index as usize;
-                let prims = &bvh2.primitive_indices[first..first + node.prim_count as usize];
-                prims.iter().filter(|&&p| leaves.triangle(slot_of_prim[p as usize] as usize).is_none()).count() as u32
-            } else {
-                shapes[node.first_index as usize] + shapes[node.first_index as usize + 1]
-            };
-        }
+        let (counts, shapes) = subtree_counts(bvh2, |p| leaves.triangle(slot_of_prim[p as usize] as usize).is_none());
+        let is_leaf = |n: usize| {
+            bvh2.nodes[n].is_leaf() || counts[n] <= 1 || (counts[n] as usize <= LEAF_PRIMS && shapes[n] == 0)
+        };
         tree.nodes.push(WideNode::EMPTY);
         tree.parent.push((0, 0));
         // Work list of (BVH2 node, wide node to fill).
         let mut work = vec![(0usize, 0usize)];
-        let is_leaf = |n: usize| {
-            bvh2.nodes[n].is_leaf() || counts[n] <= 1 || (counts[n] as usize <= LEAF_PRIMS && shapes[n] == 0)
-        };
         while let Some((n2, wide)) = work.pop() {
             let children = if is_leaf(n2) { vec![n2] } else { widen(bvh2, &is_leaf, n2) };
             for (c, &child) in children.iter().enumerate() {
@@ -226,12 +215,14 @@ impl WideBvh {
             .sum()
     }
 
-    /// Visits the blocks whose leaf boxes `ray` may meet over [0, t_max()], nearest box first,
-    /// skipping boxes beyond the current `t_max()` (which `visit` may lower). `visit` returns true
-    /// to stop. Returns false if the tree was too deep for the stack (the caller then tests every
-    /// primitive).
+    /// Visits the blocks whose leaf boxes `ray` may meet over [0, t_max], skipping boxes beyond
+    /// the current `t_max` (which `visit` may lower). `visit` returns true to stop. With `NEAREST`
+    /// (closest hits), each node's children are visited nearest box first; without (any hit),
+    /// a node's leaves are visited as soon as the node is, before any child node, since any
+    /// blocker ends the query. Returns false if the tree was too deep for the stack (the caller
+    /// then tests every primitive).
     #[inline(always)]
-    pub(crate) fn traverse(
+    pub(crate) fn traverse<const NEAREST: bool>(
         &self,
         ray: &Ray,
         t_max: &mut f32,
@@ -276,8 +267,12 @@ impl WideBvh {
                 // Which corner the ray enters the slab at.
                 let (lo, hi) = if neg[a] { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
                 for c in 0..WIDTH {
-                    t_near[c] = t_near[c].max((lo[c] - origin[a]) * inv_dir[a]);
-                    t_far[c] = t_far[c].min((hi[c] - origin[a]) * inv_dir[a]);
+                    // Plain compares, not f32::max / min (whose NaN rules cost extra steps): no
+                    // slab parameter is NaN, since |1/d| is capped and finite boxes have finite
+                    // corners, and an empty child's infinite corners meet a nonzero 1/d.
+                    let (t0, t1) = ((lo[c] - origin[a]) * inv_dir[a], (hi[c] - origin[a]) * inv_dir[a]);
+                    t_near[c] = if t0 > t_near[c] { t0 } else { t_near[c] };
+                    t_far[c] = if t1 < t_far[c] { t1 } else { t_far[c] };
                 }
             }
             let mut mask = 0u32;
@@ -286,6 +281,24 @@ impl WideBvh {
             }
             if sp + WIDTH > STACK {
                 return false;
+            }
+            if !NEAREST {
+                let mut leaves = mask & leaf_mask(node);
+                mask &= !leaves;
+                while leaves != 0 {
+                    let c = leaves.trailing_zeros() as usize;
+                    leaves &= leaves - 1;
+                    if visit(&self.blocks[(node.child[c] & !LEAF) as usize], t_max) {
+                        return true;
+                    }
+                }
+                while mask != 0 {
+                    let c = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    stack[sp].write((node.child[c], t_near[c]));
+                    sp += 1;
+                }
+                continue;
             }
             // Push the hit children farthest first, so the nearest is popped first.
             let first = sp;
@@ -305,6 +318,16 @@ impl WideBvh {
         }
         true
     }
+}
+
+/// Bit `c` set for each child `c` of `node` that is a leaf.
+#[inline(always)]
+fn leaf_mask(node: &WideNode) -> u32 {
+    let mut mask = 0;
+    for c in 0..WIDTH {
+        mask |= u32::from(node.child[c] != EMPTY && node.child[c] & LEAF != 0) << c;
+    }
+    mask
 }
 
 /// The lanes of `block` whose triangle `ray` (as `sheared`) hits over (delta_t, t_max], with their
@@ -419,20 +442,28 @@ fn make_block(slots: &[u32], leaves: &impl LeafSource) -> PrimBlock {
     block
 }
 
-/// Primitives under each BVH2 node.
-fn subtree_counts(bvh2: &Bvh2) -> Vec<u32> {
+/// Per BVH2 node, its number of primitives and of those the shapes (`is_shape` of an input
+/// primitive), by a walk from the root (obvhs's builders do not all place children after parents).
+fn subtree_counts(bvh2: &Bvh2, is_shape: impl Fn(u32) -> bool) -> (Vec<u32>, Vec<u32>) {
     let mut counts = vec![0u32; bvh2.nodes.len()];
-    // Children sit after their parents in obvhs's layout, so a reverse walk sees them first.
-    for n in (0..bvh2.nodes.len()).rev() {
+    let mut shapes = vec![0u32; bvh2.nodes.len()];
+    // Post-order without recursion: a node is summed when it is met the second time.
+    let mut stack = vec![(0usize, false)];
+    while let Some((n, children_done)) = stack.pop() {
         let node = &bvh2.nodes[n];
-        counts[n] = if node.is_leaf() {
-            node.prim_count
-        } else {
+        if node.is_leaf() {
+            let first = node.first_index as usize;
+            let prims = &bvh2.primitive_indices[first..first + node.prim_count as usize];
+            counts[n] = node.prim_count;
+            shapes[n] = prims.iter().filter(|&&p| is_shape(p)).count() as u32;
+        } else if children_done {
             let c = node.first_index as usize;
-            counts[c] + counts[c + 1]
-        };
+            (counts[n], shapes[n]) = (counts[c] + counts[c + 1], shapes[c] + shapes[c + 1]);
+        } else {
+            stack.extend([(n, true), (node.first_index as usize, false), (node.first_index as usize + 1, false)]);
+        }
     }
-    counts
+    (counts, shapes)
 }
 
 /// Up to [`WIDTH`] BVH2 nodes under `n` that cover it: its two children, then repeatedly the
@@ -575,5 +606,39 @@ mod tests {
                 assert_eq!(bvh.occluded(&ray), bvh.occluded_brute_force(&ray), "{ray:?}");
             }
         }
+    }
+
+    /// Every child box of the collapsed tree is a box of the binary tree (collapsing only drops
+    /// nodes), so its cost is at most the binary tree's sum of half areas, and its blocks hold
+    /// every primitive once. A collapse that misread the binary tree's layout (obvhs's PLOC puts
+    /// parents after their children) packed large subtrees into made-up boxes and broke this.
+    #[test]
+    fn collapse_keeps_the_binary_trees_boxes_and_every_primitive() {
+        use obvhs::BvhBuildParams;
+        use obvhs::ploc::PlocBuilder;
+        let mut rng = SplitMix64::new(3);
+        let tris: Vec<[Vec3; 3]> = (0..5000)
+            .map(|_| {
+                let c = v(&mut rng, 50.0);
+                [c, c + v(&mut rng, 0.5), c + v(&mut rng, 0.5)]
+            })
+            .collect();
+        let source = Triangles(tris);
+        let aabbs: Vec<Aabb> = (0..source.0.len()).map(|i| source.bounds(i)).collect();
+        let p = BvhBuildParams::fast_build();
+        let bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+            p.ploc_search_distance,
+            &aabbs,
+            (0..aabbs.len() as u32).collect(),
+            p.sort_precision,
+            p.search_depth_threshold,
+        );
+        let identity: Vec<u32> = (0..aabbs.len() as u32).collect();
+        let tree = WideBvh::from_bvh2(&bvh2, &identity, &source);
+        let binary: f64 = bvh2.nodes.iter().map(|n| f64::from(n.aabb().half_area())).sum();
+        assert!(tree.cost() <= binary * (1.0 + 1e-6), "collapsed cost {} > binary {binary}", tree.cost());
+        let mut seen: Vec<u32> = tree.blocks.iter().flat_map(|b| b.slot).filter(|&s| s != NO_SLOT).collect();
+        seen.sort_unstable();
+        assert_eq!(seen, identity);
     }
 }
