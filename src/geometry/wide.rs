@@ -89,6 +89,13 @@ pub(crate) struct WideBvh {
     block_of_slot: Vec<u32>,
     /// Refit scratch: nodes whose box in their parent must be recomputed.
     dirty: Vec<bool>,
+    /// Sum of the half areas of every child box, kept up to date by refits.
+    area_sum: f64,
+}
+
+fn half_area(b: &Aabb) -> f64 {
+    let d = b.max - b.min;
+    f64::from(d.x * d.y + d.y * d.z + d.z * d.x)
 }
 
 /// What the tree needs to know of each primitive: its box, and for triangles their vertices.
@@ -131,6 +138,11 @@ impl WideBvh {
             }
         }
         tree.dirty = vec![false; tree.nodes.len()];
+        tree.area_sum = tree
+            .nodes
+            .iter()
+            .flat_map(|n| (0..WIDTH).filter(|&c| n.child[c] != EMPTY).map(|c| half_area(&n.child_box(c))))
+            .sum();
         tree
     }
 
@@ -173,11 +185,12 @@ impl WideBvh {
         let mut dirty_nodes = Vec::new();
         for b in blocks {
             let block = &mut self.blocks[b as usize];
-            let slots: Vec<u32> = block.slot.iter().copied().filter(|&s| s != NO_SLOT).collect();
-            *block = make_block(&slots, leaves);
-            let bounds = slots.iter().fold(Aabb::empty(), |acc, &s| acc.union(&leaves.bounds(s as usize)));
+            let n_slots = block.slot.iter().take_while(|&&s| s != NO_SLOT).count();
+            let slots = block.slot;
+            *block = make_block(&slots[..n_slots], leaves);
+            let bounds = slots[..n_slots].iter().fold(Aabb::empty(), |acc, &s| acc.union(&leaves.bounds(s as usize)));
             let (node, c) = self.block_parent[b as usize];
-            self.nodes[node as usize].set_box(c as usize, &bounds);
+            self.set_child_box(node as usize, c as usize, &bounds);
             let mut n = node;
             while n != 0 && !std::mem::replace(&mut self.dirty[n as usize], true) {
                 dirty_nodes.push(n);
@@ -192,9 +205,15 @@ impl WideBvh {
             let bounds =
                 (0..WIDTH).filter(|&c| node.child[c] != EMPTY).fold(Aabb::empty(), |b, c| b.union(&node.child_box(c)));
             let (parent, c) = self.parent[n as usize];
-            self.nodes[parent as usize].set_box(c as usize, &bounds);
+            self.set_child_box(parent as usize, c as usize, &bounds);
         }
-        self.cost()
+        self.area_sum
+    }
+
+    /// Sets the box of child `c` of `node`, keeping `area_sum` in step.
+    fn set_child_box(&mut self, node: usize, c: usize, bounds: &Aabb) {
+        self.area_sum += half_area(bounds) - half_area(&self.nodes[node].child_box(c));
+        self.nodes[node].set_box(c, bounds);
     }
 
     /// The box around everything in the tree, or None when it is empty.
@@ -203,16 +222,9 @@ impl WideBvh {
         Some((0..WIDTH).filter(|&c| root.child[c] != EMPTY).fold(Aabb::empty(), |b, c| b.union(&root.child_box(c))))
     }
 
-    /// Sum of the half areas of every child box.
+    /// Sum of the half areas of every child box (the tree's SAH-style cost).
     pub(crate) fn cost(&self) -> f64 {
-        let half_area = |b: &Aabb| {
-            let d = b.max - b.min;
-            f64::from(d.x * d.y + d.y * d.z + d.z * d.x)
-        };
-        self.nodes
-            .iter()
-            .flat_map(|n| (0..WIDTH).filter(|&c| n.child[c] != EMPTY).map(|c| half_area(&n.child_box(c))))
-            .sum()
+        self.area_sum
     }
 
     /// Visits the blocks whose leaf boxes `ray` may meet over [0, t_max], skipping boxes beyond
