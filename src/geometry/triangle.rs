@@ -111,21 +111,29 @@ impl ShearedRay {
             return None;
         }
 
-        // pbrt-v4 eqs. 6.27-6.32: bound the error of t and require t to exceed it.
-        let max_z = p0.z.abs().max(p1.z.abs()).max(p2.z.abs());
         let max_x = p0.x.abs().max(p1.x.abs()).max(p2.x.abs());
         let max_y = p0.y.abs().max(p1.y.abs()).max(p2.y.abs());
-        let delta_z = gamma(3) * max_z;
-        let delta_x = gamma(5) * (max_x + max_z);
-        let delta_y = gamma(5) * (max_y + max_z);
-        let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+        let max_z = p0.z.abs().max(p1.z.abs()).max(p2.z.abs());
         let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-        let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-        if t <= delta_t {
+        if t <= t_error_bound([max_x, max_y, max_z], max_e, inv_det) {
             return None;
         }
         Some(TriangleHit { t, b: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
     }
+}
+
+/// pbrt-v4 eqs. 6.27-6.32: a bound on the rounding error of the watertight test's t, from the
+/// largest |x|, |y| and (scaled) |z| of the sheared vertices, the largest |edge function| and
+/// 1 / det. A hit counts only if its t exceeds this bound. (The scalar test and its lane kernel,
+/// `wide::triangle_block_hits`, both call it.)
+#[inline(always)]
+pub(crate) fn t_error_bound(max: [f32; 3], max_e: f32, inv_det: f32) -> f32 {
+    let [max_x, max_y, max_z] = max;
+    let delta_z = gamma(3) * max_z;
+    let delta_x = gamma(5) * (max_x + max_z);
+    let delta_y = gamma(5) * (max_y + max_z);
+    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs()
 }
 
 /// `v` with its axes rotated so that axis `kz` becomes z (static swizzles: runtime indexing

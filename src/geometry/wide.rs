@@ -16,7 +16,7 @@ use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
 
 use super::ray::{Ray, gamma};
-use super::triangle::EARLY_REJECT_SLACK;
+use super::triangle::{EARLY_REJECT_SLACK, t_error_bound};
 
 /// Children per node.
 pub(crate) const WIDTH: usize = 8;
@@ -412,16 +412,11 @@ pub(crate) fn triangle_block_hits(
         if tl.is_nan() || tl > t_max {
             continue;
         }
-        let max_z = z0.abs().max(z1.abs()).max(z2.abs());
         let max_x = p[0][0][l].abs().max(p[1][0][l].abs()).max(p[2][0][l].abs());
         let max_y = p[0][1][l].abs().max(p[1][1][l].abs()).max(p[2][1][l].abs());
-        let delta_z = gamma(3) * max_z;
-        let delta_x = gamma(5) * (max_x + max_z);
-        let delta_y = gamma(5) * (max_y + max_z);
-        let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+        let max_z = z0.abs().max(z1.abs()).max(z2.abs());
         let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-        let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-        if tl <= delta_t {
+        if tl <= t_error_bound([max_x, max_y, max_z], max_e, inv_det) {
             continue;
         }
         hit |= 1 << l;
