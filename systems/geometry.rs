@@ -101,7 +101,12 @@ pub fn update_scene_bvh<P: Placement>(
                 let geometry = shape_of(m, s, d, r)?;
                 let slot = entities.len() as u32;
                 entities.push(e);
-                Some(GeometryInstance { geometry, transform: t.placement(), entity_index: e.index_u32(), material: slot })
+                Some(GeometryInstance {
+                    geometry,
+                    transform: t.placement(),
+                    entity_index: e.index_u32(),
+                    material: slot,
+                })
             })
             .collect();
         *bvh = SceneBvh::build(&instances);

@@ -52,7 +52,8 @@ fn example_light_bvh_estimate_is_unbiased_over_the_grid() {
     let world = app.world_mut();
     let (mut estimate, mut exact) = (0.0f64, 0.0f64);
     for (k, &p) in points.iter().enumerate().step_by(7) {
-        estimate += f64::from(demo::estimated_lux(world.resource::<DirectLighting>(), k, Vec3::Y, demo.samples_per_point));
+        estimate +=
+            f64::from(demo::estimated_lux(world.resource::<DirectLighting>(), k, Vec3::Y, demo.samples_per_point));
         exact += f64::from(demo::exact_lux(world, p, Vec3::Y));
     }
     let err = (estimate - exact).abs() / exact;

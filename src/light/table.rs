@@ -178,7 +178,9 @@ impl LightTable {
     }
     /// Every light id, kind by kind in [`LightKind::ALL`] order.
     pub fn ids(&self) -> impl Iterator<Item = LightId> + '_ {
-        LightKind::ALL.into_iter().flat_map(|kind| (0..self.kind_len(kind) as u32).map(move |row| LightId { kind, row }))
+        LightKind::ALL
+            .into_iter()
+            .flat_map(|kind| (0..self.kind_len(kind) as u32).map(move |row| LightId { kind, row }))
     }
     /// The entity that owns light `id`.
     pub fn owner(&self, id: LightId) -> Entity {
