@@ -66,19 +66,9 @@ pub fn trace_shadow_rays(
             ShadowTarget::Surface => offset.spawn_ray_to(&from, &SurfacePoint::from_point(target[e], target_normal[e])),
         }
     };
-    if !bvh.few_flat_shapes() {
-        // Rays one at a time: the lane queries would answer them so anyway.
-        let answers = r.occluded.par_iter_mut().enumerate().with_min_len(RAY_CHUNK);
-        r.blocked = answers
-            .map(|(e, occluded)| {
-                *occluded = bvh.occluded_from(&segment(e), batch.geometry_of(point_of(e)));
-                *occluded as usize
-            })
-            .sum();
-        return;
-    }
-    // Segments traced LANES at a time. Blocks of point-light segments, one entry per point, are
-    // built from columns by a lane kernel; others one segment at a time.
+    // Segments traced LANES at a time (a pixel's samples: coherent packets). Blocks of
+    // point-light segments, one entry per point, are built from columns by a lane kernel; others
+    // one segment at a time.
     let chunks = r.occluded.par_chunks_mut(RAY_CHUNK).enumerate();
     r.blocked = chunks
         .map(|(c, chunk)| {

@@ -69,10 +69,20 @@ impl RayLanes {
         (self.t_max[l], self.valid[l]) = (ray.t_max, ray.is_valid());
     }
 
-    /// The ray of lane `l` (exact: the f64 values came from f32).
-    fn ray(&self, l: usize) -> Ray {
-        let v = |c: &[[f64; LANES]; 3]| Vec3::new(c[0][l] as f32, c[1][l] as f32, c[2][l] as f32);
-        Ray { origin: v(&self.o), dir: v(&self.d), t_max: self.t_max[l] }
+    /// The rays as f32 columns (exact: the f64 values came from f32); invalid lanes get
+    /// t_max = 0, which keeps them invalid.
+    #[inline(always)]
+    fn f32_columns(&self) -> (Lanes3, Lanes3, [f32; LANES]) {
+        let (mut origin, mut dir, mut t_max) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3], self.t_max);
+        for a in 0..3 {
+            for l in 0..LANES {
+                (origin[a][l], dir[a][l]) = (self.o[a][l] as f32, self.d[a][l] as f32);
+            }
+        }
+        for l in 0..LANES {
+            t_max[l] = if self.valid[l] { t_max[l] } else { 0.0 };
+        }
+        (origin, dir, t_max)
     }
 
     #[inline(always)]
@@ -321,10 +331,8 @@ impl SceneBvh {
     #[inline(always)]
     pub fn closest_hits_lanes(&self, r: &RayLanes, out: &mut impl HitSink) {
         if !self.few_flat_shapes() {
-            for l in 0..LANES {
-                out.hit(l, self.closest_hit(&r.ray(l)));
-            }
-            return;
+            let (origin, dir, t_max) = r.f32_columns();
+            return self.closest_hits_packet(&origin, &dir, &t_max, LANES, out);
         }
         // As `closest_hit_each`: primitives in input order; a later one wins only when nearer.
         let (mut best_t, mut best_slot) = (r.t_max, [NO_SLOT; LANES]);
@@ -367,6 +375,9 @@ impl SceneBvh {
     pub fn closest_hits_from(&self, origin: Vec3, dirs: &Lanes3, t_max: f32, out: &mut impl HitSink) {
         if self.leaf.len() != 1 || !self.few_flat_shapes() {
             let origins = [[origin.x; LANES], [origin.y; LANES], [origin.z; LANES]];
+            if !self.few_flat_shapes() {
+                return self.closest_hits_packet(&origins, dirs, &[t_max; LANES], LANES, out);
+            }
             return self.closest_hits_lanes(&RayLanes::from_columns(&[origins, *dirs], t_max), out);
         }
         let shape = &self.shapes[self.leaf[0].shape as usize];
@@ -416,8 +427,10 @@ impl SceneBvh {
     pub fn occluded_lanes(&self, r: &RayLanes, n: usize, origins: &[GeometryId; LANES]) -> [bool; LANES] {
         let mut out = [false; LANES];
         if !self.few_flat_shapes() {
-            for (l, o) in out.iter_mut().enumerate().take(n) {
-                *o = self.occluded_from(&r.ray(l), origins[l]);
+            let (origin, dir, t_max) = r.f32_columns();
+            let blocked = self.occluded_packet(&origin, &dir, &t_max, n, origins);
+            for (l, o) in out.iter_mut().enumerate() {
+                *o = (blocked >> l) & 1 != 0;
             }
             return out;
         }

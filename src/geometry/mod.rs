@@ -10,6 +10,7 @@
 pub mod bvh;
 mod flat_lanes;
 pub mod mesh;
+mod packets;
 pub mod ray;
 mod refit;
 pub mod shapes;

@@ -81,15 +81,15 @@ pub fn closest_hits(bvh: &SceneBvh, rays: &[Ray], out: &mut Vec<Option<Hit>>) {
 
 /// The best hit so far: parameter, input primitive index (tie-breaker), slot, barycentrics.
 #[derive(Clone, Copy)]
-struct Best {
-    t: f32,
-    prim: u32,
-    slot: usize,
-    b: [f32; 3],
+pub(super) struct Best {
+    pub(super) t: f32,
+    pub(super) prim: u32,
+    pub(super) slot: usize,
+    pub(super) b: [f32; 3],
 }
 
 impl Best {
-    fn improves_on(&self, other: &Option<Best>) -> bool {
+    pub(super) fn improves_on(&self, other: &Option<Best>) -> bool {
         other.is_none_or(|o| self.t < o.t || (self.t == o.t && self.prim < o.prim))
     }
 }
@@ -248,7 +248,7 @@ impl SceneBvh {
 
     /// The shape in leaf slot `slot` (which must hold one).
     #[inline(always)]
-    fn shape_in_slot(&self, slot: usize) -> &super::shapes::PlacedShape {
+    pub(super) fn shape_in_slot(&self, slot: usize) -> &super::shapes::PlacedShape {
         &self.shapes[self.leaf[slot].shape as usize]
     }
 
@@ -273,7 +273,7 @@ impl SceneBvh {
     }
 
     /// [`Self::closest_hit_brute_force`] for a valid ray.
-    fn closest_hit_each(&self, ray: &Ray) -> Option<Hit> {
+    pub(super) fn closest_hit_each(&self, ray: &Ray) -> Option<Hit> {
         let tri_ray = OnceCell::new();
         let mut best: Option<Best> = None;
         let mut best_local = None;
@@ -312,10 +312,10 @@ impl SceneBvh {
     }
 
     /// The full hit record of `best`; `local` is the object-space point of a shape hit.
-    fn make_hit(&self, ray: &Ray, best: Best, local: Option<DVec3>) -> Hit {
-        let (instance, id, material) = self.id_of(best.prim);
+    pub(super) fn make_hit(&self, ray: &Ray, best: Best, local: Option<DVec3>) -> Hit {
         let leaf = &self.leaf[best.slot];
         if leaf.shape != NO_SHAPE {
+            let (instance, id, material) = self.id_of(best.prim);
             let shape = &self.shapes[leaf.shape as usize];
             let (sp, uv) = match local.map(|p| shape.hit_at_local(best.t, p)) {
                 Some(h) => (h.point, h.uv),
@@ -324,27 +324,62 @@ impl SceneBvh {
             };
             return Hit { t: best.t, p: sp.p, p_error: sp.p_error, ng: sp.n, ns: sp.n, uv, id, material, instance };
         }
-        let (v, b) = (&leaf.v, best.b);
-        let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
+        self.triangle_attributes(best.prim, best.slot).hit(best.t, best.b)
+    }
+
+    /// What every hit on the triangle in leaf slot `slot` (input primitive `prim`) shares.
+    #[inline(always)]
+    pub(super) fn triangle_attributes(&self, prim: u32, slot: usize) -> TriangleAttributes {
+        let (instance, id, material) = self.id_of(prim);
+        let v = self.leaf[slot].v;
         let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or(Vec3::Z);
-        let mut ns = ng;
-        let mut uv = Vec2::new(b[1], b[2]);
+        let (mut normals, mut uvs) = (None, None);
         if let Some(mesh) = self.mesh_of(instance) {
             let idx = mesh.triangle_indices(id.primitive as usize).map(|k| k as usize);
             if let Some(n) = mesh.normals() {
-                let local = b[0] * n[idx[0]] + b[1] * n[idx[1]] + b[2] * n[idx[2]];
                 let tr = self.instances[instance as usize].transform;
-                // Normals map by the inverse transpose: rotation * (n / scale).
-                let world = (tr.rotation * (local / tr.scale)).normalize_or_zero();
-                if world.is_finite() && world != Vec3::ZERO {
-                    ns = world;
-                }
+                normals = Some(([n[idx[0]], n[idx[1]], n[idx[2]]], tr.rotation, tr.scale));
             }
-            if let Some(t) = mesh.uvs() {
-                uv = b[0] * t[idx[0]] + b[1] * t[idx[1]] + b[2] * t[idx[2]];
+            uvs = mesh.uvs().map(|t| [t[idx[0]], t[idx[1]], t[idx[2]]]);
+        }
+        TriangleAttributes { v, ng, normals, uvs, id, material, instance }
+    }
+}
+
+/// A triangle's data that its hits share: world vertices and unit normal, the mesh's vertex
+/// normals (object space, with the instance's rotation and scale) and uvs, and its ids.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct TriangleAttributes {
+    v: [Vec3; 3],
+    ng: Vec3,
+    normals: Option<([Vec3; 3], glam::Quat, Vec3)>,
+    uvs: Option<[Vec2; 3]>,
+    id: GeometryId,
+    material: u32,
+    instance: u32,
+}
+
+impl TriangleAttributes {
+    /// The hit record at parameter `t` and barycentrics `b`.
+    #[inline(always)]
+    pub(super) fn hit(&self, t: f32, b: [f32; 3]) -> Hit {
+        let v = &self.v;
+        let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
+        let mut ns = self.ng;
+        if let Some((n, rotation, scale)) = self.normals {
+            let local = b[0] * n[0] + b[1] * n[1] + b[2] * n[2];
+            // Normals map by the inverse transpose: rotation * (n / scale).
+            let world = (rotation * (local / scale)).normalize_or_zero();
+            if world.is_finite() && world != Vec3::ZERO {
+                ns = world;
             }
         }
-        Hit { t: best.t, p, p_error: triangle_point_error(v, b), ng, ns, uv, id, material, instance }
+        let uv = match self.uvs {
+            Some(t) => b[0] * t[0] + b[1] * t[1] + b[2] * t[2],
+            None => Vec2::new(b[1], b[2]),
+        };
+        let (id, material, instance) = (self.id, self.material, self.instance);
+        Hit { t, p, p_error: triangle_point_error(v, b), ng: self.ng, ns, uv, id, material, instance }
     }
 }
 

@@ -18,6 +18,8 @@ use obvhs::bvh2::Bvh2;
 use super::ray::{Ray, gamma};
 use super::triangle::{EARLY_REJECT_SLACK, t_error_bound};
 
+pub(crate) mod packet;
+
 /// Children per node.
 pub(crate) const WIDTH: usize = 8;
 /// Largest number of primitives in a leaf (the lanes of one [`PrimBlock`]).

@@ -1,0 +1,356 @@
+//! Closest hits of [`LANES`] rays at once over the wide tree (`wide/packet.rs`): for coherent
+//! rays, such as one pixel's camera samples. Each lane's answer is [`SceneBvh::closest_hit`]'s.
+
+use glam::{DVec3, Vec3};
+
+use super::bvh::{GeometryId, SceneBvh};
+use super::flat_lanes::HitSink;
+use super::ray::Ray;
+use super::triangle::ShearedRay;
+use super::visibility::{Best, FEW_PRIMITIVES, TriangleAttributes};
+use super::wide::packet::{Columns, RayPacket, triangle_lanes};
+use crate::lanes::LANES;
+
+/// No primitive: the `prim` of a lane without a hit.
+const NO_PRIM: u32 = u32::MAX;
+
+impl SceneBvh {
+    /// The closest hit of each of the first `n` rays `origin[l] + t dir[l]`, t in (0, t_max[l]],
+    /// handed to `out` lane by lane (lanes past `n` are not reported). Run it inside
+    /// [`crate::lanes::widest`] so that the lane loops compile to vector code.
+    #[inline(always)]
+    pub fn closest_hits_packet(
+        &self,
+        origin: &Columns,
+        dir: &Columns,
+        t_max: &[f32; LANES],
+        n: usize,
+        out: &mut impl HitSink,
+    ) {
+        let ray = |l: usize| Ray {
+            origin: Vec3::new(origin[0][l], origin[1][l], origin[2][l]),
+            dir: Vec3::new(dir[0][l], dir[1][l], dir[2][l]),
+            t_max: t_max[l],
+        };
+        if self.leaf.len() <= FEW_PRIMITIVES {
+            // No tree walk pays for so few primitives (as `closest_hit`).
+            for l in 0..n {
+                out.hit(l, self.closest_hit(&ray(l)));
+            }
+            return;
+        }
+        let rays = RayPacket::new(origin, dir, t_max, n);
+        let mut best_t = *t_max;
+        let (mut prim, mut slot, mut b) = ([NO_PRIM; LANES], [0u32; LANES], [[0f32; LANES]; 3]);
+        // Object-space points of shape hits (see `SceneBvh::make_hit`), per lane.
+        let mut local: [Option<DVec3>; LANES] = [None; LANES];
+        let complete = self.wide.traverse_packet::<true>(
+            &rays,
+            rays.valid,
+            &mut best_t,
+            #[inline(always)]
+            |block, mask, best_t| {
+                let mut triangles = block.triangles;
+                while triangles != 0 {
+                    let k = triangles.trailing_zeros() as usize;
+                    triangles &= triangles - 1;
+                    let s = block.slot[k];
+                    let p = self.prim_of_slot(s as usize);
+                    let hits = triangle_lanes(block, k, &rays, mask, best_t);
+                    for l in 0..LANES {
+                        let t = hits.t[l];
+                        let wins = (hits.hit >> l) & 1 != 0 && (t < best_t[l] || (t == best_t[l] && p < prim[l]));
+                        if wins {
+                            (best_t[l], prim[l], slot[l]) = (t, p, s);
+                            (b[0][l], b[1][l], b[2][l]) = (hits.b[0][l], hits.b[1][l], hits.b[2][l]);
+                            local[l] = None;
+                        }
+                    }
+                    let mut exact = hits.exact;
+                    while exact != 0 {
+                        let l = exact.trailing_zeros() as usize;
+                        exact &= exact - 1;
+                        let Some(h) = ShearedRay::new(&ray(l)).intersect(&self.leaf[s as usize].v, best_t[l]) else {
+                            continue;
+                        };
+                        if h.t < best_t[l] || (h.t == best_t[l] && p < prim[l]) {
+                            (best_t[l], prim[l], slot[l], local[l]) = (h.t, p, s, None);
+                            (b[0][l], b[1][l], b[2][l]) = (h.b[0], h.b[1], h.b[2]);
+                        }
+                    }
+                }
+                let mut shapes = block.shapes;
+                while shapes != 0 {
+                    let k = shapes.trailing_zeros() as usize;
+                    shapes &= shapes - 1;
+                    let s = block.slot[k];
+                    let p = self.prim_of_slot(s as usize);
+                    let mut lanes = mask;
+                    while lanes != 0 {
+                        let l = lanes.trailing_zeros() as usize;
+                        lanes &= lanes - 1;
+                        let Some((t, at)) = self.shape_in_slot(s as usize).local_hit(&ray(l), best_t[l]) else {
+                            continue;
+                        };
+                        if t < best_t[l] || (t == best_t[l] && p < prim[l]) {
+                            (best_t[l], prim[l], slot[l], local[l]) = (t, p, s, Some(at));
+                            (b[0][l], b[1][l], b[2][l]) = (0.0, 0.0, 0.0);
+                        }
+                    }
+                }
+                0
+            },
+        );
+        // Coherent lanes mostly hit one triangle: its shared data is looked up once per run.
+        let mut shared: Option<(u32, TriangleAttributes)> = None;
+        for l in 0..n {
+            let hit = if rays.valid & (1 << l) == 0 {
+                None
+            } else if !complete {
+                self.closest_hit_each(&ray(l))
+            } else if prim[l] == NO_PRIM {
+                None
+            } else if local[l].is_some() {
+                let best = Best { t: best_t[l], prim: prim[l], slot: slot[l] as usize, b: [0.0; 3] };
+                Some(self.make_hit(&ray(l), best, local[l]))
+            } else {
+                let attributes = match shared {
+                    Some((p, a)) if p == prim[l] => a,
+                    _ => {
+                        let a = self.triangle_attributes(prim[l], slot[l] as usize);
+                        shared = Some((prim[l], a));
+                        a
+                    }
+                };
+                Some(attributes.hit(best_t[l], [b[0][l], b[1][l], b[2][l]]))
+            };
+            out.hit(l, hit);
+        }
+    }
+
+    /// Whether something other than a flat origin blocks each of the first `n` rays over
+    /// (0, t_max[l]]: bit l is [`SceneBvh::occluded_from`]`(ray l, origins[l])`. Lanes leave the
+    /// packet at their first blocker. Run it inside [`crate::lanes::widest`].
+    #[inline(always)]
+    pub fn occluded_packet(
+        &self,
+        origin: &Columns,
+        dir: &Columns,
+        t_max: &[f32; LANES],
+        n: usize,
+        origins: &[GeometryId; LANES],
+    ) -> u32 {
+        let ray = |l: usize| Ray {
+            origin: Vec3::new(origin[0][l], origin[1][l], origin[2][l]),
+            dir: Vec3::new(dir[0][l], dir[1][l], dir[2][l]),
+            t_max: t_max[l],
+        };
+        let rays = RayPacket::new(origin, dir, t_max, n);
+        if self.leaf.len() <= FEW_PRIMITIVES {
+            let mut blocked = 0;
+            for l in 0..n {
+                blocked |= u32::from(self.occluded_from(&ray(l), origins[l])) << l;
+            }
+            return blocked;
+        }
+        let mut blocked = 0u32;
+        let mut limits = *t_max;
+        let complete = self.wide.traverse_packet::<false>(
+            &rays,
+            rays.valid,
+            &mut limits,
+            #[inline(always)]
+            |block, mask, t_max| {
+                let mut found = 0u32;
+                let mut triangles = block.triangles;
+                while triangles != 0 {
+                    let k = triangles.trailing_zeros() as usize;
+                    triangles &= triangles - 1;
+                    let s = block.slot[k] as usize;
+                    let hits = triangle_lanes(block, k, &rays, mask & !found, t_max);
+                    let mut lanes = hits.hit | hits.exact;
+                    while lanes != 0 {
+                        let l = lanes.trailing_zeros() as usize;
+                        lanes &= lanes - 1;
+                        if self.ignores(s, origins[l]) {
+                            continue;
+                        }
+                        let exact = (hits.exact >> l) & 1 != 0;
+                        if !exact || ShearedRay::new(&ray(l)).intersect(&self.leaf[s].v, t_max[l]).is_some() {
+                            found |= 1 << l;
+                        }
+                    }
+                }
+                let mut shapes = block.shapes;
+                while shapes != 0 {
+                    let k = shapes.trailing_zeros() as usize;
+                    shapes &= shapes - 1;
+                    let s = block.slot[k] as usize;
+                    let mut lanes = mask & !found;
+                    while lanes != 0 {
+                        let l = lanes.trailing_zeros() as usize;
+                        lanes &= lanes - 1;
+                        if !self.ignores(s, origins[l]) && self.shape_in_slot(s).local_hit(&ray(l), t_max[l]).is_some()
+                        {
+                            found |= 1 << l;
+                        }
+                    }
+                }
+                blocked |= found;
+                found
+            },
+        );
+        if !complete {
+            // Too deep for the stack: the lanes not yet answered test every primitive.
+            let mut rest = rays.valid & !blocked;
+            while rest != 0 {
+                let l = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
+                blocked |= u32::from(self.occluded_from(&ray(l), origins[l])) << l;
+            }
+        }
+        blocked
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Quat, Vec2, Vec3};
+
+    use crate::geometry::{
+        GeometryId, GeometryInstance, GeometryRef, Hit, Mesh, Ray, SceneBvh, Shape, Sphere, Transform,
+    };
+    use crate::lanes::LANES;
+    use crate::rng::SplitMix64;
+
+    fn v(rng: &mut SplitMix64, r: f32) -> Vec3 {
+        Vec3::new(rng.range(-r, r), rng.range(-r, r), rng.range(-r, r))
+    }
+
+    /// Random triangles with normals and uvs, a fan whose shared edges and centre vertex lie on
+    /// the z axis, both under a rotated and scaled transform, and two spheres among them.
+    fn scene(rng: &mut SplitMix64) -> (Mesh, Mesh) {
+        let tris: Vec<[Vec3; 3]> = (0..400)
+            .map(|_| {
+                let c = v(rng, 4.0);
+                [c, c + v(rng, 0.6), c + v(rng, 0.6)]
+            })
+            .collect();
+        let n = tris.len() * 3;
+        let soup = Mesh::from_triangles(&tris)
+            .unwrap()
+            .with_normals((0..n).map(|_| v(rng, 1.0).normalize_or(Vec3::Y)).collect())
+            .unwrap()
+            .with_uvs((0..n).map(|_| Vec2::new(rng.f32(), rng.f32())).collect())
+            .unwrap();
+        let fan: Vec<[Vec3; 3]> = (0..8)
+            .map(|k| {
+                let a = k as f32 * std::f32::consts::FRAC_PI_4;
+                let b = a + std::f32::consts::FRAC_PI_4;
+                [Vec3::ZERO, Vec3::new(a.cos(), a.sin(), 0.0), Vec3::new(b.cos(), b.sin(), 0.0)]
+            })
+            .collect();
+        (soup, Mesh::from_triangles(&fan).unwrap())
+    }
+
+    fn lanes_of(rays: &[Ray; LANES]) -> ([[f32; LANES]; 3], [[f32; LANES]; 3], [f32; LANES]) {
+        let (mut o, mut d, mut t) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3], [0.0; LANES]);
+        for (l, r) in rays.iter().enumerate() {
+            for a in 0..3 {
+                (o[a][l], d[a][l]) = (r.origin[a], r.dir[a]);
+            }
+            t[l] = r.t_max;
+        }
+        (o, d, t)
+    }
+
+    /// Each lane of a packet gets `closest_hit`'s answer bit for bit, in lane code and not:
+    /// coherent packets (one origin, a narrow cone), incoherent ones whose lanes have different
+    /// dominant axes, rays down the fan's shared edges and centre vertex (edge functions exactly
+    /// zero), short t_max that cut hits off, and invalid lanes (zero direction, NaN origin,
+    /// t_max 0) and lanes past `n`, which report nothing. Any-hit likewise, with half the lanes
+    /// leaving the primitive they first hit (which then must not block them).
+    #[test]
+    fn packets_match_one_ray_at_a_time() {
+        let mut rng = SplitMix64::new(11);
+        let (soup, fan) = scene(&mut rng);
+        let placed = Transform {
+            translation: Vec3::new(0.3, -0.2, 0.1),
+            rotation: Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0).normalize(), 0.7),
+            scale: Vec3::new(1.0, 1.5, 0.8),
+        };
+        let instance = |geometry, transform, entity_index| GeometryInstance {
+            geometry,
+            transform,
+            entity_index,
+            material: entity_index,
+        };
+        let sphere = |r| GeometryRef::Shape(Shape::Sphere(Sphere { radius: r }));
+        let bvh = SceneBvh::build(&[
+            instance(GeometryRef::Mesh(&soup), placed, 0),
+            instance(GeometryRef::Mesh(&fan), Transform::IDENTITY, 1),
+            instance(sphere(0.7), Transform::from_translation(Vec3::new(1.0, 1.0, -2.0)), 2),
+            instance(sphere(0.4), Transform::from_translation(Vec3::new(-2.0, 0.5, 1.0)), 3),
+        ]);
+        let (mut hits, mut exact_cases, mut blocked_count) = (0, 0, 0);
+        for case in 0..1200 {
+            let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); LANES];
+            let origin = v(&mut rng, 6.0);
+            let aim = v(&mut rng, 3.0);
+            for (l, ray) in rays.iter_mut().enumerate() {
+                *ray = match case % 4 {
+                    0 => Ray::new(origin, aim - origin + v(&mut rng, 0.05)),
+                    1 => Ray { origin: v(&mut rng, 6.0), dir: v(&mut rng, 1.0), t_max: rng.range(0.5, 12.0) },
+                    // Down the fan's axis and along its shared edges, from either side.
+                    2 => {
+                        let a = (l % 8) as f32 * std::f32::consts::FRAC_PI_4;
+                        let on_edge = Vec3::new(a.cos(), a.sin(), 0.0) * rng.range(0.0, 0.9) * (l >= 8) as u8 as f32;
+                        let z = if l % 2 == 0 { 3.0 } else { -3.0 };
+                        Ray::new(on_edge + Vec3::Z * z, Vec3::Z * -z.signum())
+                    }
+                    _ => Ray { origin, dir: aim - origin + v(&mut rng, 0.3), t_max: rng.range(0.0, 8.0) },
+                };
+            }
+            if case % 4 == 3 {
+                rays[3].dir = Vec3::ZERO;
+                rays[5].origin.y = f32::NAN;
+                rays[7].t_max = 0.0;
+            }
+            let n = if case % 5 == 0 { 1 + case % LANES } else { LANES };
+            let (o, d, t) = lanes_of(&rays);
+            for wide in [false, true] {
+                let mut got: [Option<Option<Hit>>; LANES] = [None; LANES];
+                let mut sink = |l: usize, h: Option<Hit>| got[l] = Some(h);
+                if wide {
+                    crate::lanes::widest(|| bvh.closest_hits_packet(&o, &d, &t, n, &mut sink));
+                } else {
+                    bvh.closest_hits_packet(&o, &d, &t, n, &mut sink);
+                }
+                // Any-hit from an origin on the lane's first hit (which then does not block it,
+                // unless it is a sphere), or from nowhere.
+                let mut origins = [GeometryId::NONE; LANES];
+                for (l, ray) in rays.iter().enumerate() {
+                    let want = (l < n).then(|| bvh.closest_hit(ray));
+                    assert_eq!(got[l], want, "case {case}, lane {l}, {ray:?}");
+                    hits += want.flatten().is_some() as usize;
+                    exact_cases += (case % 4 == 2 && want.flatten().is_some()) as usize;
+                    if l % 2 == 0 {
+                        origins[l] = want.flatten().map_or(GeometryId::NONE, |h| h.id);
+                    }
+                }
+                let blocked = if wide {
+                    crate::lanes::widest(|| bvh.occluded_packet(&o, &d, &t, n, &origins))
+                } else {
+                    bvh.occluded_packet(&o, &d, &t, n, &origins)
+                };
+                for (l, ray) in rays.iter().enumerate() {
+                    let want = l < n && bvh.occluded_from(ray, origins[l]);
+                    assert_eq!((blocked >> l) & 1 != 0, want, "any-hit: case {case}, lane {l}, {ray:?}");
+                    blocked_count += want as usize;
+                }
+            }
+        }
+        assert!(hits > 5000 && exact_cases > 1000, "hits compared {hits}, on the fan's edges {exact_cases}");
+        assert!(blocked_count > 3000, "blocked rays compared {blocked_count}");
+    }
+}

@@ -1,0 +1,267 @@
+//! Packet traversal: [`LANES`] rays walk the wide tree together, one lane per ray. A node's child
+//! boxes are tested against every ray of the packet, and a leaf's triangles one at a time against
+//! every ray that reached the leaf, so coherent rays (a pixel's camera samples, a point's shadow
+//! rays toward one light) share each node and triangle fetch.
+//!
+//! Answers are the single-ray traversal's, bit for bit: the slab test is the same conservative
+//! one, per lane; triangle lanes run the operations of `ShearedRay::intersect` (lanes where an
+//! edge function rounds to zero take that scalar test itself); and the closest hit is the least
+//! (t, input primitive) pair, which does not depend on the order leaves are visited in.
+
+use std::mem::MaybeUninit;
+
+use super::{EMPTY, LEAF, MAX_INV_DIR, PrimBlock, STACK, WIDTH, WideBvh};
+use crate::geometry::ray::gamma;
+use crate::geometry::triangle::{EARLY_REJECT_SLACK, t_error_bound};
+use crate::lanes::LANES;
+
+/// Lane columns: `[axis][lane]`.
+pub(crate) type Columns = [[f32; LANES]; 3];
+
+/// A packet's rays in the form the traversal and the triangle test read: origins, capped
+/// reciprocal directions, and the watertight test's axis choice and shear per lane.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RayPacket {
+    pub(crate) origin: Columns,
+    inv_dir: Columns,
+    /// Bit l: lane l's direction is negative along the axis.
+    neg: [u32; 3],
+    /// Bit l of `by_kz[k]`: lane l's largest direction component is axis k (`ShearedRay::kz`).
+    by_kz: [u32; 3],
+    /// (Sx, Sy, Sz) of `ShearedRay::new`, in the lane's permuted axes.
+    shear: Columns,
+    /// Lanes that hold a valid ray ([`crate::geometry::Ray::is_valid`]).
+    pub(crate) valid: u32,
+}
+
+impl RayPacket {
+    /// The packet of rays `origin + t dir`, t in (0, t_max[l]]; lanes past `n` are left out.
+    #[inline(always)]
+    pub(crate) fn new(origin: &Columns, dir: &Columns, t_max: &[f32; LANES], n: usize) -> Self {
+        let inv = |d: f32| {
+            let i = 1.0 / d;
+            if i.is_finite() && i.abs() <= MAX_INV_DIR { i } else { MAX_INV_DIR.copysign(d) }
+        };
+        let (mut inv_dir, mut shear) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3]);
+        let (mut neg, mut by_kz, mut valid) = ([0u32; 3], [0u32; 3], 0u32);
+        for l in 0..LANES {
+            let d = [dir[0][l], dir[1][l], dir[2][l]];
+            let o = [origin[0][l], origin[1][l], origin[2][l]];
+            let finite = d.iter().chain(&o).all(|v| v.is_finite());
+            let ok = finite && d != [0.0; 3] && t_max[l] > 0.0 && l < n;
+            valid |= u32::from(ok) << l;
+            for a in 0..3 {
+                inv_dir[a][l] = inv(d[a]);
+                neg[a] |= u32::from(inv_dir[a][l] < 0.0) << l;
+            }
+            // As `ShearedRay::new`.
+            let a = d.map(f32::abs);
+            let kz = if a[0] > a[1] {
+                if a[0] > a[2] { 0 } else { 2 }
+            } else if a[1] > a[2] {
+                1
+            } else {
+                2
+            };
+            by_kz[kz] |= 1 << l;
+            let [x, y, z] = permuted(kz);
+            (shear[0][l], shear[1][l], shear[2][l]) = (-d[x] / d[z], -d[y] / d[z], 1.0 / d[z]);
+        }
+        Self { origin: *origin, inv_dir, neg, by_kz, shear, valid }
+    }
+}
+
+/// The original axes that become x, y and z when axis `kz` is rotated to z.
+#[inline(always)]
+fn permuted(kz: usize) -> [usize; 3] {
+    match kz {
+        0 => [1, 2, 0],
+        1 => [2, 0, 1],
+        _ => [0, 1, 2],
+    }
+}
+
+/// Triangle hits of a packet against one triangle: lanes hit over (delta_t, t_max[l]], their t
+/// and barycentrics, and the lanes whose edge functions rounded to zero (for the scalar test).
+pub(crate) struct TriangleLanes {
+    pub(crate) hit: u32,
+    pub(crate) exact: u32,
+    pub(crate) t: [f32; LANES],
+    pub(crate) b: Columns,
+}
+
+/// The lanes of `mask` tested against triangle `k` of `block` (which must hold one), the
+/// operations of `ShearedRay::intersect` lane by lane.
+#[inline(always)]
+pub(crate) fn triangle_lanes(
+    block: &PrimBlock,
+    k: usize,
+    rays: &RayPacket,
+    mask: u32,
+    t_max: &[f32; LANES],
+) -> TriangleLanes {
+    let mut out = TriangleLanes { hit: 0, exact: 0, t: [0.0; LANES], b: [[0.0; LANES]; 3] };
+    for (kz, &lanes) in rays.by_kz.iter().enumerate() {
+        if lanes & mask != 0 {
+            triangle_lanes_kz(block, k, rays, lanes & mask, t_max, permuted(kz), &mut out);
+        }
+    }
+    out
+}
+
+/// [`triangle_lanes`] for lanes that share the axis permutation `[ax, ay, az]`.
+#[inline(always)]
+fn triangle_lanes_kz(
+    block: &PrimBlock,
+    k: usize,
+    rays: &RayPacket,
+    mask: u32,
+    t_max: &[f32; LANES],
+    [ax, ay, az]: [usize; 3],
+    out: &mut TriangleLanes,
+) {
+    let (o, s) = (&rays.origin, &rays.shear);
+    // p[vertex][axis][lane], translated, permuted and sheared.
+    let mut p = [[[0f32; LANES]; 3]; 3];
+    for (vertex, pv) in p.iter_mut().enumerate() {
+        let v = [block.v[vertex][ax][k], block.v[vertex][ay][k], block.v[vertex][az][k]];
+        for l in 0..LANES {
+            let z = v[2] - o[az][l];
+            pv[0][l] = (v[0] - o[ax][l]) + s[0][l] * z;
+            pv[1][l] = (v[1] - o[ay][l]) + s[1][l] * z;
+            pv[2][l] = z;
+        }
+    }
+    let (mut hit, mut exact) = (0u32, 0u32);
+    for l in 0..LANES {
+        let e0 = p[1][0][l] * p[2][1][l] - p[1][1][l] * p[2][0][l];
+        let e1 = p[2][0][l] * p[0][1][l] - p[2][1][l] * p[0][0][l];
+        let e2 = p[0][0][l] * p[1][1][l] - p[0][1][l] * p[1][0][l];
+        let zero = (e0 == 0.0) | (e1 == 0.0) | (e2 == 0.0);
+        let mixed = ((e0 < 0.0) | (e1 < 0.0) | (e2 < 0.0)) & ((e0 > 0.0) | (e1 > 0.0) | (e2 > 0.0));
+        let det = e0 + e1 + e2;
+        let (z0, z1, z2) = (p[0][2][l] * s[2][l], p[1][2][l] * s[2][l], p[2][2][l] * s[2][l]);
+        let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
+        let t_reject = t_max[l] * EARLY_REJECT_SLACK;
+        let behind_or_far = if det < 0.0 {
+            (t_scaled >= 0.0) | (t_scaled < t_reject * det)
+        } else {
+            (t_scaled <= 0.0) | (t_scaled > t_reject * det)
+        };
+        let inv_det = 1.0 / det;
+        let t = t_scaled * inv_det;
+        let max_x = p[0][0][l].abs().max(p[1][0][l].abs()).max(p[2][0][l].abs());
+        let max_y = p[0][1][l].abs().max(p[1][1][l].abs()).max(p[2][1][l].abs());
+        let max_z = z0.abs().max(z1.abs()).max(z2.abs());
+        let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+        // `!(t > bound)` also rejects a NaN t, as the scalar test's `t.is_nan()`.
+        let too_close = !(t > t_error_bound([max_x, max_y, max_z], max_e, inv_det));
+        let miss = mixed | (det == 0.0) | behind_or_far | !(t <= t_max[l]) | too_close;
+        exact |= u32::from(zero) << l;
+        hit |= u32::from(!zero & !miss) << l;
+        // Lanes outside `mask` keep what another permutation's pass wrote.
+        let mine = (mask >> l) & 1 != 0;
+        out.t[l] = if mine { t } else { out.t[l] };
+        for (a, e) in [e0, e1, e2].into_iter().enumerate() {
+            out.b[a][l] = if mine { e * inv_det } else { out.b[a][l] };
+        }
+    }
+    out.exact |= exact & mask;
+    out.hit |= hit & mask;
+}
+
+impl WideBvh {
+    /// [`WideBvh::traverse`] for a packet: visits each block whose box some lane of `active` may
+    /// meet over [0, t_max[l]], with the mask of those lanes; `visit` may lower `t_max` and
+    /// returns lanes that are done (any hit found), which leave the packet. With `NEAREST`, each
+    /// node's children are visited nearest first (by their nearest lane). Returns false if the
+    /// tree was too deep for the stack.
+    #[inline(always)]
+    pub(crate) fn traverse_packet<const NEAREST: bool>(
+        &self,
+        rays: &RayPacket,
+        mut active: u32,
+        t_max: &mut [f32; LANES],
+        mut visit: impl FnMut(&PrimBlock, u32, &mut [f32; LANES]) -> u32,
+    ) -> bool {
+        if self.nodes.is_empty() || active == 0 {
+            return true;
+        }
+        let far_pad = 1.0 + 2.0 * gamma(3);
+        let (o, inv) = (&rays.origin, &rays.inv_dir);
+        let mut stack = [const { MaybeUninit::<(u32, u32, f32)>::uninit() }; STACK];
+        stack[0].write((0, active, 0.0));
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            // SAFETY: entries below `sp` are written (the root above, children below).
+            let (entry, lanes, near) = unsafe { stack[sp].assume_init_read() };
+            // Lanes still in the packet whose current t_max the subtree's nearest entry is within.
+            let mut mask = 0u32;
+            for l in 0..LANES {
+                mask |= u32::from(near <= t_max[l] * far_pad) << l;
+            }
+            let mask = mask & lanes & active;
+            if mask == 0 {
+                continue;
+            }
+            if entry & LEAF != 0 {
+                active &= !visit(&self.blocks[(entry & !LEAF) as usize], mask, t_max);
+                if active == 0 {
+                    return true;
+                }
+                continue;
+            }
+            let node = &self.nodes[entry as usize];
+            let mut in_mask = [false; LANES];
+            for (l, m) in in_mask.iter_mut().enumerate() {
+                *m = (mask >> l) & 1 != 0;
+            }
+            let (mut child_lanes, mut child_near) = ([0u32; WIDTH], [f32::INFINITY; WIDTH]);
+            for c in 0..WIDTH {
+                if node.child[c] == EMPTY {
+                    continue;
+                }
+                let (mut t_near, mut t_far) = ([0f32; LANES], *t_max);
+                for a in 0..3 {
+                    let (lo, hi) = (node.lo[a][c], node.hi[a][c]);
+                    for l in 0..LANES {
+                        let (t0, t1) = ((lo - o[a][l]) * inv[a][l], (hi - o[a][l]) * inv[a][l]);
+                        let (enter, leave) = if (rays.neg[a] >> l) & 1 != 0 { (t1, t0) } else { (t0, t1) };
+                        t_near[l] = if enter > t_near[l] { enter } else { t_near[l] };
+                        t_far[l] = if leave < t_far[l] { leave } else { t_far[l] };
+                    }
+                }
+                let (mut hit, mut nearest) = (0u32, f32::INFINITY);
+                for l in 0..LANES {
+                    let meets = t_near[l] <= t_far[l] * far_pad;
+                    hit |= u32::from(meets) << l;
+                    nearest = if meets & in_mask[l] && t_near[l] < nearest { t_near[l] } else { nearest };
+                }
+                (child_lanes[c], child_near[c]) = (hit & mask, nearest);
+            }
+            if sp + WIDTH > STACK {
+                return false;
+            }
+            let first = sp;
+            for c in 0..WIDTH {
+                if child_lanes[c] == 0 {
+                    continue;
+                }
+                let item = (node.child[c], child_lanes[c], child_near[c]);
+                let mut k = sp;
+                if NEAREST {
+                    // Farthest first on the stack, so the nearest is popped first.
+                    // SAFETY: entries `first..sp` were written in this loop.
+                    while k > first && unsafe { stack[k - 1].assume_init_ref() }.2 < item.2 {
+                        stack[k] = stack[k - 1];
+                        k -= 1;
+                    }
+                }
+                stack[k].write(item);
+                sp += 1;
+            }
+        }
+        true
+    }
+}
