@@ -15,6 +15,7 @@ pub mod alias;
 pub mod distribution;
 pub mod frame;
 pub mod spherical;
+pub mod spherical_f32;
 pub mod warp;
 
 pub use alias::AliasTable;
