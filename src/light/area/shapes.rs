@@ -10,7 +10,8 @@
 //!   area sampling outside that band, where spherical sampling loses precision.
 //!
 //! Geometry that cancels (distances to nearby surfaces, cone angles of tiny spheres) is done in
-//! f64; only results are rounded to f32.
+//! f64; only results are rounded to f32. This is the reference; `fast.rs` is the f32 path that
+//! `sample_li` takes, tested against it.
 
 use std::f64::consts::PI;
 
