@@ -246,3 +246,136 @@ fn point_light_with_radius_is_a_sphere_of_the_same_power_and_far_intensity() {
     );
     assert!(sphere_from_point_light(&PointLight::candela(1.0), &t).unwrap().is_none());
 }
+
+// -------------------------------------------------------------------------------------------
+// The f32 kernel (`AreaShape::sample_fast`, what `sample_li` uses) against its f64 reference
+// (`AreaShape::sample`, what `sample_li_f64` uses)
+
+/// Per kind of hard triangle: samples compared, how many took the f32 kernel, and the worst
+/// relative pdf difference (to the reference and to `hit`) and direction difference (radians
+/// over the triangle's angular size).
+#[derive(Default)]
+struct Agreement {
+    samples: usize,
+    kernel: usize,
+    pdf_vs_reference: f64,
+    pdf_vs_hit: f64,
+    spherical_dir: f64,
+    area_dir: f64,
+    none: usize,
+    reference_gave_up: usize,
+}
+
+#[test]
+fn f32_kernel_agrees_with_f64_reference_on_hard_triangles() {
+    use glam::DVec3;
+    use kelvin::light::area::SamplingStrategy;
+    use kelvin::sampling::spherical_f32::TriangleView;
+    use kelvin::sampling::{sample_spherical_triangle, sample_uniform_triangle, triangle_solid_angle};
+    let mut rng = SplitMix64::new(41);
+    let mut by_kind: Vec<(&str, Agreement)> = Vec::new();
+    let mut a_bound = 0.0f32;
+    for (kind, v, p) in hard_triangles(&mut rng, 6000) {
+        let shape = AreaShape::Triangle { p: v, uv: [Vec2::ZERO, Vec2::X, Vec2::Y] };
+        let (normal, area) = (shape.plane_normal().unwrap(), shape.area());
+        let view = TriangleView::new(v, normal * (2.0 * area), p);
+        let kernel = view.is_some_and(|t| t.solid_angle < 3e-4 || t.spherical().is_some());
+        if let Some(t) = view {
+            // The error bound the strategy choice relies on holds (the reference is f64, rounded).
+            let exact = triangle_solid_angle(v, p);
+            let err = (t.solid_angle - exact).abs();
+            assert!(err <= t.solid_angle_error + exact * 1.2e-7, "{kind}: {v:?} from {p}: {t:?} vs {exact}");
+            a_bound = a_bound.max(err / t.solid_angle_error);
+        }
+        // Angular size: the largest angle between vertex directions.
+        let dirs = v.map(|q| (q.as_dvec3() - p.as_dvec3()).normalize());
+        let size = (0..3).map(|i| dirs[i].angle_between(dirs[(i + 1) % 3])).fold(0.0, f64::max);
+        let slot = match by_kind.iter().position(|(k, _)| *k == kind) {
+            Some(i) => i,
+            None => {
+                by_kind.push((kind, Agreement::default()));
+                by_kind.len() - 1
+            }
+        };
+        let a = &mut by_kind[slot].1;
+        for _ in 0..32 {
+            let u = rng.vec2();
+            let (fast, reference) = (shape.sample_fast(p, u), shape.sample(p, u));
+            let Some(f) = fast else {
+                // Only through the reference (whose edge repair may give up), which then agrees.
+                assert!(reference.is_none(), "{kind}: {v:?} from {p}, u {u}: no f32 sample");
+                a.none += 1;
+                continue;
+            };
+            a.samples += 1;
+            let rel = |x: f32, y: f32| ((x - y) as f64).abs() / y as f64;
+            let h =
+                shape.hit(p, f.wi).unwrap_or_else(|| panic!("{kind}: {v:?} from {p}, u {u}: f32 wi {} misses", f.wi));
+            a.pdf_vs_hit = a.pdf_vs_hit.max(rel(f.pdf, h.pdf));
+            let Some(r) = reference else {
+                a.reference_gave_up += 1; // its point, rounded to f32, fell outside
+                continue;
+            };
+            a.pdf_vs_reference = a.pdf_vs_reference.max(rel(f.pdf, r.pdf));
+            a.kernel += kernel as usize;
+            if !kernel || f == r {
+                continue; // the reference's own sample (its view, or per sample at an edge)
+            }
+            if shape.strategy(p) == SamplingStrategy::SphericalTriangle {
+                // The f64 map's direction for the same u (the reference rounds its point to f32
+                // before taking the direction, which costs more than f32 does here).
+                let b = sample_spherical_triangle(v, p, u).unwrap().0;
+                let [v0, v1, v2] = v.map(|q| q.as_dvec3() - p.as_dvec3());
+                let q = v0 + (v1 - v0) * b[1] as f64 + (v2 - v0) * b[2] as f64;
+                a.spherical_dir = a.spherical_dir.max(f.wi.as_dvec3().angle_between(q) / size);
+            } else {
+                a.area_dir = a.area_dir.max(f.wi.as_dvec3().angle_between(r.wi.as_dvec3()));
+            }
+        }
+    }
+    for (kind, a) in &by_kind {
+        eprintln!(
+            "{kind}: {} samples, {:.1}% by the f32 kernel; max rel pdf diff {:.1e} to the reference, {:.1e} to hit; \
+             max direction diff {:.1e} of the angular size (spherical), {:.1e} rad (area); {} None, {} only from f32",
+            a.samples,
+            100.0 * a.kernel as f64 / a.samples.max(1) as f64,
+            a.pdf_vs_reference,
+            a.pdf_vs_hit,
+            a.spherical_dir,
+            a.area_dir,
+            a.none,
+            a.reference_gave_up
+        );
+    }
+    eprintln!("solid angle: error at most {a_bound:.2} of its bound");
+    for (kind, a) in &by_kind {
+        assert!(a.pdf_vs_reference < 1e-4 && a.pdf_vs_hit < 1e-4, "{kind}");
+        assert!(a.spherical_dir < 1e-4 && a.area_dir < 1e-6, "{kind}");
+    }
+}
+
+#[test]
+fn f32_area_sampling_density_integrates_to_the_solid_angle() {
+    // E[1 / pdf] over the samples is the solid angle; exact for solid-angle sampling, a Monte
+    // Carlo integral for area sampling (tiny or far triangles), which the kernel does too.
+    use kelvin::sampling::spherical_f32::TriangleView;
+    use kelvin::sampling::triangle_solid_angle;
+    let mut rng = SplitMix64::new(43);
+    let mut checked = 0;
+    for (kind, v, p) in hard_triangles(&mut rng, 600) {
+        let shape = AreaShape::Triangle { p: v, uv: [Vec2::ZERO; 3] };
+        let omega = triangle_solid_angle(v, p) as f64;
+        let (normal, area) = (shape.plane_normal().unwrap(), shape.area());
+        if TriangleView::new(v, normal * (2.0 * area), p).is_none() {
+            continue; // the reference's (which at grazing angles drops the samples it cannot repair)
+        }
+        let mut s = common::Stats::default();
+        for _ in 0..4000 {
+            s.add(shape.sample_fast(p, rng.vec2()).map_or(0.0, |f| 1.0 / f.pdf as f64));
+        }
+        let err = (s.mean() - omega).abs();
+        assert!(err <= 5.0 * s.sigma() + 1e-4 * omega, "{kind}: {v:?} from {p}: {} vs {omega}", s.mean());
+        checked += (shape.strategy(p) == kelvin::light::area::SamplingStrategy::Area) as usize;
+    }
+    assert!(checked > 100, "{checked} area-sampled triangles");
+}

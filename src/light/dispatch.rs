@@ -25,16 +25,16 @@ impl LightTable {
         }
     }
 
-    /// [`Self::sample_li`] with point and spot lights evaluated in f64 (`LightPrecision::F64`);
-    /// every other kind has only its f32 form.
+    /// [`Self::sample_li`] with point, spot and area lights evaluated in f64, their references
+    /// (`LightPrecision::F64`); every other kind has only its f32 form.
     #[inline]
     pub fn sample_li_f64(&self, id: LightId, ctx: &LightSampleContext, u: Vec2, query: ColorQuery) -> Option<LiSample> {
         let i = id.row as usize;
         match id.kind {
             LightKind::Point => self.points.sample_li_f64(i, ctx, query),
             LightKind::Spot => self.spots.sample_li_f64(i, ctx, query),
-            LightKind::Area
-            | LightKind::Projection
+            LightKind::Area => self.area.items[i].light.sample_li_f64(ctx, u, query),
+            LightKind::Projection
             | LightKind::Goniometric
             | LightKind::Distant
             | LightKind::UniformInfinite

@@ -9,12 +9,14 @@
 //!   per unit area (or length) of the domain named.
 //! - Sample inputs `u` are uniform in [0, 1); a 1 is tolerated and clamped where it matters.
 //! - Where cancellation would eat an f32 (tiny cones and spherical polygons, sun-like peaks in a
-//!   distribution), the work is done in f64 and only the result is rounded.
+//!   distribution), the work is done in f64 and only the result is rounded; `spherical_f32` is
+//!   the f32 kernel of triangle sampling, which bounds its own error and says where it cannot.
 
 pub mod alias;
 pub mod distribution;
 pub mod frame;
 pub mod spherical;
+pub mod spherical_f32;
 pub mod warp;
 
 pub use alias::AliasTable;

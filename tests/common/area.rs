@@ -179,3 +179,50 @@ pub fn sphere_irradiance(s: &ResolvedArea, ctx: &LightSampleContext) -> f64 {
     assert!(cos.acos() + (r / d).asin() <= PI / 2.0 + 1e-9, "sphere crosses the horizon");
     PI * nits(s) * (r / d).powi(2) * cos
 }
+
+/// Triangles and reference points where f32 is hard, for the f32 kernel against its f64
+/// reference: (kind, vertices, point). Kinds cycle through ordinary, tiny and far (down to
+/// ~1e-8 sr), nearly in the plane (heights 1e-6 to 0.1 of the size), over the inside (close to
+/// 2 pi sr), slivers (thickness 1e-5 to 1e-2) and ordinary ones 1 km from the origin.
+pub fn hard_triangles(rng: &mut SplitMix64, n: usize) -> Vec<(&'static str, [Vec3; 3], Vec3)> {
+    const KINDS: [&str; 6] = ["ordinary", "tiny far", "near plane", "near 2 pi", "sliver", "far from origin"];
+    let mut rng2 = SplitMix64::new(rng.next_u64());
+    let mut unit = || Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - 1.0;
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let kind = KINDS[i % KINDS.len()];
+        let size = rng2.log_range(1e-3, 1e2);
+        let origin = if kind == "far from origin" { Vec3::new(1e3, -700.0, 400.0) } else { Vec3::ZERO };
+        let mut v = [unit(), unit(), unit()].map(|q| origin + q * size);
+        if kind == "sliver" {
+            let t = rng2.range(0.1, 0.9);
+            let e = v[1] - v[0];
+            let perp = e.cross(unit()).normalize() * e.length() * rng2.log_range(1e-5, 1e-2);
+            v[2] = v[0] + e * t + perp;
+        }
+        let centroid = (v[0] + v[1] + v[2]) / 3.0;
+        let cross = (v[1] - v[0]).cross(v[2] - v[0]);
+        if !(cross.length() > 1e-5 * (v[1] - v[0]).length() * (v[2] - v[0]).length()) {
+            continue;
+        }
+        let n = cross.normalize();
+        let side = if rng2.f32() < 0.5 { 1.0 } else { -1.0 };
+        let dir = unit().normalize();
+        let p = match kind {
+            "tiny far" => centroid + dir * size * rng2.log_range(10.0, 1e4),
+            "near plane" => {
+                let w = unit();
+                let in_plane = (w - n * n.dot(w)) * size * 2.0;
+                centroid + in_plane + n * side * size * rng2.log_range(1e-6, 0.1)
+            }
+            "near 2 pi" => {
+                let (a, b) = (rng2.f32(), rng2.f32());
+                let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+                v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b + n * side * size * rng2.log_range(1e-5, 0.1)
+            }
+            _ => centroid + dir * size * rng2.log_range(0.2, 10.0),
+        };
+        out.push((kind, v, p));
+    }
+    out
+}

@@ -5,6 +5,7 @@
 //! or rectangle size, or a mesh) and is resolved with its `Transform` into one [`ResolvedArea`]
 //! per shape or triangle. Sampling lives in [`shapes`].
 
+mod fast;
 pub mod shapes;
 
 use std::f32::consts::PI;
@@ -137,6 +138,8 @@ pub struct ResolvedArea {
     pub texture: Option<Arc<LightTexture>>,
     /// Area of `shape`, m^2.
     pub area: f32,
+    /// `shape.plane_normal()`, zero for spheres: computed once for the f32 sampling path.
+    pub normal: Vec3,
 }
 
 /// The triangles of a mesh light and how many degenerate triangles were left out.
@@ -326,7 +329,8 @@ fn is_degenerate(p: &[Vec3; 3]) -> bool {
 impl ResolvedArea {
     /// A light on `shape` with radiance `radiance` (W/(m^2 sr)).
     pub fn new(shape: AreaShape, radiance: Emitter, two_sided: bool, texture: Option<Arc<LightTexture>>) -> Self {
-        Self { area: shape.area(), shape, radiance, two_sided, texture }
+        let normal = shape.plane_normal().unwrap_or(Vec3::ZERO);
+        Self { area: shape.area(), normal, shape, radiance, two_sided, texture }
     }
 
     /// Radiance leaving surface point `p` (normal `n`, texture coordinate `uv`) toward unit
@@ -348,9 +352,20 @@ impl ResolvedArea {
 
     /// A direction toward the light with the radiance arriving along it; None where the
     /// light cannot be sampled (degenerate shape, `ctx.p` in its plane) or sends no light along
-    /// the sampled direction (the back of a one-sided light, a black texel).
+    /// the sampled direction (the back of a one-sided light, a black texel). Through the f32
+    /// kernels ([`AreaShape::sample_fast`]); [`Self::sample_li_f64`] is its reference.
     pub fn sample_li(&self, ctx: &LightSampleContext, u: Vec2, query: ColorQuery) -> Option<LiSample> {
+        let s = self.shape.sample_fast_with(self.normal, self.area, ctx.p, u)?;
+        self.li_sample(s, query)
+    }
+
+    /// [`Self::sample_li`] through the f64 reference ([`AreaShape::sample`]).
+    pub fn sample_li_f64(&self, ctx: &LightSampleContext, u: Vec2, query: ColorQuery) -> Option<LiSample> {
         let s = self.shape.sample(ctx.p, u)?;
+        self.li_sample(s, query)
+    }
+
+    fn li_sample(&self, s: ShapeSample, query: ColorQuery) -> Option<LiSample> {
         let radiance = self.radiance(s.point.p, s.point.n, s.point.uv, -s.wi, query);
         if radiance.0.iter().all(|&v| v == 0.0) {
             return None;

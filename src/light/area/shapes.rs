@@ -10,7 +10,8 @@
 //!   area sampling outside that band, where spherical sampling loses precision.
 //!
 //! Geometry that cancels (distances to nearby surfaces, cone angles of tiny spheres) is done in
-//! f64; only results are rounded to f32.
+//! f64; only results are rounded to f32. This is the reference; `fast.rs` is the f32 path that
+//! `sample_li` takes, tested against it.
 
 use std::f64::consts::PI;
 
@@ -222,7 +223,8 @@ impl AreaShape {
         while eps < 0.5 {
             let w = s.wi.as_dvec3().lerp(toward, eps).normalize_or_zero().as_vec3();
             if let Some(h) = self.hit_with(p_ref, w, strategy, omega) {
-                return Some(h);
+                // `h.wi` is `w` renormalised in f64, which may round an ulp off the one checked.
+                return Some(ShapeSample { wi: w, ..h });
             }
             eps *= 4.0;
         }
@@ -320,7 +322,7 @@ fn in_spherical_band(omega: f32) -> bool {
 }
 
 /// Keeps a sample only if its density and direction are usable.
-fn finite_sample(point: SurfacePoint, wi: Vec3, pdf: f32) -> Option<ShapeSample> {
+pub(super) fn finite_sample(point: SurfacePoint, wi: Vec3, pdf: f32) -> Option<ShapeSample> {
     let ok = pdf.is_finite() && pdf > 0.0 && wi.is_finite() && wi != Vec3::ZERO && point.p.is_finite();
     ok.then_some(ShapeSample { point, wi, pdf })
 }
