@@ -513,3 +513,65 @@ fn light_tree_quality() {
         }
     }
 }
+
+/// `LightSampler::sample_lanes` chooses what `sample` chooses, with the same pmf bits, lane by
+/// lane, in lane code and not: trees of 1, 2, 5 and 3,000 lights (lanes that share every node,
+/// and lanes that part ways deep in the tree), points with and without normals, a lane with a
+/// NaN position and lanes left out of `active` (no choice), and a sampler over distant lights
+/// too (at infinity: chosen with probability by count).
+#[test]
+fn lane_sampling_matches_one_point_at_a_time() {
+    use kelvin::lanes::LANES;
+    let mut rng = SplitMix64::new(77);
+    let mut with_distant = random_lights(40, 8, 0);
+    with_distant.push(L::Distant(Vec3::new(0.3, -1.0, 0.2), 5.0));
+    let sets = [
+        random_lights(1, 1, 0),
+        random_lights(2, 2, 0),
+        random_lights(5, 3, 0),
+        random_lights(3000, 4, 7),
+        with_distant,
+    ];
+    let mut compared = 0;
+    for lights in &sets {
+        let table = table_of(lights);
+        for sampler in all_samplers(&table) {
+            for block in 0..200 {
+                let ctxs = contexts(block as u64 + 1000 * lights.len() as u64, LANES);
+                let (mut p, mut n, mut u) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3], [0f32; LANES]);
+                for (l, c) in ctxs.iter().enumerate() {
+                    // Coherent blocks (one small patch) and scattered ones.
+                    let at = if block % 2 == 0 { ctxs[0].p + 0.01 * c.p } else { c.p };
+                    for a in 0..3 {
+                        (p[a][l], n[a][l]) = (at[a], c.n[a]);
+                    }
+                    u[l] = rng.f32();
+                }
+                p[1][5] = f32::NAN;
+                let active = if block % 3 == 0 { 0xffff & !(1 << 9) } else { 0xffff };
+                for wide in [false, true] {
+                    let got = if wide {
+                        kelvin::lanes::widest(|| sampler.sample_lanes(&p, &n, &u, active))
+                    } else {
+                        sampler.sample_lanes(&p, &n, &u, active)
+                    };
+                    for l in 0..LANES {
+                        let at = Vec3::new(p[0][l], p[1][l], p[2][l]);
+                        let normal = Vec3::new(n[0][l], n[1][l], n[2][l]);
+                        let ctx = LightSampleContext { p: at, n: normal, ns: normal };
+                        let want = if active & (1 << l) != 0 { sampler.sample(&ctx, u[l]) } else { None };
+                        let lane = (got.chosen & (1 << l) != 0).then(|| (got.light[l], got.pmf[l].to_bits()));
+                        assert_eq!(
+                            lane,
+                            want.map(|(id, q)| (id, q.to_bits())),
+                            "{} lights, block {block}, lane {l}",
+                            lights.len()
+                        );
+                        compared += want.is_some() as usize;
+                    }
+                }
+            }
+        }
+    }
+    assert!(compared > 40_000, "choices compared: {compared}");
+}

@@ -86,12 +86,12 @@ impl NodeMeta {
 #[derive(Clone, Debug, Default)]
 pub struct BvhSampler {
     /// Root first; siblings adjacent; children after their parent.
-    nodes: Vec<Node>,
+    pub(super) nodes: Vec<Node>,
     /// Per node, what a refit needs besides the bounds, together so it costs one cache line.
     meta: Vec<NodeMeta>,
     /// What sampling walks: the tree collapsed into nodes of four SIMD lanes.
-    wide: WideTree,
-    infinite: Vec<LightId>,
+    pub(super) wide: WideTree,
+    pub(super) infinite: Vec<LightId>,
     /// Per kind, per row: the leaf node, [`AT_INFINITY`] or [`ABSENT`].
     leaf_of: [Vec<u32>; LightKind::COUNT],
     /// Sum of `NodeMeta::growth` over all nodes (f64: refits add and subtract into it), and the
@@ -385,7 +385,7 @@ impl BvhSampler {
 
     /// Probability of choosing a light at infinity (all of them together).
     #[inline]
-    fn infinite_probability(&self) -> f32 {
+    pub(super) fn infinite_probability(&self) -> f32 {
         let n = self.infinite.len() as f32;
         if self.nodes.is_empty() { if n > 0.0 { 1.0 } else { 0.0 } } else { n / (n + 1.0) }
     }

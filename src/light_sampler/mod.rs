@@ -3,17 +3,21 @@
 
 mod bvh;
 mod bvh_build;
+mod bvh_lanes;
 pub mod importance;
+mod importance_lanes;
 mod power;
 mod uniform;
 mod wide;
 
 use bevy_ecs::resource::Resource;
 
+use crate::lanes::LANES;
 use crate::light::{LightId, LightSampleContext, LightTable};
 use crate::shading::LightSamplerKind;
 
 pub use bvh::{BvhSampler, BvhUpdate, LIGHT_TREE_REBUILD_RATIO};
+pub use bvh_lanes::LaneChoices;
 pub use power::PowerSampler;
 pub use uniform::UniformSampler;
 
@@ -70,6 +74,39 @@ impl LightSampler {
             Self::Bvh(s) => s.sample(ctx, u),
         }
         .filter(|_| ctx.p.is_finite())
+    }
+
+    /// [`Self::sample`] for [`LANES`] points (`p`, `n` as lane columns, zero normals for none)
+    /// with numbers `u`, in the lanes of `active`: the same choices and pmfs, lane by lane. The
+    /// BVH sampler weighs each node's clusters for all the points at it at once. Run it inside
+    /// [`crate::lanes::widest`].
+    #[inline(always)]
+    pub fn sample_lanes(
+        &self,
+        p: &[[f32; LANES]; 3],
+        n: &[[f32; LANES]; 3],
+        u: &[f32; LANES],
+        active: u32,
+    ) -> LaneChoices {
+        let mut active = active;
+        for l in 0..LANES {
+            let finite = p[0][l].is_finite() & p[1][l].is_finite() & p[2][l].is_finite();
+            active &= !(u32::from(!finite) << l);
+        }
+        if let Self::Bvh(s) = self {
+            return s.sample_lanes(p, n, u, active);
+        }
+        let none = LightId { kind: crate::light::LightKind::Point, row: 0 };
+        let mut out = LaneChoices { light: [none; LANES], pmf: [0.0; LANES], chosen: 0 };
+        while active != 0 {
+            let l = active.trailing_zeros() as usize;
+            active &= active - 1;
+            let ctx = LightSampleContext::at(glam::Vec3::new(p[0][l], p[1][l], p[2][l]));
+            if let Some((id, q)) = self.sample(&ctx, u[l]) {
+                (out.light[l], out.pmf[l], out.chosen) = (id, q, out.chosen | 1 << l);
+            }
+        }
+        out
     }
 
     /// [`Self::sample`] at a point with a finite position, for the samplers that read nothing else

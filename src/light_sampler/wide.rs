@@ -4,10 +4,12 @@
 //! binary walk: the binary tree stays the source of truth (build, refit, cost), and every slot
 //! is a copy of one binary node's bounds, updated when that node is refitted.
 
-use glam::{Vec3, Vec4};
+use glam::{BVec4A, Vec3, Vec4};
 
 use super::bvh_build::Node;
-use super::importance::{ClusterQuery, EMPTY_BOUNDS, MAX_IMPORTANCE, MIN_DISTANCE_SQUARED};
+use super::importance::{ClusterQuery, EMPTY_BOUNDS};
+use super::importance_lanes::{self, ClusterLanes, F32x16, Lanes, Mask16};
+use crate::lanes::LANES;
 use crate::light::{LightId, LightKind};
 
 /// Marks "no slot" in `slot_of` and "no parent" for the root.
@@ -83,72 +85,50 @@ impl WideNode {
     /// formula as `ClusterQuery::importance` (see there for the model and its sources).
     #[inline(always)]
     pub fn importance(&self, p: Vec3, n: Vec3) -> Vec4 {
-        let zero = Vec4::ZERO;
-        let one = Vec4::ONE;
-        let (px, py, pz) = (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z));
-        let [min_x, min_y, min_z] = self.min;
-        let [max_x, max_y, max_z] = self.max;
-        let (tx, ty, tz) = (px - 0.5 * (min_x + max_x), py - 0.5 * (min_y + max_y), pz - 0.5 * (min_z + max_z));
-        let dist2 = tx * tx + ty * ty + tz * tz;
-        let (gx, gy, gz) = (
-            (min_x - px).max(px - max_x).max(zero),
-            (min_y - py).max(py - max_y).max(zero),
-            (min_z - pz).max(pz - max_z).max(zero),
-        );
-        let gap = (gx * gx + gy * gy + gz * gz).sqrt();
-        let radius = self.radius;
-        let dist = dist2.sqrt();
-        let d2 = (dist * gap).max(radius * radius / 64.0).max(Vec4::splat(MIN_DISTANCE_SQUARED));
-        let inv_dist = Vec4::select(dist2.cmpgt(zero), dist.recip(), zero);
-        let (wx, wy, wz) = (tx * inv_dist, ty * inv_dist, tz * inv_dist);
+        let has_n = BVec4A::splat(n != Vec3::ZERO);
+        importance_lanes::importance(&self.lanes(), p.to_array().map(Vec4::splat), n.to_array().map(Vec4::splat), has_n)
+    }
 
-        let inside = dist2.cmple(radius * radius);
-        let sin_b = Vec4::select(inside, zero, radius * inv_dist);
-        let cos_b = Vec4::select(inside, -one, (one - sin_b * sin_b).max(zero).sqrt());
-
-        // Clusters that emit every way (any point light inside) skip the cone terms: most
-        // interior nodes, since points and spots mix.
-        let (cos_o, cos_e) = (self.cos_theta_o, self.cos_theta_e);
-        let everywhere = cos_o.cmple(-one);
-        let cos_p = if everywhere.all() {
-            one
-        } else {
-            let [ax, ay, az] = self.w;
-            let cos_w0 = ax * wx + ay * wy + az * wz;
-            let cos_w = Vec4::select(self.two_sided.cmpgt(zero), cos_w0.abs(), cos_w0);
-            let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
-            let sin_o = self.sin_theta_o;
-            let within_o = cos_w.cmpgt(cos_o);
-            let cos_x = Vec4::select(within_o, one, cos_w * cos_o + sin_w * sin_o);
-            let sin_x = Vec4::select(within_o, zero, sin_w * cos_o - cos_w * sin_o);
-            let cos_p = Vec4::select(cos_x.cmpgt(cos_b), one, cos_x * cos_b + sin_x * sin_b);
-            Vec4::select(everywhere, one, cos_p)
-        };
-        let dark = cos_p.cmplt(cos_e) | self.phi.cmple(zero);
-        let lambertian = cos_e.cmple(zero) | cos_p.cmpge(one);
-        let emission = if lambertian.all() {
-            cos_p
-        } else {
-            let t = ((cos_p - cos_e) / (one - cos_e).max(Vec4::splat(1e-12))).clamp(zero, one);
-            Vec4::select(lambertian, cos_p, t * t * (3.0 - 2.0 * t))
-        };
-        let mut value = self.phi * emission / d2;
-
-        if n != Vec3::ZERO {
-            let cos_i = (wx * n.x + wy * n.y + wz * n.z).abs();
-            let sin_i = (one - cos_i * cos_i).max(zero).sqrt();
-            let cone_bound = Vec4::select(cos_i.cmpgt(cos_b), one, cos_i * cos_b + sin_i * sin_b);
-            let axis = |lo: Vec4, hi: Vec4, pc: Vec4, nc: f32| ((lo - pc) * nc, (hi - pc) * nc);
-            let (lx, hx) = axis(min_x, max_x, px, n.x);
-            let (ly, hy) = axis(min_y, max_y, py, n.y);
-            let (lz, hz) = axis(min_z, max_z, pz, n.z);
-            let above = lx.max(hx) + ly.max(hy) + lz.max(hz);
-            let below = -(lx.min(hx) + ly.min(hy) + lz.min(hz));
-            let offset = above.max(below);
-            let plane_bound = Vec4::select(offset.cmpge(gap), one, offset / gap);
-            value *= cone_bound.min(plane_bound);
+    /// The clusters as lanes.
+    #[inline(always)]
+    fn lanes(&self) -> ClusterLanes<Vec4> {
+        ClusterLanes {
+            min: self.min,
+            max: self.max,
+            w: self.w,
+            phi: self.phi,
+            radius: self.radius,
+            cos_theta_o: self.cos_theta_o,
+            sin_theta_o: self.sin_theta_o,
+            cos_theta_e: self.cos_theta_e,
+            two_sided: self.two_sided,
         }
-        Vec4::select(dark, zero, value.clamp(zero, Vec4::splat(MAX_IMPORTANCE)))
+    }
+
+    /// Cluster `c` seen from [`LANES`] points (`p`, `n` as lane columns; `has_n`: lanes with a
+    /// normal): the same bits as lane `c` of [`Self::importance`] at each point.
+    #[inline(always)]
+    pub fn importance_from_points(
+        &self,
+        c: usize,
+        p: &[[f32; LANES]; 3],
+        n: &[[f32; LANES]; 3],
+        has_n: Mask16,
+    ) -> F32x16 {
+        let one = |v: &Vec4| F32x16::splat(v[c]);
+        let three = |v: &[Vec4; 3]| [one(&v[0]), one(&v[1]), one(&v[2])];
+        let cluster = ClusterLanes {
+            min: three(&self.min),
+            max: three(&self.max),
+            w: three(&self.w),
+            phi: one(&self.phi),
+            radius: one(&self.radius),
+            cos_theta_o: one(&self.cos_theta_o),
+            sin_theta_o: one(&self.sin_theta_o),
+            cos_theta_e: one(&self.cos_theta_e),
+            two_sided: one(&self.two_sided),
+        };
+        importance_lanes::importance(&cluster, p.map(F32x16), n.map(F32x16), has_n)
     }
 }
 

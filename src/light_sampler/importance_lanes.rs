@@ -1,0 +1,325 @@
+//! The light BVH's importance formula ([`super::importance::ClusterQuery::importance`], the
+//! scalar reference) written once over lane types: a wide node's four clusters seen from one
+//! point ([`Vec4`]), or one cluster seen from [`LANES`] points ([`F32x16`], for batches of
+//! shading points in `BvhSampler::sample_lanes`). Both lane types round every operation as the
+//! other does (IEEE +, -, *, /, sqrt; `max` / `min` with SSE's operand order), so a point's
+//! importances, and so its choices and pmfs, are the same bits whichever form computed them.
+
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Sub};
+
+use glam::{BVec4A, Vec4};
+
+use super::importance::{MAX_IMPORTANCE, MIN_DISTANCE_SQUARED};
+use crate::lanes::LANES;
+
+/// What the importance formula needs of a lane type.
+pub(super) trait Lanes:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
+{
+    type Mask: Copy + BitOr<Output = Self::Mask> + BitAnd<Output = Self::Mask>;
+    fn splat(v: f32) -> Self;
+    fn sqrt(self) -> Self;
+    fn abs(self) -> Self;
+    /// `self > other ? self : other` lane by lane (SSE `maxps`).
+    fn max(self, other: Self) -> Self;
+    /// `self < other ? self : other` lane by lane (SSE `minps`).
+    fn min(self, other: Self) -> Self;
+    fn gt(self, other: Self) -> Self::Mask;
+    fn ge(self, other: Self) -> Self::Mask;
+    fn lt(self, other: Self) -> Self::Mask;
+    fn le(self, other: Self) -> Self::Mask;
+    fn select(mask: Self::Mask, yes: Self, no: Self) -> Self;
+    fn all(mask: Self::Mask) -> bool;
+    fn any(mask: Self::Mask) -> bool;
+}
+
+impl Lanes for Vec4 {
+    type Mask = BVec4A;
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        Vec4::splat(v)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Vec4::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Vec4::abs(self)
+    }
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        Vec4::max(self, other)
+    }
+    #[inline(always)]
+    fn min(self, other: Self) -> Self {
+        Vec4::min(self, other)
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> BVec4A {
+        self.cmpgt(other)
+    }
+    #[inline(always)]
+    fn ge(self, other: Self) -> BVec4A {
+        self.cmpge(other)
+    }
+    #[inline(always)]
+    fn lt(self, other: Self) -> BVec4A {
+        self.cmplt(other)
+    }
+    #[inline(always)]
+    fn le(self, other: Self) -> BVec4A {
+        self.cmple(other)
+    }
+    #[inline(always)]
+    fn select(mask: BVec4A, yes: Self, no: Self) -> Self {
+        Vec4::select(mask, yes, no)
+    }
+    #[inline(always)]
+    fn all(mask: BVec4A) -> bool {
+        mask.all()
+    }
+    #[inline(always)]
+    fn any(mask: BVec4A) -> bool {
+        mask.any()
+    }
+}
+
+/// [`LANES`] f32 as plain loops, which compile to one register per operation inside
+/// [`crate::lanes::widest`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct F32x16(pub [f32; LANES]);
+
+/// [`F32x16`]'s comparisons.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Mask16([bool; LANES]);
+
+impl From<[bool; LANES]> for Mask16 {
+    fn from(lanes: [bool; LANES]) -> Self {
+        Self(lanes)
+    }
+}
+
+macro_rules! lane_op {
+    ($trait:ident, $f:ident, $op:tt) => {
+        impl $trait for F32x16 {
+            type Output = Self;
+            #[inline(always)]
+            fn $f(self, o: Self) -> Self {
+                let mut r = [0.0; LANES];
+                for l in 0..LANES {
+                    r[l] = self.0[l] $op o.0[l];
+                }
+                Self(r)
+            }
+        }
+    };
+}
+lane_op!(Add, add, +);
+lane_op!(Sub, sub, -);
+lane_op!(Mul, mul, *);
+lane_op!(Div, div, /);
+
+impl Neg for F32x16 {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        self.map(|v| -v)
+    }
+}
+
+impl BitOr for Mask16 {
+    type Output = Self;
+    #[inline(always)]
+    fn bitor(self, o: Self) -> Self {
+        let mut r = [false; LANES];
+        for l in 0..LANES {
+            r[l] = self.0[l] | o.0[l];
+        }
+        Self(r)
+    }
+}
+
+impl BitAnd for Mask16 {
+    type Output = Self;
+    #[inline(always)]
+    fn bitand(self, o: Self) -> Self {
+        let mut r = [false; LANES];
+        for l in 0..LANES {
+            r[l] = self.0[l] & o.0[l];
+        }
+        Self(r)
+    }
+}
+
+impl F32x16 {
+    #[inline(always)]
+    fn map(self, f: impl Fn(f32) -> f32) -> Self {
+        let mut r = [0.0; LANES];
+        for l in 0..LANES {
+            r[l] = f(self.0[l]);
+        }
+        Self(r)
+    }
+    #[inline(always)]
+    fn zip(self, o: Self, f: impl Fn(f32, f32) -> f32) -> Self {
+        let mut r = [0.0; LANES];
+        for l in 0..LANES {
+            r[l] = f(self.0[l], o.0[l]);
+        }
+        Self(r)
+    }
+    #[inline(always)]
+    fn test(self, o: Self, f: impl Fn(f32, f32) -> bool) -> Mask16 {
+        let mut r = [false; LANES];
+        for l in 0..LANES {
+            r[l] = f(self.0[l], o.0[l]);
+        }
+        Mask16(r)
+    }
+}
+
+impl Lanes for F32x16 {
+    type Mask = Mask16;
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        Self([v; LANES])
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        self.map(f32::sqrt)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        self.map(f32::abs)
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        self.zip(o, |a, b| if a > b { a } else { b })
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        self.zip(o, |a, b| if a < b { a } else { b })
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> Mask16 {
+        self.test(o, |a, b| a > b)
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> Mask16 {
+        self.test(o, |a, b| a >= b)
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> Mask16 {
+        self.test(o, |a, b| a < b)
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> Mask16 {
+        self.test(o, |a, b| a <= b)
+    }
+    #[inline(always)]
+    fn select(mask: Mask16, yes: Self, no: Self) -> Self {
+        let mut r = [0.0; LANES];
+        for l in 0..LANES {
+            r[l] = if mask.0[l] { yes.0[l] } else { no.0[l] };
+        }
+        Self(r)
+    }
+    #[inline(always)]
+    fn all(mask: Mask16) -> bool {
+        mask.0.iter().fold(true, |a, &b| a & b)
+    }
+    #[inline(always)]
+    fn any(mask: Mask16) -> bool {
+        mask.0.iter().fold(false, |a, &b| a | b)
+    }
+}
+
+/// Cluster bounds as lanes (see `WideNode`): box corners, emission axis, power, bounding-sphere
+/// radius, cone cosines and sine, and 1 for two-sided clusters.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ClusterLanes<V> {
+    pub min: [V; 3],
+    pub max: [V; 3],
+    pub w: [V; 3],
+    pub phi: V,
+    pub radius: V,
+    pub cos_theta_o: V,
+    pub sin_theta_o: V,
+    pub cos_theta_e: V,
+    pub two_sided: V,
+}
+
+/// The importance of each lane's cluster at its point `p` with normal `n` (`has_n`: lanes whose
+/// normal is not zero): `ClusterQuery::importance` lane by lane (see there for the model and its
+/// sources).
+#[inline(always)]
+pub(super) fn importance<V: Lanes>(c: &ClusterLanes<V>, p: [V; 3], n: [V; 3], has_n: V::Mask) -> V {
+    let s = V::splat;
+    let (zero, one) = (s(0.0), s(1.0));
+    let [px, py, pz] = p;
+    let [min_x, min_y, min_z] = c.min;
+    let [max_x, max_y, max_z] = c.max;
+    let (tx, ty, tz) = (px - s(0.5) * (min_x + max_x), py - s(0.5) * (min_y + max_y), pz - s(0.5) * (min_z + max_z));
+    let dist2 = tx * tx + ty * ty + tz * tz;
+    let (gx, gy, gz) = (
+        (min_x - px).max(px - max_x).max(zero),
+        (min_y - py).max(py - max_y).max(zero),
+        (min_z - pz).max(pz - max_z).max(zero),
+    );
+    let gap = (gx * gx + gy * gy + gz * gz).sqrt();
+    let radius = c.radius;
+    let dist = dist2.sqrt();
+    let d2 = (dist * gap).max(radius * radius / s(64.0)).max(s(MIN_DISTANCE_SQUARED));
+    let inv_dist = V::select(dist2.gt(zero), one / dist, zero);
+    let (wx, wy, wz) = (tx * inv_dist, ty * inv_dist, tz * inv_dist);
+
+    let inside = dist2.le(radius * radius);
+    let sin_b = V::select(inside, zero, radius * inv_dist);
+    let cos_b = V::select(inside, s(-1.0), (one - sin_b * sin_b).max(zero).sqrt());
+
+    // Clusters that emit every way (any point light inside) skip the cone terms: most interior
+    // nodes, since points and spots mix.
+    let (cos_o, cos_e) = (c.cos_theta_o, c.cos_theta_e);
+    let everywhere = cos_o.le(s(-1.0));
+    let cos_p = if V::all(everywhere) {
+        one
+    } else {
+        let [ax, ay, az] = c.w;
+        let cos_w0 = ax * wx + ay * wy + az * wz;
+        let cos_w = V::select(c.two_sided.gt(zero), cos_w0.abs(), cos_w0);
+        let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
+        let sin_o = c.sin_theta_o;
+        let within_o = cos_w.gt(cos_o);
+        let cos_x = V::select(within_o, one, cos_w * cos_o + sin_w * sin_o);
+        let sin_x = V::select(within_o, zero, sin_w * cos_o - cos_w * sin_o);
+        let cos_p = V::select(cos_x.gt(cos_b), one, cos_x * cos_b + sin_x * sin_b);
+        V::select(everywhere, one, cos_p)
+    };
+    let dark = cos_p.lt(cos_e) | c.phi.le(zero);
+    let lambertian = cos_e.le(zero) | cos_p.ge(one);
+    let emission = if V::all(lambertian) {
+        cos_p
+    } else {
+        let t = ((cos_p - cos_e) / (one - cos_e).max(s(1e-12))).max(zero).min(one);
+        V::select(lambertian, cos_p, t * t * (s(3.0) - s(2.0) * t))
+    };
+    let mut value = c.phi * emission / d2;
+
+    if V::any(has_n) {
+        let [nx, ny, nz] = n;
+        let cos_i = (wx * nx + wy * ny + wz * nz).abs();
+        let sin_i = (one - cos_i * cos_i).max(zero).sqrt();
+        let cone_bound = V::select(cos_i.gt(cos_b), one, cos_i * cos_b + sin_i * sin_b);
+        let axis = |lo: V, hi: V, pc: V, nc: V| ((lo - pc) * nc, (hi - pc) * nc);
+        let (lx, hx) = axis(min_x, max_x, px, nx);
+        let (ly, hy) = axis(min_y, max_y, py, ny);
+        let (lz, hz) = axis(min_z, max_z, pz, nz);
+        let above = lx.max(hx) + ly.max(hy) + lz.max(hz);
+        let below = -(lx.min(hx) + ly.min(hy) + lz.min(hz));
+        let offset = above.max(below);
+        let plane_bound = V::select(offset.ge(gap), one, offset / gap);
+        value = V::select(has_n, value * cone_bound.min(plane_bound), value);
+    }
+    V::select(dark, zero, value.max(zero).min(s(MAX_IMPORTANCE)))
+}
