@@ -491,17 +491,21 @@ impl Sampling<'_> {
             }
         } else {
             let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
+            let mut normal = [[0.0f32; LANES]; 3];
             for l in 0..n {
-                if !finite(l) {
+                let v = self.batch.normal[point[l]];
+                (normal[0][l], normal[1][l], normal[2][l]) = (v.x, v.y, v.z);
+            }
+            // `sample_lanes` leaves points without a finite position unchosen.
+            let choices = self.sampler.sample_lanes(&p, &normal, &u, (1u32 << n) - 1);
+            for l in 0..n {
+                if choices.chosen & (1 << l) == 0 {
                     continue;
                 }
-                let choice = self.sampler.sample_context_free(u[l]);
-                if let Some((id, q)) = choice.unwrap_or_else(|| self.sampler.sample(&self.context(point[l]), u[l])) {
-                    (light[l], pmf[l], chosen[l]) = (id, q, true);
-                    if id.kind == LightKind::Point {
-                        (rows[l], casts[l], points) =
-                            (id.row, self.table.points.casts_shadows[id.row as usize], points + 1);
-                    }
+                let id = choices.light[l];
+                (light[l], pmf[l], chosen[l]) = (id, choices.pmf[l], true);
+                if id.kind == LightKind::Point {
+                    (rows[l], casts[l], points) = (id.row, self.table.points.casts_shadows[id.row as usize], points + 1);
                 }
             }
         }
