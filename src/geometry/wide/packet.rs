@@ -71,6 +71,20 @@ impl RayPacket {
     }
 }
 
+/// The least of `v` (none is NaN), as a tree of lane-wise steps: a running minimum would be a
+/// chain of 16 dependent scalar compares.
+#[inline(always)]
+fn nearest(mut v: [f32; LANES]) -> f32 {
+    let mut width = LANES / 2;
+    while width > 0 {
+        for l in 0..width {
+            v[l] = if v[l + width] < v[l] { v[l + width] } else { v[l] };
+        }
+        width /= 2;
+    }
+    v[0]
+}
+
 /// The original axes that become x, y and z when axis `kz` is rotated to z.
 #[inline(always)]
 fn permuted(kz: usize) -> [usize; 3] {
@@ -232,13 +246,13 @@ impl WideBvh {
                         t_far[l] = if leave < t_far[l] { leave } else { t_far[l] };
                     }
                 }
-                let (mut hit, mut nearest) = (0u32, f32::INFINITY);
+                let (mut hit, mut near) = (0u32, [f32::INFINITY; LANES]);
                 for l in 0..LANES {
                     let meets = t_near[l] <= t_far[l] * far_pad;
                     hit |= u32::from(meets) << l;
-                    nearest = if meets & in_mask[l] && t_near[l] < nearest { t_near[l] } else { nearest };
+                    near[l] = if meets & in_mask[l] { t_near[l] } else { f32::INFINITY };
                 }
-                (child_lanes[c], child_near[c]) = (hit & mask, nearest);
+                (child_lanes[c], child_near[c]) = (hit & mask, nearest(near));
             }
             if sp + WIDTH > STACK {
                 return false;
