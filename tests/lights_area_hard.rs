@@ -268,10 +268,9 @@ struct Agreement {
 
 #[test]
 fn f32_kernel_agrees_with_f64_reference_on_hard_triangles() {
-    use glam::DVec3;
     use kelvin::light::area::SamplingStrategy;
     use kelvin::sampling::spherical_f32::TriangleView;
-    use kelvin::sampling::{sample_spherical_triangle, sample_uniform_triangle, triangle_solid_angle};
+    use kelvin::sampling::{sample_spherical_triangle, triangle_solid_angle};
     let mut rng = SplitMix64::new(41);
     let mut by_kind: Vec<(&str, Agreement)> = Vec::new();
     let mut a_bound = 0.0f32;
@@ -378,4 +377,111 @@ fn f32_area_sampling_density_integrates_to_the_solid_angle() {
         checked += (shape.strategy(p) == kelvin::light::area::SamplingStrategy::Area) as usize;
     }
     assert!(checked > 100, "{checked} area-sampled triangles");
+}
+
+// -------------------------------------------------------------------------------------------
+// The f32 hit (`AreaShape::hit_fast`, what `pdf_li` and `li` use) against its f64 reference
+// (`AreaShape::hit`, what `pdf_li_f64` uses)
+
+#[test]
+fn f32_hit_agrees_with_f64_reference_on_hard_triangles() {
+    use kelvin::sampling::spherical_f32::{EdgeTest, TriangleView};
+    let mut rng = SplitMix64::new(47);
+    let rel = |x: f32, y: f32| ((x - y) as f64).abs() / y as f64;
+    let (mut by_f32, mut total, mut hits, mut sampled) = (0usize, 0usize, 0usize, 0usize);
+    let (mut worst_pdf, mut worst_sampled, mut worst_point) = (0.0f64, 0.0f64, 0.0f64);
+    for (kind, v, p) in hard_triangles(&mut rng, 6000) {
+        let shape = AreaShape::Triangle { p: v, uv: [Vec2::ZERO, Vec2::X, Vec2::Y] };
+        let (normal, area) = (shape.plane_normal().unwrap(), shape.area());
+        let view = TriangleView::new(v, normal * (2.0 * area), p);
+        let size = (v[1] - v[0]).length().max((v[2] - v[0]).length()).max((v[2] - v[1]).length());
+        for _ in 0..32 {
+            // Toward points of the plane around the triangle (half of them outside it, some
+            // within rounding of an edge), and a few directions from anywhere.
+            let (a, b) = (rng.f32() * 1.4 - 0.2, rng.f32() * 1.4 - 0.2);
+            let wi = if rng.f32() < 0.9 {
+                ((v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b) - p).normalize()
+            } else {
+                sample_uniform_sphere(rng.vec2())
+            };
+            let (fast, reference) = (shape.hit_fast(p, wi), shape.hit(p, wi));
+            total += 1;
+            by_f32 += view.is_some_and(|t| t.edge_test(wi) != EdgeTest::Unsure) as usize;
+            match (fast, reference) {
+                (Some(f), Some(r)) => {
+                    hits += 1;
+                    worst_pdf = worst_pdf.max(rel(f.pdf, r.pdf));
+                    // f32 differences v - p and the interpolated point round by eps |p|, and an
+                    // ulp of the direction moves the point by eps t / |cos|; the barycentrics
+                    // carry that over the triangle's least height h, the point that times its
+                    // size (a sliver's point slides along its long edge).
+                    let height = 2.0 * area / size;
+                    let scale = (r.point.p - p).length() / normal.dot(wi).abs() + p.length().max(r.point.p.length());
+                    let d = ((f.point.p - r.point.p).length() * height / (scale * size)) as f64;
+                    worst_point = worst_point.max(d);
+                    assert!(f.point.n == r.point.n, "{kind}");
+                    assert!(
+                        (f.point.uv - r.point.uv).length() <= 1e-6 * scale / height + 1e-5,
+                        "{kind}: {f:?} vs {r:?}"
+                    );
+                }
+                (None, None) => {}
+                (f, r) => panic!("{kind}: {v:?} from {p} along {wi}: f32 {f:?}, f64 {r:?}"),
+            }
+        }
+        // A sampled direction's density is the one `hit_fast` gives it.
+        for _ in 0..8 {
+            if let Some(s) = shape.sample_fast(p, rng.vec2()) {
+                let h = shape.hit_fast(p, s.wi).unwrap_or_else(|| panic!("{kind}: {v:?} from {p}: {} misses", s.wi));
+                worst_sampled = worst_sampled.max(rel(s.pdf, h.pdf));
+                sampled += 1;
+            }
+        }
+    }
+    eprintln!(
+        "f32 hit: {total} directions ({:.1}% decided in f32), {hits} hits: max rel pdf diff {worst_pdf:.1e} to the \
+         reference, max point diff {worst_point:.1e} of (t / |cos| + |p|) size / h; {sampled} samples: max rel diff {worst_sampled:.1e} \
+         to their own density",
+        100.0 * by_f32 as f64 / total as f64
+    );
+    assert!(hits > total / 5 && by_f32 > total / 2);
+    assert!(worst_pdf <= 2e-5 && worst_sampled <= 2e-5, "{worst_pdf} {worst_sampled}");
+    assert!(worst_point < 1e-6);
+}
+
+#[test]
+fn sample_li_density_is_pdf_li_for_its_own_direction() {
+    // Through the light (and the table's dispatch): the f32 kernels on both sides, the f64
+    // reference pair, and each against the other.
+    let mut rng = SplitMix64::new(53);
+    let l = light();
+    let mut worst = [0.0f64; 3];
+    let mut n = 0;
+    for (_, v, p) in hard_triangles(&mut rng, 1200) {
+        let Ok(mesh) = l.resolve_mesh(&v, &[], &[0, 1, 2], &Transform::IDENTITY) else { continue };
+        let Some(light) = mesh.triangles.first() else { continue };
+        let ctx = LightSampleContext::at(p);
+        for _ in 0..16 {
+            let u = rng.vec2();
+            let rel = |x: f32, y: f32| ((x - y) as f64).abs() / y as f64;
+            if let Some(s) = light.sample_li(&ctx, u, RGB) {
+                assert!(
+                    light
+                        .li(&ctx, s.wi, RGB)
+                        .is_some_and(|(h, le)| h.pdf == light.pdf_li(&ctx, s.wi) && le.0 == s.radiance.0)
+                );
+                worst[0] = worst[0].max(rel(s.pdf, light.pdf_li(&ctx, s.wi)));
+                worst[2] = worst[2].max(rel(s.pdf, light.pdf_li_f64(&ctx, s.wi)));
+                n += 1;
+            }
+            if let Some(s) = light.sample_li_f64(&ctx, u, RGB) {
+                worst[1] = worst[1].max(rel(s.pdf, light.pdf_li_f64(&ctx, s.wi)));
+            }
+        }
+    }
+    eprintln!(
+        "sample_li vs pdf_li over {n} samples: f32 {:.1e}, f64 {:.1e}, f32 vs f64 {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(n > 5000 && worst[0] <= 2e-5 && worst[1] <= 2e-5 && worst[2] <= 1e-4, "{worst:?}");
 }

@@ -114,6 +114,15 @@ fn image_light_pdf_of_samples_matches_pdf_li() {
                 let pdf = if mis { light.pdf_li_mis(s.wi) } else { light.pdf_li(s.wi) };
                 worst = worst.max(rel_diff(s.pdf, pdf));
                 assert_eq!(s.radiance, light.le(s.wi, ColorQuery::Rgb));
+                // The escaping-ray pair from one lookup is the two lookups, bit for bit.
+                let w = sample_uniform_sphere(rng.vec2());
+                let le = light.le(w, ColorQuery::Rgb);
+                let pdf_w = if mis { light.pdf_li_mis(w) } else { light.pdf_li(w) };
+                let pair = light.le_and_pdf(w, ColorQuery::Rgb, mis);
+                assert_eq!(
+                    pair.map(|(l, p)| (l.0, p.to_bits())),
+                    (le.0 != [0.0; 4]).then_some((le.0, pdf_w.to_bits()))
+                );
                 assert!(s.pdf.is_finite() && s.pdf > 0.0 && s.radiance.is_finite());
             }
             eprintln!("image light {lookup:?} mis={mis}: worst relative pdf mismatch {worst:.2e}");

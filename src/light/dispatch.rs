@@ -185,6 +185,32 @@ impl LightTable {
         self.ids().filter(|&id| self.flags(id).contains(LightFlags::INFINITE))
     }
 
+    /// [`Self::le`] and [`Self::pdf_li`] of an escaping ray along `wi`, None where `le` is
+    /// black (without its density); an image light maps `wi` into its image once for both.
+    pub fn le_and_pdf_li(
+        &self,
+        id: LightId,
+        ctx: &LightSampleContext,
+        wi: Vec3,
+        query: ColorQuery,
+    ) -> Option<(crate::spectrum::SampledSpectrum, f32)> {
+        match id.kind {
+            LightKind::ImageInfinite => {
+                self.image_infinite.items[id.row as usize].le_and_pdf(wi, query, self.mis_compensation)
+            }
+            LightKind::Distant
+            | LightKind::UniformInfinite
+            | LightKind::Point
+            | LightKind::Spot
+            | LightKind::Area
+            | LightKind::Projection
+            | LightKind::Goniometric => {
+                let le = self.le(id, wi, query);
+                (!le.0.iter().all(|&v| v == 0.0)).then(|| (le, self.pdf_li(id, ctx, wi)))
+            }
+        }
+    }
+
     /// Radiance arriving along an escaping ray with direction `wi` from light `id` (zero unless
     /// the light is at infinity and covers `wi`).
     pub fn le(&self, id: LightId, wi: Vec3, query: ColorQuery) -> crate::spectrum::SampledSpectrum {

@@ -430,11 +430,10 @@ impl ShadeContext<'_> {
                     }
                 } else {
                     for &id in escape_ids {
-                        let le = self.table.le(id, bs.wi, query);
-                        if le.0.iter().all(|&v| v == 0.0) {
+                        let Some((le, pdf)) = self.table.le_and_pdf_li(id, &ctx, bs.wi, query) else {
                             continue;
-                        }
-                        let light_pdf = pmf(id) * self.table.pdf_li(id, &ctx, bs.wi);
+                        };
+                        let light_pdf = pmf(id) * pdf;
                         let w = self.strategy.bsdf_weight(bs.pdf, light_pdf);
                         l = l.add(bs.f.mul(le).scale(bs.wi.dot(ns).abs() * w / bs.pdf));
                     }

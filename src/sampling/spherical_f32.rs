@@ -64,6 +64,17 @@ pub fn sin_cos_0_pi(x: f32) -> (f32, f32) {
     (2.0 * s * c, if h < FRAC_PI_4 { 1.0 - 2.0 * s * s } else { 2.0 * c * c - 1.0 })
 }
 
+/// Where a direction goes relative to the triangle, as far as f32 rounding can tell.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EdgeTest {
+    /// It meets the triangle in front of the point, with these barycentrics, clear of every edge.
+    Inside([f32; 3]),
+    /// It surely misses.
+    Outside,
+    /// Within rounding of an edge (or of the plane): the f64 reference decides.
+    Unsure,
+}
+
 /// A triangle seen from a point in f32, with its solid angle and an error bound; what both area
 /// and solid-angle sampling need from the point.
 #[derive(Clone, Copy, Debug)]
@@ -154,11 +165,25 @@ impl TriangleView {
     /// too, in front of the point and not grazing. None near an edge, outside, or behind.
     #[inline]
     pub fn barycentrics(&self, w: Vec3) -> Option<[f32; 3]> {
+        match self.edge_test(w) {
+            EdgeTest::Inside(b) => Some(b),
+            EdgeTest::Outside | EdgeTest::Unsure => None,
+        }
+    }
+
+    /// [`Self::barycentrics`], telling apart a sure miss: some edge's numerator negative by more
+    /// than its rounding error, so the exact ray misses (outside that edge, or behind the point).
+    #[inline]
+    pub fn edge_test(&self, w: Vec3) -> EdgeTest {
         let x = [w.dot(self.n_bc), -w.dot(self.n_ac), w.dot(self.n_ab)].map(|x| x * self.side);
+        let margin = self.scale.map(|s| 16.0 * EPS * s);
+        if (0..3).any(|i| x[i] < -margin[i]) {
+            return EdgeTest::Outside;
+        }
         let sum = x[0] + x[1] + x[2];
         // w . N = sum: its cosine with the plane must dwarf an f32 normal's error too.
-        let inside = (0..3).all(|i| x[i] >= 16.0 * EPS * self.scale[i]) && sum >= 4.0 * EPS * self.cross_len;
-        inside.then(|| x.map(|x| x / sum))
+        let inside = (0..3).all(|i| x[i] >= margin[i]) && sum >= 4.0 * EPS * self.cross_len;
+        if inside { EdgeTest::Inside(x.map(|x| x / sum)) } else { EdgeTest::Unsure }
     }
 
     /// Distance along `w` to the plane (for densities t^2 / (|cos| A)).

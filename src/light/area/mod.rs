@@ -374,15 +374,21 @@ impl ResolvedArea {
     }
 
     /// Solid-angle density with which `sample_li` picks `wi` (1/sr; 0 if the ray misses). It is
-    /// the density of the sampling strategy, also where the light shows its back.
+    /// the density of the sampling strategy, also where the light shows its back. Through the
+    /// f32 kernels ([`AreaShape::hit_fast`]); [`Self::pdf_li_f64`] is its reference.
     pub fn pdf_li(&self, ctx: &LightSampleContext, wi: Vec3) -> f32 {
+        self.shape.hit_fast_with(self.normal, self.area, ctx.p, wi).map_or(0.0, |h| h.pdf)
+    }
+
+    /// [`Self::pdf_li`] through the f64 reference ([`AreaShape::hit`]).
+    pub fn pdf_li_f64(&self, ctx: &LightSampleContext, wi: Vec3) -> f32 {
         self.shape.hit(ctx.p, wi).map_or(0.0, |h| h.pdf)
     }
 
     /// The surface point the ray from `ctx.p` along `wi` sees, its radiance toward `ctx.p` and
-    /// the density of `wi` (for MIS of directions sampled otherwise).
+    /// the density of `wi` (for MIS of directions sampled otherwise), as [`Self::pdf_li`] finds it.
     pub fn li(&self, ctx: &LightSampleContext, wi: Vec3, query: ColorQuery) -> Option<(ShapeSample, SampledSpectrum)> {
-        let h = self.shape.hit(ctx.p, wi)?;
+        let h = self.shape.hit_fast_with(self.normal, self.area, ctx.p, wi)?;
         Some((h, self.radiance(h.point.p, h.point.n, h.point.uv, -h.wi, query)))
     }
 

@@ -213,6 +213,17 @@ impl ResolvedImageInfinite {
         self.tables.pdf_solid_angle(self.image_uv(wi), mis)
     }
 
+    /// [`Self::le`] and the density of [`Self::pdf_li`] (`mis`: of [`Self::pdf_li_mis`]) at
+    /// `wi`, from one lat-long lookup; None (and no density lookup) where `le` is black.
+    pub fn le_and_pdf(&self, wi: Vec3, query: ColorQuery, mis: bool) -> Option<(SampledSpectrum, f32)> {
+        let uv = self.image_uv(wi);
+        let le = self.emitter.eval_tinted(query, texel_at(&self.image, self.lookup, uv));
+        if le.0.iter().all(|&v| v == 0.0) {
+            return None;
+        }
+        Some((le, self.tables.pdf_solid_angle(uv, mis)))
+    }
+
     /// The texel value (clean, linear RGB relative to the spectrum) seen along `wi`.
     pub fn texel(&self, wi: Vec3) -> Vec3 {
         texel_at(&self.image, self.lookup, self.image_uv(wi))

@@ -78,6 +78,9 @@ pub struct EnvMapTables {
     pub bad_texels: usize,
     /// The lookup the table was built for.
     pub lookup: EnvLookup,
+    /// Per table row, [`cell_pdf_to_solid_angle`]'s divisor 2 pi nv band: its sines once per
+    /// row at build rather than per lookup.
+    row_divisor: Vec<f64>,
 }
 
 impl std::fmt::Debug for EnvMapTables {
@@ -248,7 +251,8 @@ impl EnvMapTables {
         } else {
             None
         };
-        Self { resolution: [nw, nh], distribution, compensated, bad_texels, lookup: options.lookup }
+        let row_divisor = (0..nh).map(|row| row_divisor(row, nh)).collect();
+        Self { resolution: [nw, nh], distribution, compensated, bad_texels, lookup: options.lookup, row_divisor }
     }
 
     /// The distribution used for complete (`mis == false`) or MIS-compensated sampling.
@@ -265,7 +269,7 @@ impl EnvMapTables {
         let t = uv.y as f64 * nv as f64 - row as f64;
         let v = (theta_in_row(t, row, nv) / PI64) as f32;
         let dir = lat_long_direction(Vec2::new(uv.x, v));
-        let pdf = cell_pdf_to_solid_angle(pdf_uv, row, nv);
+        let pdf = density_over(pdf_uv, self.row_divisor[row]);
         (pdf > 0.0).then_some((dir, pdf))
     }
 
@@ -280,7 +284,7 @@ impl EnvMapTables {
         let nv = self.resolution[1];
         // The same f64 bin arithmetic as the distribution's lookup.
         let row = ((uv.y as f64 * nv as f64) as usize).min(nv - 1);
-        cell_pdf_to_solid_angle(dist.pdf(uv), row, nv)
+        density_over(dist.pdf(uv), self.row_divisor[row])
     }
 
     /// Density in (u, v) of the table itself at `uv`; 0 for a black map or outside [0, 1]^2.
@@ -293,10 +297,21 @@ impl EnvMapTables {
 /// pdf_uv / (nu nv) over its solid angle (2 pi / nu) * band, i.e. pdf_uv / (2 pi nv band).
 /// 0 for a zero or non-finite result.
 pub fn cell_pdf_to_solid_angle(pdf_uv: f32, row: usize, nv: usize) -> f32 {
+    density_over(pdf_uv, row_divisor(row, nv))
+}
+
+/// 2 pi nv band of row `row` of `nv`.
+fn row_divisor(row: usize, nv: usize) -> f64 {
+    2.0 * PI64 * nv as f64 * row_band(row, nv)
+}
+
+/// pdf_uv / divisor, 0 for a zero or non-finite result.
+#[inline]
+fn density_over(pdf_uv: f32, divisor: f64) -> f32 {
     if !(pdf_uv > 0.0) {
         return 0.0;
     }
-    let pdf = (pdf_uv as f64 / (2.0 * PI64 * nv as f64 * row_band(row, nv))) as f32;
+    let pdf = (pdf_uv as f64 / divisor) as f32;
     if pdf.is_finite() { pdf } else { 0.0 }
 }
 
@@ -306,6 +321,18 @@ mod tests {
 
     fn image(w: usize, h: usize, f: impl Fn(usize, usize) -> Vec3) -> RgbImage {
         RgbImage { width: w, height: h, pixels: (0..w * h).map(|i| f(i % w, i / w)).collect() }
+    }
+
+    #[test]
+    fn cached_row_divisors_give_cell_pdf_to_solid_angle_bit_for_bit() {
+        let img = image(37, 19, |x, y| Vec3::splat(1.0 + (x * 7 + y * 3) as f32 % 5.0));
+        let t = EnvMapTables::build_with(&img, EnvTableOptions::default());
+        let (d, nv) = (t.distribution(false).unwrap(), t.resolution[1]);
+        for i in 0..4000 {
+            let uv = Vec2::new((i % 63) as f32 / 63.0, (i / 63) as f32 / 63.0 + 1e-3);
+            let row = ((uv.y as f64 * nv as f64) as usize).min(nv - 1);
+            assert_eq!(t.pdf_solid_angle(uv, false).to_bits(), cell_pdf_to_solid_angle(d.pdf(uv), row, nv).to_bits());
+        }
     }
 
     #[test]
