@@ -20,7 +20,6 @@ use super::GeometryError;
 use super::ray::{Ray, SurfacePoint, f64_point_error, gamma};
 use super::transform::Transform;
 use flat::FlatMap;
-pub(super) use flat::{dot_row, dot_row32, dz_error_bound, flat_hit_f32_from_rows, flat_hit_from_rows};
 
 mod flat;
 
