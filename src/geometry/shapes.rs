@@ -218,7 +218,7 @@ impl Shape {
                 Vec2::new(phi / std::f32::consts::TAU, (d.radius - rho) / (d.radius - d.inner_radius))
             }
             Shape::Rectangle(rect) => {
-                // Reciprocals, which lane loops hoist: divisions per hit are the slow step.
+                // Reciprocals: divisions per hit are the slow step.
                 let inv = rect.half_size.recip();
                 Vec2::new(0.5 * (x * inv.x + 1.0), 0.5 * (y * inv.y + 1.0))
             }

@@ -198,7 +198,7 @@ mod tests {
 
     /// The f32 plane test answers as the f64 test does wherever the answer matters: segments that
     /// end on the shape (t_max at the hit, one f32 step either side, and short by
-    /// SHADOW_EPSILON), and grazing rays. Unsure lanes go to the f64 test, and some must.
+    /// SHADOW_EPSILON), and grazing rays. Unsure cases go to the f64 test, and some must.
     #[test]
     fn f32_plane_test_decides_as_the_f64_test() {
         let rotation = Quat::from_rotation_x(0.3) * Quat::from_rotation_z(0.2);
