@@ -12,13 +12,9 @@
 //!   ... }`), not one loop holding a whole per-lane computation, which it vectorised across
 //!   x, y, z instead, if at all;
 //! - lane arrays of plain numbers: copying `Option`s or structs of mixed field sizes between lane
-//!   arrays stalls on store-to-load forwarding, and a `match` per lane keeps a loop scalar (pass
-//!   the variant's test in as a closure, as `geometry::flat_lanes` does).
+//!   arrays stalls on store-to-load forwarding, and a `match` per lane keeps a loop scalar.
 
 use glam::Vec3;
-
-mod transpose;
-pub use transpose::{store_rgb_spectra, store_vec3s};
 
 /// Values per lane array: one AVX-512 register of f32.
 pub const LANES: usize = 16;
@@ -36,21 +32,7 @@ pub fn block_mut<T>(column: &mut [T], first: usize) -> &mut [T; LANES] {
     column[first..].first_chunk_mut().expect("a whole block")
 }
 
-/// Lane columns (x, y, z) as `LANES` vectors: a loop of this one step becomes a few vector
-/// shuffles, where a loop that also computes the values stays scalar. How well LLVM does it
-/// depends on the kernel: the camera pass measured fastest with this, the sampling pass with
-/// [`store_vec3s`] (explicit AVX-512 permutes).
-#[inline(always)]
-pub fn vec3s(c: &[[f32; LANES]; 3]) -> [Vec3; LANES] {
-    let mut out = [Vec3::ZERO; LANES];
-    for l in 0..LANES {
-        out[l] = Vec3::new(c[0][l], c[1][l], c[2][l]);
-    }
-    out
-}
-
-/// The lane columns (all x, all y, all z) of `LANES` vectors, [`vec3s`] inverted: read from the
-/// block as one run of floats, which LLVM loads as whole registers and shuffles, where reading
+/// The lane columns (all x, all y, all z) of `LANES` vectors: read from the block as one run of floats, which LLVM loads as whole registers and shuffles, where reading
 /// `v[l].x` lane by lane made scalar loads and stores that stalled the vector loads after them.
 #[inline(always)]
 pub fn columns(v: &[Vec3; LANES]) -> [[f32; LANES]; 3] {
@@ -217,9 +199,9 @@ mod tests {
     }
 
     #[test]
-    fn columns_undo_vec3s() {
+    fn columns_of_vectors() {
         let c: [[f32; LANES]; 3] = std::array::from_fn(|a| std::array::from_fn(|l| (100 * a + l) as f32 - 0.5));
-        let v = vec3s(&c);
+        let v: [Vec3; LANES] = std::array::from_fn(|l| Vec3::new(c[0][l], c[1][l], c[2][l]));
         assert_eq!(v[5], Vec3::new(4.5, 104.5, 204.5));
         assert_eq!(columns(&v), c);
         assert_eq!(widest(|| columns(&v)), c);

@@ -22,9 +22,8 @@ const NO_LIGHT: LightId = LightId { kind: LightKind::Point, row: 0 };
 /// Where an entry's shadow ray ends, if it has one.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ShadowTarget {
-    /// No ray: the sample failed or carries no light, its light casts no shadows, shadows are
-    /// off, or nothing in the scene could block a ray from its point (the scene is one flat
-    /// primitive, and the point lies on it).
+    /// No ray: the sample failed or carries no light, its light casts no shadows, or shadows
+    /// are off.
     #[default]
     None,
     /// A point with no surface (point-like lights): the ray stops just short of it.
@@ -127,7 +126,6 @@ pub fn sample_direct_lighting(
     table: Res<LightTable>,
     sampler: Res<LightSampler>,
     settings: Res<Settings>,
-    bvh: Res<crate::geometry::SceneBvh>,
     mut out: ResMut<DirectLighting>,
     mut rays: ResMut<ShadowRays>,
 ) {
@@ -162,7 +160,6 @@ pub fn sample_direct_lighting(
         all_ids: &all_ids,
         k,
         spp: settings.samples_per_point.max(1),
-        only_choice: sampler.only_choice(),
     };
     // Point lights sampled one per entry in RGB f32 go through the lane kernel.
     let lanes = settings.selection == LightSelection::OneSampled
@@ -190,19 +187,7 @@ pub fn sample_direct_lighting(
             for (j, offset) in offsets.iter_mut().enumerate() {
                 *offset = ((c * CHUNK + j) * k) as u32;
             }
-            // Rays from points on the scene's one flat primitive can meet nothing: none is cast.
-            // (Points pushed without their geometry may lie anywhere.)
-            let points = first_entry / k.max(1)..(first_entry + radiance.len()).div_ceil(k.max(1));
-            let free = batch.geometry.get(points).is_some_and(|g| {
-                // In wide code: a fold over 8 B per point.
-                crate::lanes::widest(
-                    #[inline(always)]
-                    || bvh.blocks_nothing_from(g),
-                )
-            });
-            let shadows = settings.shadows && !free;
-            let mut cols =
-                EntryColumns { radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal, shadows };
+            let mut cols = EntryColumns { radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal };
             if lanes {
                 crate::lanes::widest(
                     #[inline(always)]
@@ -238,8 +223,6 @@ struct Sampling<'a> {
     k: usize,
     /// Light samples per point.
     spp: u32,
-    /// `LightSampler::only_choice`, asked once per batch.
-    only_choice: Option<(LightId, f32)>,
 }
 
 impl Sampling<'_> {
@@ -328,7 +311,7 @@ impl Sampling<'_> {
         };
         let pdf = ls.pdf * pmf;
         (cols.radiance[e], cols.wi[e], cols.pdf[e], cols.delta[e]) = (ls.radiance, ls.wi, pdf, flags.is_delta());
-        if !self.wants_shadow_ray(cols.shadows, pdf, &ls.radiance, light) {
+        if !self.wants_shadow_ray(pdf, &ls.radiance, light) {
             return false;
         }
         cols.ray_kind[e] = if flags.contains(LightFlags::INFINITE) || flags.contains(LightFlags::DELTA_DIRECTION) {
@@ -345,11 +328,10 @@ impl Sampling<'_> {
         true
     }
 
-    /// Whether a sample of `light` with this pdf and radiance gets a shadow ray (`shadows`: from
-    /// a chunk whose rays are cast at all, `EntryColumns::shadows`).
+    /// Whether a sample of `light` with this pdf and radiance gets a shadow ray.
     #[inline(always)]
-    fn wants_shadow_ray(&self, shadows: bool, pdf: f32, radiance: &SampledSpectrum, light: LightId) -> bool {
-        shadows && pdf > 0.0 && radiance.0.iter().any(|&v| v > 0.0) && self.table.casts_shadows(light)
+    fn wants_shadow_ray(&self, pdf: f32, radiance: &SampledSpectrum, light: LightId) -> bool {
+        self.settings.shadows && pdf > 0.0 && radiance.0.iter().any(|&v| v > 0.0) && self.table.casts_shadows(light)
     }
 
     /// [`Self::write`] of lane `l` of `lit`, point light `light` chosen with `pmf`, without
@@ -371,64 +353,12 @@ impl Sampling<'_> {
         (cols.light[e], cols.occluded[e]) = (light, false);
         (cols.radiance[e], cols.wi[e], cols.pdf[e]) = (radiance, v(&lit.wi), pmf);
         cols.delta[e] = LightKind::Point.flags().is_delta();
-        let ray = self.wants_shadow_ray(cols.shadows, pmf, &radiance, light);
+        let ray = self.wants_shadow_ray(pmf, &radiance, light);
         cols.ray_kind[e] = if ray { ShadowTarget::Point } else { ShadowTarget::None };
         if ray {
             cols.target[e] = v(&lit.target);
         }
         ray
-    }
-
-    /// [`Self::write_point`] of the `LANES` entries from `e`, every one a point light chosen with
-    /// `pmf` (`casts[l]`: whether light l casts shadows). Branch-free loops over slices of a known
-    /// length, so that the stores vectorise. Returns the number of shadow rays.
-    #[inline(always)]
-    fn write_point_block(
-        &self,
-        cols: &mut EntryColumns,
-        e: usize,
-        (light, pmf, casts): (&[LightId; LANES], &[f32; LANES], &[bool; LANES]),
-        lit: &PointLanes,
-    ) -> usize {
-        // Each column is built whole in lane arrays and stored as a block: one store loop over
-        // ten columns stayed scalar, and its stores dominated the sampling pass.
-        let shadows = cols.shadows;
-        // Selects as bit masks (all ones or zero): selects on arrays of bools compile to
-        // per-lane mask shuffling.
-        let (mut keep, mut aim, mut pdf) = ([0u32; LANES], [0u32; LANES], [0.0f32; LANES]);
-        let pick = |v: f32, mask: u32| f32::from_bits(v.to_bits() & mask);
-        for l in 0..LANES {
-            // An invalid lane is `write`'s failed sample: zero radiance, pdf and direction, not delta.
-            keep[l] = 0u32.wrapping_sub(lit.valid[l] as u32);
-            pdf[l] = pick(pmf[l], keep[l]);
-            let some = (lit.radiance[0][l] > 0.0) | (lit.radiance[1][l] > 0.0) | (lit.radiance[2][l] > 0.0);
-            // `wants_shadow_ray`, with `&` for `&&` (an invalid lane has a zero pdf).
-            aim[l] = 0u32.wrapping_sub((shadows & (pdf[l] > 0.0) & some & casts[l]) as u32);
-        }
-        let (mut rgb, mut wi) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
-        for a in 0..3 {
-            for l in 0..LANES {
-                rgb[a][l] = pick(lit.radiance[a][l], keep[l]);
-                wi[a][l] = pick(lit.wi[a][l], keep[l]);
-            }
-        }
-        let (mut ray_kind, mut traced) = ([ShadowTarget::None; LANES], 0);
-        for l in 0..LANES {
-            ray_kind[l] = if aim[l] != 0 { ShadowTarget::Point } else { ShadowTarget::None };
-            traced += (aim[l] & 1) as usize;
-        }
-        lanes::store_rgb_spectra(&rgb, lanes::block_mut(cols.radiance, e));
-        lanes::store_vec3s(&wi, lanes::block_mut(cols.wi, e));
-        if traced > 0 {
-            // Lanes without a ray may hold any target.
-            lanes::store_vec3s(&lit.target, lanes::block_mut(cols.target, e));
-        }
-        *lanes::block_mut(cols.pdf, e) = pdf;
-        *lanes::block_mut(cols.light, e) = *light;
-        *lanes::block_mut(cols.delta, e) = lit.valid;
-        *lanes::block_mut(cols.occluded, e) = [false; LANES];
-        *lanes::block_mut(cols.ray_kind, e) = ray_kind;
-        traced
     }
 
     /// Samples entries `e..e + LANES` (or to the chunk's end) of the chunk starting at global
@@ -444,16 +374,9 @@ impl Sampling<'_> {
             // One entry per point: entries are points, read as contiguous runs (as
             // `point_and_stream`, whose slot and sample offset are then 0).
             let i = first + e;
-            for (l, point) in point.iter_mut().enumerate() {
-                *point = i + l;
-            }
-            // The random streams' keys, unless no number is drawn: every point takes the one
-            // point light (see below), whose samples need no u.
-            if self.only_choice.is_none_or(|(id, _)| id.kind != LightKind::Point) {
-                let (pixels, samples) = (&self.batch.pixel[i..i + LANES], &self.batch.sample[i..i + LANES]);
-                for l in 0..LANES {
-                    (pixel[l], stream[l]) = (pixels[l], samples[l] * self.spp);
-                }
+            let (pixels, samples) = (&self.batch.pixel[i..i + LANES], &self.batch.sample[i..i + LANES]);
+            for l in 0..LANES {
+                (point[l], pixel[l], stream[l]) = (i + l, pixels[l], samples[l] * self.spp);
             }
             p = lanes::columns(lanes::block(&self.batch.position, i));
         } else {
@@ -464,59 +387,32 @@ impl Sampling<'_> {
                 (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
             }
         }
+        let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
         // The choices as plain lane arrays: arrays of `Option<(LightId, f32)>` cost store-to-load
         // forwarding stalls on every read.
         let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
-        let (mut rows, mut casts, mut points) = ([0u32; LANES], [false; LANES], 0);
-        let finite = |l: usize| p[0][l].is_finite() && p[1][l].is_finite() && p[2][l].is_finite();
-        if let Some((id, q)) = self.only_choice {
-            // Every point with a position chooses this light whatever its u, so none is drawn
-            // (the streams are counter based: no other number changes).
-            let point_light = id.kind == LightKind::Point;
-            let casts_shadows = point_light && self.table.casts_shadows(id);
-            let mut finite_lanes = 0;
-            for ((x, y), z) in p[0].iter().zip(&p[1]).zip(&p[2]) {
-                finite_lanes += (x.is_finite() & y.is_finite() & z.is_finite()) as usize;
+        let (mut rows, mut points) = ([0u32; LANES], 0);
+        let mut normal = [[0.0f32; LANES]; 3];
+        for l in 0..n {
+            let v = self.batch.normal[point[l]];
+            (normal[0][l], normal[1][l], normal[2][l]) = (v.x, v.y, v.z);
+        }
+        // `sample_lanes` leaves slots without a finite position unchosen (as `entry`).
+        let choices = self.sampler.sample_lanes(&p, &normal, &u, (1u32 << n) - 1);
+        for l in 0..n {
+            if choices.chosen & (1 << l) == 0 {
+                continue;
             }
-            if n == LANES && finite_lanes == LANES {
-                // Every lane has a point (a block that sees only surfaces): whole lanes of one
-                // value, where the loop below stores lane by lane.
-                (light, pmf, chosen) = ([id; LANES], [q; LANES], [true; LANES]);
-                (rows, casts, points) = ([id.row; LANES], [casts_shadows; LANES], LANES * point_light as usize);
-            } else {
-                for l in (0..n).filter(|&l| finite(l)) {
-                    (light[l], pmf[l], chosen[l]) = (id, q, true);
-                    (rows[l], casts[l], points) = (id.row, casts_shadows, points + point_light as usize);
-                }
-            }
-        } else {
-            let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
-            let mut normal = [[0.0f32; LANES]; 3];
-            for l in 0..n {
-                let v = self.batch.normal[point[l]];
-                (normal[0][l], normal[1][l], normal[2][l]) = (v.x, v.y, v.z);
-            }
-            // `sample_lanes` leaves points without a finite position unchosen.
-            let choices = self.sampler.sample_lanes(&p, &normal, &u, (1u32 << n) - 1);
-            for l in 0..n {
-                if choices.chosen & (1 << l) == 0 {
-                    continue;
-                }
-                let id = choices.light[l];
-                (light[l], pmf[l], chosen[l]) = (id, choices.pmf[l], true);
-                if id.kind == LightKind::Point {
-                    (rows[l], casts[l], points) = (id.row, self.table.points.casts_shadows[id.row as usize], points + 1);
-                }
+            let id = choices.light[l];
+            (light[l], pmf[l], chosen[l]) = (id, choices.pmf[l], true);
+            if id.kind == LightKind::Point {
+                (rows[l], points) = (id.row, points + 1);
             }
         }
-        // Blocks where no entry chose a point light (scenes lit by other kinds) skip the kernel.
+        // Blocks where no entry chose a point light (scenes lit by other kinds) skip the kernel;
+        // lanes that chose none sample row 0, which exists (see `sample_direct_lighting`).
         // `if`, not `bool::then`: a closure would keep the kernel out of the wide code.
         let lit = if points > 0 { Some(self.table.points.sample_li_rgb_lanes(&rows, &p)) } else { None };
-        if let Some(lit) = &lit
-            && points == LANES
-        {
-            return self.write_point_block(cols, e, (&light, &pmf, &casts), lit);
-        }
         let mut traced = 0;
         for l in 0..n {
             let chosen = chosen[l].then_some((light[l], pmf[l]));
@@ -544,9 +440,6 @@ struct EntryColumns<'a> {
     ray_kind: &'a mut [ShadowTarget],
     target: &'a mut [Vec3],
     target_normal: &'a mut [Vec3],
-    /// Whether the chunk's entries may get shadow rays: shadows are on, and something in the
-    /// scene could block rays from its points.
-    shadows: bool,
 }
 
 impl EntryColumns<'_> {

@@ -5,7 +5,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use crate::geometry::ray::spawn_rays_to_points_lanes;
-use crate::geometry::{GeometryId, RAY_CHUNK, Ray, RayLanes, SHADOW_EPSILON, SceneBvh, ShadowOffset, SurfacePoint};
+use crate::geometry::{GeometryId, RAY_CHUNK, Ray, SHADOW_EPSILON, SceneBvh, ShadowOffset, SurfacePoint};
 use crate::lanes::{self, LANES};
 use crate::shading::{RunReport, Settings, ShadingBatch};
 
@@ -72,8 +72,6 @@ pub fn trace_shadow_rays(
     let chunks = r.occluded.par_chunks_mut(RAY_CHUNK).enumerate();
     r.blocked = chunks
         .map(|(c, chunk)| {
-            // (Whole chunks of points on the scene's one flat primitive cast no rays: the sampling
-            // pass leaves them out. Blocks of such points among others are skipped below.)
             crate::lanes::widest(
                 #[inline(always)]
                 || {
@@ -90,19 +88,13 @@ pub fn trace_shadow_rays(
                                 }
                             }
                         }
-                        if bvh.blocks_nothing_from(&origins) {
-                            // Nothing but the surface the rays leave: no ray to build.
-                            chunk[b..b + n].fill(false);
-                            b += LANES;
-                            continue;
-                        }
-                        let mut rays = RayLanes::default();
+                        // Cache-line aligned: the packet loads these columns whole.
+                        #[repr(C, align(64))]
+                        struct Aligned<T>(T);
                         let points = k == 1 && n == LANES && offset == ShadowOffset::ErrorBound;
-                        if points && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point) {
+                        let segments = if points && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point)
+                        {
                             let columns = |v: &[Vec3]| lanes::columns(lanes::block(v, first));
-                            // Cache-line aligned, as `RayLanes` is: the kernel loads these columns whole.
-                            #[repr(C, align(64))]
-                            struct Aligned<T>(T);
                             // Origin, its error bound, normal and target. (Not `array::map`: its closure
                             // may stay out of the wide code.)
                             let ends = Aligned([
@@ -112,20 +104,24 @@ pub fn trace_shadow_rays(
                                 columns(target),
                             ]);
                             let [origin, error, normal, to] = &ends.0;
-                            let segments = Aligned(spawn_rays_to_points_lanes([origin, error, normal], to));
-                            rays = RayLanes::from_columns(&segments.0, 1.0 - SHADOW_EPSILON);
+                            let [o, d] = spawn_rays_to_points_lanes([origin, error, normal], to);
+                            Aligned((o, d, [1.0 - SHADOW_EPSILON; LANES]))
                         } else {
+                            let mut s = Aligned(([[0f32; LANES]; 3], [[0f32; LANES]; 3], [0f32; LANES]));
+                            let (o, d, t) = &mut s.0;
                             for l in 0..n {
-                                rays.set(l, &segment(first + l));
+                                let ray = segment(first + l);
+                                for a in 0..3 {
+                                    (o[a][l], d[a][l]) = (ray.origin[a], ray.dir[a]);
+                                }
+                                t[l] = ray.t_max;
                             }
-                        }
-                        let occluded = bvh.occluded_lanes(&rays, n, &origins);
-                        // A copy of a length known at compile time is a vector store; a variable one
-                        // calls memmove.
-                        if n == LANES {
-                            chunk[b..b + LANES].copy_from_slice(&occluded);
-                        } else {
-                            chunk[b..b + n].copy_from_slice(&occluded[..n]);
+                            s
+                        };
+                        let (o, d, t) = &segments.0;
+                        let blocked = bvh.occluded_packet(o, d, t, n, &origins);
+                        for (l, occluded) in chunk[b..b + n].iter_mut().enumerate() {
+                            *occluded = (blocked >> l) & 1 != 0;
                         }
                         b += LANES;
                     }

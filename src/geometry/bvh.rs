@@ -50,12 +50,6 @@ pub struct GeometryId {
 impl GeometryId {
     /// No primitive (a point whose surface is unknown).
     pub const NONE: Self = Self { entity_index: u32::MAX, primitive: u32::MAX };
-
-    /// Both fields in one number, for lane loops.
-    #[inline(always)]
-    pub(crate) fn key(self) -> u64 {
-        ((self.entity_index as u64) << 32) | self.primitive as u64
-    }
 }
 
 /// The geometry of one instance: a borrowed mesh (copied into the BVH) or an analytic shape.

@@ -5,10 +5,9 @@
 //!   world-space triangle and analytic shape; see `bvh.rs` for the build / refit choices (their
 //!   measured costs: docs/performance.md), `refit.rs` for updates.
 //! - [`occluded`] and [`closest_hits`]: batched any-hit and closest-hit queries (rayon);
-//!   `SceneBvh::closest_hits_lanes` and `occluded_lanes` answer 16 rays at once (`flat_lanes.rs`).
+//!   `SceneBvh::closest_hits_packet` and `occluded_packet` answer 16 rays at once (`packets.rs`).
 //! - [`offset_ray_origin`], [`SurfacePoint`]: robust shadow-ray endpoints with stated error bounds.
 pub mod bvh;
-mod flat_lanes;
 pub mod mesh;
 mod packets;
 pub mod ray;
@@ -20,8 +19,8 @@ pub mod visibility;
 mod wide;
 
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
-pub use flat_lanes::{FlatHitBlock, HitSink, RayLanes};
 pub use mesh::Mesh;
+pub use packets::HitSink;
 pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin, triangle_surface_point};
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};
 pub use transform::{Placement, Transform};

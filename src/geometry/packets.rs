@@ -4,15 +4,28 @@
 use glam::{DVec3, Vec3};
 
 use super::bvh::{GeometryId, SceneBvh};
-use super::flat_lanes::HitSink;
 use super::ray::Ray;
 use super::triangle::ShearedRay;
-use super::visibility::{Best, FEW_PRIMITIVES, TriangleAttributes};
+use super::visibility::{Best, FEW_PRIMITIVES, Hit, TriangleAttributes};
 use super::wide::packet::{Columns, RayPacket, triangle_lanes};
 use crate::lanes::LANES;
 
 /// No primitive: the `prim` of a lane without a hit.
 const NO_PRIM: u32 = u32::MAX;
+
+/// Where [`SceneBvh::closest_hits_packet`] hands its hits (a returned array of hits would be
+/// copied once more). Any `FnMut(lane, hit)` is one.
+pub trait HitSink {
+    /// The closest hit of lane `l` (None: the ray hit nothing).
+    fn hit(&mut self, l: usize, hit: Option<Hit>);
+}
+
+impl<F: FnMut(usize, Option<Hit>)> HitSink for F {
+    #[inline(always)]
+    fn hit(&mut self, l: usize, hit: Option<Hit>) {
+        self(l, hit)
+    }
+}
 
 impl SceneBvh {
     /// The closest hit of each of the first `n` rays `origin[l] + t dir[l]`, t in (0, t_max[l]],
@@ -352,5 +365,36 @@ mod tests {
         }
         assert!(hits > 5000 && exact_cases > 1000, "hits compared {hits}, on the fan's edges {exact_cases}");
         assert!(blocked_count > 3000, "blocked rays compared {blocked_count}");
+    }
+
+    /// A ray leaving a flat primitive passes it, however its origin was rounded (hard case: an
+    /// origin just below the plane heading up through it); a ray leaving a sphere inward meets
+    /// its far side.
+    #[test]
+    fn rays_pass_the_flat_primitive_they_leave_but_not_a_sphere() {
+        use crate::geometry::Rectangle;
+        let one = |shape| {
+            let geometry = GeometryRef::Shape(shape);
+            SceneBvh::build(&[GeometryInstance {
+                geometry,
+                transform: Transform::IDENTITY,
+                entity_index: 0,
+                material: 0,
+            }])
+        };
+        let column = |v: Vec3| [[v.x; LANES], [v.y; LANES], [v.z; LANES]];
+        let plane = one(Shape::Rectangle(Rectangle { half_size: Vec2::new(2.0, 1.0) }));
+        let id = |bvh: &SceneBvh| bvh.geometry_of_slot(0);
+        let up = Ray::new(Vec3::new(0.3, 0.2, -1e-6), Vec3::Z);
+        let (o, d, t) = (column(up.origin), column(up.dir), [up.t_max; LANES]);
+        assert!(plane.occluded(&up) && !plane.occluded_from(&up, id(&plane)));
+        assert_eq!(plane.occluded_packet(&o, &d, &t, LANES, &[GeometryId::NONE; LANES]), (1 << LANES) - 1);
+        let mut origins = [id(&plane); LANES];
+        origins[5] = GeometryId::NONE;
+        assert_eq!(plane.occluded_packet(&o, &d, &t, LANES, &origins), 1 << 5);
+        let ball = one(Shape::Sphere(Sphere { radius: 1.0 }));
+        let inward = Ray::new(Vec3::Z, Vec3::NEG_Z);
+        let (o, d) = (column(inward.origin), column(inward.dir));
+        assert_eq!(ball.occluded_packet(&o, &d, &t, LANES, &[id(&ball); LANES]), (1 << LANES) - 1);
     }
 }

@@ -20,7 +20,6 @@ use super::GeometryError;
 use super::ray::{Ray, SurfacePoint, f64_point_error, gamma};
 use super::transform::Transform;
 use flat::FlatMap;
-pub(super) use flat::{dot_row, dot_row32, dz_error_bound, flat_hit_f32_from_rows, flat_hit_from_rows};
 
 mod flat;
 
@@ -219,7 +218,7 @@ impl Shape {
                 Vec2::new(phi / std::f32::consts::TAU, (d.radius - rho) / (d.radius - d.inner_radius))
             }
             Shape::Rectangle(rect) => {
-                // Reciprocals, which lane loops hoist: divisions per hit are the slow step.
+                // Reciprocals: divisions per hit are the slow step.
                 let inv = rect.half_size.recip();
                 Vec2::new(0.5 * (x * inv.x + 1.0), 0.5 * (y * inv.y + 1.0))
             }

@@ -79,14 +79,7 @@ pub struct ResolvedPoint {
 impl ResolvedPoint {
     /// The delta direction toward the light with radiance I / r^2; None at the light's position.
     pub fn sample_li(&self, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let (wi, r2) = ctx.toward(self.position)?;
-        Some(LiSample {
-            radiance: self.intensity.eval(query).scale(1.0 / r2),
-            wi,
-            pdf: 1.0,
-            p_light: self.position,
-            n_light: Vec3::ZERO,
-        })
+        sample_li_at(self.position, || self.intensity.eval(query), ctx)
     }
 
     /// A delta light is never hit by sampled directions.
@@ -111,6 +104,20 @@ impl ResolvedPoint {
             two_sided: false,
         }
     }
+}
+
+/// Point Sample_Li, f32: the delta direction from `ctx` toward a light at `position` with
+/// radiance I / r^2 (`intensity`: I in the query's colour mode); None at the light's position.
+/// The one scalar form (`PointColumns::sample_li_rgb_lanes` is its lane kernel,
+/// `PointColumns::sample_li_f64` its f64 reference).
+#[inline(always)]
+fn sample_li_at(
+    position: Vec3,
+    intensity: impl FnOnce() -> crate::spectrum::SampledSpectrum,
+    ctx: &LightSampleContext,
+) -> Option<LiSample> {
+    let (wi, r2) = ctx.toward(position)?;
+    Some(LiSample { radiance: intensity().scale(1.0 / r2), wi, pdf: 1.0, p_light: position, n_light: Vec3::ZERO })
 }
 
 /// Point lights as columns (the `LightTable` block): what the batch paths read.
@@ -152,9 +159,8 @@ impl PointColumns {
     /// Sample_Li of the light at `row` without building a `ResolvedPoint`.
     #[inline]
     pub fn sample_li(&self, row: usize, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let (wi, r2) = ctx.toward(self.position[row])?;
-        let radiance = query.intensity_column(self.rgb[row], &self.spectrum[row], self.scale[row]).scale(1.0 / r2);
-        Some(LiSample { radiance, wi, pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
+        let intensity = || query.intensity_column(self.rgb[row], &self.spectrum[row], self.scale[row]);
+        sample_li_at(self.position[row], intensity, ctx)
     }
 
     /// [`Self::sample_li`] with the vector to the light, r^2 and 1/r^2 in f64 (the precision knob
@@ -271,17 +277,69 @@ impl PointColumns {
         }
         PointLanes { target, wi, radiance, valid }
     }
+}
 
-    /// Sample_Li of light `row` for a batch of points in RGB mode (the SoA batch form): writes the
-    /// direction toward the light and the radiance I / r^2 per point (zero at the light itself).
-    pub fn sample_li_batch_rgb(&self, row: usize, positions: &[Vec3], wi: &mut [Vec3], radiance: &mut [Vec3]) {
-        let (p, rgb) = (self.position[row], self.rgb[row]);
-        for ((x, w), l) in positions.iter().zip(wi.iter_mut()).zip(radiance.iter_mut()) {
-            let d = p - *x;
-            let r2 = d.length_squared();
-            let inv_r2 = if r2 > 0.0 { 1.0 / r2 } else { 0.0 };
-            *w = d * inv_r2.sqrt();
-            *l = rgb * inv_r2;
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::table::Block;
+    use crate::rng::SplitMix64;
+
+    /// The lane kernel gives the scalar f32 Sample_Li bit for bit (failed samples as invalid
+    /// lanes), the resolved form gives it too, and the f64 reference agrees with it to f32
+    /// rounding. Hard cases: a point at a light, one 1e-30 m from it (r^2 underflows), one 1e30 m
+    /// away (r^2 overflows).
+    #[test]
+    fn lane_kernel_scalar_and_f64_reference_agree() {
+        let mut rng = SplitMix64::new(9);
+        let mut points = PointColumns::default();
+        let placeholder = bevy_ecs::entity::Entity::PLACEHOLDER;
+        for i in 0..3 {
+            let at = Transform::from_translation(Vec3::new(i as f32, 2.0, -1.0));
+            let light = PointLight { amount: Amount::Candela(100.0 * (i + 1) as f32), ..Default::default() };
+            points.push(placeholder, light.resolve(&at).unwrap(), true);
         }
+        let mut compared = 0;
+        for block in 0..40 {
+            let mut p = [[0.0f32; LANES]; 3];
+            let mut rows = [0u32; LANES];
+            for l in 0..LANES {
+                let x = Vec3::new(rng.range(-5.0, 5.0), rng.range(-1.0, 3.0), rng.range(-5.0, 5.0));
+                let x = match (block, l) {
+                    (0, 0) => points.position[0],
+                    (0, 1) => points.position[1] + Vec3::new(0.0, 1e-30, 0.0),
+                    (0, 2) => Vec3::new(1e30, 0.0, 0.0),
+                    _ => x,
+                };
+                (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
+                rows[l] = if block % 2 == 0 { 1 } else { rng.below(3) as u32 };
+            }
+            let lanes = crate::lanes::widest(|| points.sample_li_rgb_lanes(&rows, &p));
+            for l in 0..LANES {
+                let (row, ctx) = (rows[l] as usize, LightSampleContext::at(Vec3::new(p[0][l], p[1][l], p[2][l])));
+                let scalar = points.sample_li(row, &ctx, ColorQuery::Rgb).filter(|s| s.radiance.is_finite());
+                assert_eq!(
+                    points.get(row).sample_li(&ctx, ColorQuery::Rgb),
+                    points.sample_li(row, &ctx, ColorQuery::Rgb)
+                );
+                let Some(s) = scalar else {
+                    assert!(!lanes.valid[l], "block {block}, lane {l}");
+                    continue;
+                };
+                assert!(lanes.valid[l]);
+                let lane = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]).to_array().map(f32::to_bits);
+                assert_eq!(lane(&lanes.wi), s.wi.to_array().map(f32::to_bits));
+                assert_eq!(lane(&lanes.radiance), [0, 1, 2].map(|c| s.radiance.0[c].to_bits()));
+                assert_eq!(lane(&lanes.target), s.p_light.to_array().map(f32::to_bits));
+                let f64 = points.sample_li_f64(row, &ctx, ColorQuery::Rgb).unwrap();
+                for c in 0..3 {
+                    let (a, b) = (s.radiance.0[c], f64.radiance.0[c]);
+                    assert!((a - b).abs() <= 4e-7 * b.abs(), "radiance {a} against {b}");
+                }
+                assert!((s.wi - f64.wi).abs().max_element() <= 1e-6, "{} against {}", s.wi, f64.wi);
+                compared += 1;
+            }
+        }
+        assert!(compared > 600);
     }
 }

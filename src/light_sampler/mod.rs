@@ -109,29 +109,6 @@ impl LightSampler {
         out
     }
 
-    /// [`Self::sample`] at a point with a finite position, for the samplers that read nothing else
-    /// of the context (uniform and power); None for the BVH sampler. Lane code calls this rather
-    /// than build a context per point.
-    #[inline(always)]
-    pub fn sample_context_free(&self, u: f32) -> Option<Option<(LightId, f32)>> {
-        match self {
-            Self::Uniform(s) => Some(s.sample(u)),
-            Self::Power(s) => Some(s.sample(u)),
-            Self::Bvh(_) => None,
-        }
-    }
-
-    /// The light and pmf that [`Self::sample`] returns for every point with a finite position and
-    /// every u, if there is one: a uniform or power sampler over a single light. Lane code then
-    /// skips drawing u.
-    pub fn only_choice(&self) -> Option<(LightId, f32)> {
-        match self {
-            Self::Uniform(s) if s.len() == 1 => s.sample(0.5),
-            Self::Power(s) if s.len() == 1 => s.sample(0.5),
-            _ => None,
-        }
-    }
-
     /// Calls `f` with every light and its pmf at `ctx`, in one pass (for exact variances).
     pub fn for_each_pmf(&self, ctx: &LightSampleContext, f: impl FnMut(LightId, f32)) {
         match self {

@@ -6,8 +6,8 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::camera::CameraModel;
-use crate::geometry::{FlatHitBlock, GeometryId, Hit, HitSink, RAY_CHUNK, SceneBvh};
-use crate::lanes::{self, LANES};
+use crate::geometry::{GeometryId, Hit, HitSink, RAY_CHUNK, SceneBvh};
+use crate::lanes::LANES;
 use crate::rng::SampleStream;
 use crate::shading::ShadingBatch;
 
@@ -131,42 +131,6 @@ impl HitSink for SlotWriter<'_, '_> {
             write_slot(self.chunk, self.b + l, dir, hit);
         }
     }
-
-    /// [`write_slot`] of every lane at once: lane columns, interleaved by whole blocks. A flat
-    /// shape's shading normal is its geometric one, so the two need no test against each other.
-    #[inline(always)]
-    fn block(&mut self, hits: &FlatHitBlock) {
-        if self.n < LANES || super::shade_lanes::turned_off() {
-            for l in 0..self.n {
-                self.hit(l, Some(hits.hit(l)));
-            }
-            return;
-        }
-        let (dirs, n) = (self.dirs, hits.n);
-        let mut flipped = [false; LANES];
-        for l in 0..LANES {
-            flipped[l] = n.x * dirs[0][l] + n.y * dirs[1][l] + n.z * dirs[2][l] > 0.0;
-        }
-        // Flips as sign bits: selects on arrays of bools became scalar stores.
-        let mut normal = [[0.0f32; LANES]; 3];
-        for (a, column) in normal.iter_mut().enumerate() {
-            for l in 0..LANES {
-                column[l] = f32::from_bits(n[a].to_bits() ^ ((flipped[l] as u32) << 31));
-            }
-        }
-        let (b, chunk) = (self.b, &mut *self.chunk);
-        lanes::store_vec3s(&hits.p, lanes::block_mut(chunk.position, b));
-        lanes::store_vec3s(&hits.p_error, lanes::block_mut(chunk.position_error, b));
-        lanes::store_vec3s(&normal, lanes::block_mut(chunk.normal, b));
-        lanes::store_vec3s(&normal, lanes::block_mut(chunk.shading_normal, b));
-        *lanes::block_mut(chunk.geometry, b) = [hits.id; LANES];
-        for (column, values) in chunk.dir.iter_mut().zip(dirs).chain(chunk.uv.iter_mut().zip(&hits.uv)) {
-            *lanes::block_mut(column, b) = *values;
-        }
-        *lanes::block_mut(chunk.material, b) = [hits.material; LANES];
-        *lanes::block_mut(chunk.instance, b) = [hits.instance; LANES];
-        *lanes::block_mut(chunk.flipped, b) = flipped;
-    }
 }
 
 /// One `RAY_CHUNK` of every column the camera pass writes.
@@ -199,9 +163,8 @@ impl BatchChunk<'_> {
 }
 
 /// Traces the camera rays of `range` and writes every slot of `batch` (resized to `range.len`,
-/// wavelengths left empty, geometry filled) and of `columns`. Random numbers, rays and (in
-/// scenes of a few flat shapes) hits are computed in lanes: dimensions 0 and 1 of each sample's
-/// stream.
+/// wavelengths left empty, geometry filled) and of `columns`. Random numbers (dimensions 0 and 1
+/// of each sample's stream) and rays are computed in lanes, hits in packets of `LANES` rays.
 pub(super) fn trace_camera_rays(
     batch: &mut ShadingBatch,
     columns: &mut CameraColumns,
@@ -267,6 +230,7 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
     let (mut next_x, mut next_y) = (next_pixel % width, next_pixel / width);
     let len = chunk.pixel.len();
     let origin = camera.origin();
+    let origins = [[origin.x; LANES], [origin.y; LANES], [origin.z; LANES]];
     let mut b = 0;
     while b < len {
         let end = (b + LANES).min(len);
@@ -316,7 +280,7 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
         };
         let dirs = camera.dirs_lanes([&x, &y], &u, &v);
         let mut writer = SlotWriter { chunk: &mut *chunk, b, n: end - b, dirs: &dirs };
-        bvh.closest_hits_from(origin, &dirs, f32::INFINITY, &mut writer);
+        bvh.closest_hits_packet(&origins, &dirs, &[f32::INFINITY; LANES], end - b, &mut writer);
         b = end;
     }
 }

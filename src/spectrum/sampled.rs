@@ -19,7 +19,6 @@ pub struct SampledWavelengths {
 
 /// Values of a spectrum at the `SampledWavelengths` of the same sample.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
-#[repr(transparent)] // Lane kernels store blocks of spectra as plain f32 (`lanes::store_rgb_spectra`).
 pub struct SampledSpectrum(pub [f32; N_SPECTRUM_SAMPLES]);
 
 /// Draws a wavelength from pbrt-v4's visible-light density p(l) ~ 1/cosh^2(0.0072 (l - 538)),

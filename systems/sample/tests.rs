@@ -39,9 +39,10 @@ fn slot_without_point_gets_no_light() {
 /// uniform and BVH samplers. Hard cases: a point exactly at a light, one 1e-30 m from it
 /// (r^2 underflows to 0), one 1e30 m away (r^2 overflows) and one at NaN (no light may be
 /// chosen), plus a batch length that is no multiple of the lane count. With point lights
-/// only, whole blocks take `write_point_block`; with one light, the choice skips u
-/// (`LightSampler::only_choice`). The schedule runs twice, on two orders of the points, so
-/// that a column the lane path fails to write keeps the first run's value.
+/// only, whole blocks go through the point kernel; one light (every lane the same row) and
+/// three (rows differ between lanes) take its two ways of reading the light. The schedule runs
+/// twice, on two orders of the points, so that a column the lane path fails to write keeps
+/// the first run's value.
 #[test]
 fn lane_path_matches_entry_by_entry() {
     use crate::shading::LightSamplerKind::{Bvh, Power, Uniform};
@@ -107,9 +108,7 @@ fn lane_path_matches_entry_by_entry() {
             world.resource::<Settings>(),
         );
         let k = samples_per_point as usize;
-        let only_choice = sampler.only_choice();
-        let sampling =
-            Sampling { batch, table, sampler, settings, all_ids: &[], k, spp: samples_per_point, only_choice };
+        let sampling = Sampling { batch, table, sampler, settings, all_ids: &[], k, spp: samples_per_point };
         let m = batch.len() * k;
         let (mut radiance, mut wi, mut pdf) = (vec![SampledSpectrum::default(); m], vec![Vec3::ZERO; m], vec![0.0; m]);
         let (mut light, mut delta, mut occluded) = (vec![NO_LIGHT; m], vec![false; m], vec![true; m]);
@@ -126,7 +125,6 @@ fn lane_path_matches_entry_by_entry() {
             ray_kind: &mut ray_kind,
             target: &mut target,
             target_normal: &mut target_normal,
-            shadows: settings.shadows,
         };
         let traced: usize = (0..m).map(|e| sampling.entry(0, e, &mut cols) as usize).sum();
         assert_eq!(traced, rays.len());
@@ -156,6 +154,5 @@ fn lane_path_matches_entry_by_entry() {
         // (The power sampler's choices for the point at a light include that light.)
         let at_light = (0..m).any(|e| batch.pixel[e / k] == 0 && pdf[e] == 0.0 && light[e].kind == LightKind::Point);
         assert!(at_light || light_sampler != Power, "at the light");
-        assert_eq!(world.resource::<LightSampler>().only_choice().is_some(), lights == 1);
     }
 }

@@ -1,6 +1,5 @@
 //! The hit test of flat shapes (disks, rectangles): the plane z = 0 in object space, first in
-//! f32 and, where its answer is not sure, in f64. Scalar and lane code (`flat_lanes`) share these
-//! operations, so that both give the same hits bit for bit.
+//! f32 and, where its answer is not sure, in f64.
 
 use glam::{DAffine3, Vec3};
 
@@ -37,7 +36,6 @@ impl PlacedShape {
     /// and object-space (x, y, 0). The f32 test answers unless t lies within its error bound of 0
     /// or t_max ([`flat_hit_f32_from_rows`]); then the f64 test does. The plane test needs only
     /// row z, and most shadow rays fail it (they leave the plane), so rows x and y wait for it.
-    /// (Lane loops run both forms on all three rows, without branches.)
     #[inline(always)]
     pub(super) fn flat_hit(&self, o: [f64; 3], d: [f64; 3], t_max: f32) -> (bool, f32, f32, f32) {
         let d32 = d.map(|c| c as f32);
@@ -62,32 +60,26 @@ impl PlacedShape {
 
     /// Row `i` of direction `d` in object space, in f32.
     #[inline(always)]
-    pub(in crate::geometry) fn object_dir_row32(&self, i: usize, d: [f32; 3]) -> f32 {
+    fn object_dir_row32(&self, i: usize, d: [f32; 3]) -> f32 {
         dot_row32(self.flat_map.rows[i], d)
     }
 
-    /// Row `i` of to_object's linear part in f32, for lane loops that hoist it.
+    /// |row z| of to_object's linear part in f32.
     #[inline(always)]
-    pub(in crate::geometry) fn object_matrix_row32(&self, i: usize) -> [f32; 3] {
-        self.flat_map.rows[i]
-    }
-
-    /// |row z| of to_object's linear part in f32 (for lane loops).
-    #[inline(always)]
-    pub(in crate::geometry) fn abs_object_row_z32(&self) -> [f32; 3] {
+    fn abs_object_row_z32(&self) -> [f32; 3] {
         self.flat_map.abs_row_z
     }
 
     /// Row `i` of the ray o + t d in object space: origin and direction components, the f64
     /// sums that `transform_point3` and `transform_vector3` form.
     #[inline(always)]
-    pub(in crate::geometry) fn object_row(&self, i: usize, o: [f64; 3], d: [f64; 3]) -> (f64, f64) {
+    fn object_row(&self, i: usize, o: [f64; 3], d: [f64; 3]) -> (f64, f64) {
         (self.object_point_row(i, o), self.object_dir_row(i, d))
     }
 
-    /// The origin half of [`Self::object_row`] (rays from one origin form it once).
+    /// The origin half of [`Self::object_row`].
     #[inline(always)]
-    pub(in crate::geometry) fn object_point_row(&self, i: usize, o: [f64; 3]) -> f64 {
+    fn object_point_row(&self, i: usize, o: [f64; 3]) -> f64 {
         dot_row(self.object_matrix_row(i), o) + self.to_object.translation[i]
     }
 
@@ -97,20 +89,20 @@ impl PlacedShape {
         dot_row(self.object_matrix_row(i), d)
     }
 
-    /// Row `i` of the world-to-object matrix, for lane loops that hoist it.
+    /// Row `i` of the world-to-object matrix.
     #[inline(always)]
-    pub(in crate::geometry) fn object_matrix_row(&self, i: usize) -> [f64; 3] {
+    fn object_matrix_row(&self, i: usize) -> [f64; 3] {
         let m = &self.to_object.matrix3;
         [m.x_axis[i], m.y_axis[i], m.z_axis[i]]
     }
 
     /// World coordinate `a` of the object-space point (x, y, 0) of a flat shape, and its error
-    /// bound, in f32 (one axis at a time, for lane loops). The point (x, y, 0) lies on the shape
+    /// bound, in f32. The point (x, y, 0) lies on the shape
     /// exactly, so the bound covers the f32 sums (pbrt-v4's gamma(3) for a transformed point)
     /// and the rounding of the f64 map to f32 (one more unit roundoff): gamma(5) leaves room for
     /// the rounding of the bound itself.
     #[inline(always)]
-    pub(in crate::geometry) fn flat_world_coordinate(&self, a: usize, x: f32, y: f32) -> (f32, f32) {
+    pub(super) fn flat_world_coordinate(&self, a: usize, x: f32, y: f32) -> (f32, f32) {
         let m = &self.flat_map;
         let p = m.x[a] * x + m.y[a] * y + m.t[a];
         let terms = m.abs_x[a] * x.abs() + m.abs_y[a] * y.abs() + m.abs_t[a];
@@ -120,14 +112,14 @@ impl PlacedShape {
 
 /// The sum the object rows form from matrix row `m` (before the translation, for points).
 #[inline(always)]
-pub(in crate::geometry) fn dot_row(m: [f64; 3], d: [f64; 3]) -> f64 {
+fn dot_row(m: [f64; 3], d: [f64; 3]) -> f64 {
     m[0] * d[0] + m[1] * d[1] + m[2] * d[2]
 }
 
 /// [`dot_row`] in f32: row `i` of a direction in object space, from row `i` of to_object's
-/// linear part in f32 (`PlacedShape::object_matrix_row32`).
+/// linear part in f32 (`FlatMap::rows`).
 #[inline(always)]
-pub(in crate::geometry) fn dot_row32(m: [f32; 3], d: [f32; 3]) -> f32 {
+fn dot_row32(m: [f32; 3], d: [f32; 3]) -> f32 {
     m[0] * d[0] + m[1] * d[1] + m[2] * d[2]
 }
 
@@ -136,14 +128,14 @@ pub(in crate::geometry) fn dot_row32(m: [f32; 3], d: [f32; 3]) -> f32 {
 /// gamma(3) and the rounding of the matrix (one unit roundoff), with room for the rounding of
 /// the bound itself (gamma(6) in all).
 #[inline(always)]
-pub(in crate::geometry) fn dz_error_bound(abs_row_z: [f32; 3], d: [f32; 3]) -> f32 {
+fn dz_error_bound(abs_row_z: [f32; 3], d: [f32; 3]) -> f32 {
     gamma(6) * (abs_row_z[0] * d[0].abs() + abs_row_z[1] * d[1].abs() + abs_row_z[2] * d[2].abs())
 }
 
 /// The rest of [`PlacedShape::flat_hit`] from the object-space ray's rows (origin, direction)
 /// for x, y and z, with the shape's containment test.
 #[inline(always)]
-pub(in crate::geometry) fn flat_hit_from_rows(
+fn flat_hit_from_rows(
     [(ox, dx), (oy, dy), (oz, dz)]: [(f64, f64); 3],
     t_max: f32,
     contains: impl Fn(f64, f64) -> bool,
@@ -168,7 +160,7 @@ fn plane_t(oz: f64, dz: f64, t_max: f32) -> (bool, f64, f32) {
 /// answer is sure ([`plane_t_f32`]), then the hit, t, x and y. A sure answer's plane test is the
 /// f64 test's; the containment test runs on the f32 x and y.
 #[inline(always)]
-pub(in crate::geometry) fn flat_hit_f32_from_rows(
+fn flat_hit_f32_from_rows(
     [(ox, dx), (oy, dy), (oz, dz)]: [(f32, f32); 3],
     dz_error: f32,
     t_max: f32,
@@ -206,7 +198,7 @@ mod tests {
 
     /// The f32 plane test answers as the f64 test does wherever the answer matters: segments that
     /// end on the shape (t_max at the hit, one f32 step either side, and short by
-    /// SHADOW_EPSILON), and grazing rays. Unsure lanes go to the f64 test, and some must.
+    /// SHADOW_EPSILON), and grazing rays. Unsure cases go to the f64 test, and some must.
     #[test]
     fn f32_plane_test_decides_as_the_f64_test() {
         let rotation = Quat::from_rotation_x(0.3) * Quat::from_rotation_z(0.2);
