@@ -1,17 +1,29 @@
 //! The ECS light system: Sample_Li batch throughput for point lights (the sampling pass's lane
 //! kernel) and spot lights (their batch form) over 1M points (points x lights per second, and
-//! bytes moved per second beside a plain memcpy), and the frame update cost for 100k lights with
-//! 1% moving against a full rebuild.
+//! bytes moved per second beside a plain memcpy); the whole schedule (light choice, Sample_Li,
+//! shadow rays) for a 1M-point G-buffer on a real file's geometry, per light kind (entries per
+//! second); and the frame update cost for 100k lights with 1% moving against a full rebuild.
 
 use bevy_ecs::prelude::*;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use kelvin::geometry::Transform;
 use kelvin::lanes::{self, LANES};
-use kelvin::light::{Amount, LightTable, PointLight, SpotLight};
-use kelvin::systems::LightingPlugin;
+use glam::Vec2;
+use kelvin::geometry::{Mesh, Ray, Rectangle, SceneBvh, Sphere};
+use kelvin::light::{
+    Amount, AreaLight, DistantLight, GoniometricLight, LightTable, PointLight, ProjectionLight, SpotLight,
+    UniformInfiniteLight,
+};
+use kelvin::render::scene_file::{spawn_env_map, spawn_gltf_file};
+use kelvin::scene::ies::IesProfile;
+use kelvin::scene::image::RgbImage;
+use kelvin::shading::ShadingBatch;
+use kelvin::systems::{LightingPlugin, ShadowRays};
 use rayon::prelude::*;
 use std::hint::black_box;
+use std::path::Path;
+use std::sync::Arc;
 
 const POINTS: usize = 1 << 20;
 const LIGHTS: usize = 8; // of each kind
@@ -102,6 +114,114 @@ fn sample_li_batch(c: &mut Criterion) {
     g.finish();
 }
 
+/// The light kinds of the per-kind group, each as a few entities spawned into `world`.
+const KINDS: [&str; 10] =
+    ["point", "spot", "distant", "rectangle", "sphere", "triangle_mesh", "uniform_sky", "image_sky", "ies", "projection"];
+
+fn spawn_kind(world: &mut World, kind: &str, data: &Path) {
+    let above = |x: f32, z: f32| Transform::from_translation(Vec3::new(x, 4.0, z)).looking_to(Vec3::NEG_Y, Vec3::Z);
+    let each = [(-2.0, -2.0), (2.0, -2.0), (-2.0, 2.0), (2.0, 2.0)];
+    let area = || AreaLight { amount: Amount::Nits(1000.0), ..Default::default() };
+    for (x, z) in each {
+        let at = above(x, z);
+        // One-sided area lights emit along local +Z: turned to face down.
+        let facing_down = Transform::from_translation(at.translation).looking_to(Vec3::Y, Vec3::Z);
+        match kind {
+            "point" => drop(world.spawn((PointLight::candela(100.0), at))),
+            "spot" => drop(world.spawn((SpotLight { amount: Amount::Candela(100.0), ..Default::default() }, at))),
+            "rectangle" => drop(world.spawn((area(), Rectangle { half_size: Vec2::splat(0.3) }, facing_down))),
+            "sphere" => drop(world.spawn((area(), Sphere { radius: 0.2 }, at))),
+            "triangle_mesh" => {
+                // A 4x4 grid of quads facing down: 32 emitting triangles.
+                let (mut positions, mut indices) = (Vec::new(), Vec::new());
+                for j in 0..5 {
+                    for i in 0..5 {
+                        positions.push(Vec3::new(i as f32 * 0.15 - 0.3, j as f32 * 0.15 - 0.3, 0.0));
+                    }
+                }
+                for j in 0..4u32 {
+                    for i in 0..4u32 {
+                        let v = j * 5 + i;
+                        indices.extend([v, v + 1, v + 6, v, v + 6, v + 5]);
+                    }
+                }
+                let mesh = Mesh::new(positions, indices).expect("a valid grid");
+                world.spawn((area(), mesh, facing_down));
+            }
+            "ies" => {
+                let profile = IesProfile::from_file(&data.join("ies/luxcore/ASA_15M_R2.ies")).expect("test data");
+                world.spawn((GoniometricLight::from_ies(Arc::new(profile)), at));
+            }
+            "projection" => {
+                let pixels = (0..64).map(|i| Vec3::splat(1.0 + (i % 7) as f32)).collect();
+                let image = RgbImage { width: 8, height: 8, pixels };
+                world.spawn((ProjectionLight::new(Arc::new(image), 1.0), at));
+            }
+            _ => {}
+        }
+    }
+    match kind {
+        "distant" => drop(world.spawn((DistantLight::default(), Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z)))),
+        "uniform_sky" => drop(world.spawn((UniformInfiniteLight::default(), Transform::default()))),
+        "image_sky" => {
+            let env = data.join("env/spiaggia_di_mondello_1k.hdr");
+            spawn_env_map(world, &env, 1.0).expect("test data");
+        }
+        _ => {}
+    }
+}
+
+/// A G-buffer of `POINTS` surface points: rays straight down over a grid onto the geometry of
+/// `sphere_65k.glb` (a 65,536-triangle sphere on a floor), with their hits' primitives.
+fn gbuffer(world: &mut World, schedule: &mut Schedule) {
+    schedule.run(world);
+    let side = (POINTS as f32).sqrt() as usize;
+    let bvh = world.resource::<SceneBvh>().clone();
+    let mut batch = world.resource_mut::<ShadingBatch>();
+    batch.clear();
+    let mut geometry = Vec::with_capacity(POINTS);
+    for j in 0..side {
+        for i in 0..side {
+            let (x, z) = ((i as f32 + 0.5) / side as f32 * 8.0 - 4.0, (j as f32 + 0.5) / side as f32 * 8.0 - 4.0);
+            let ray = Ray::new(Vec3::new(x, 10.0, z), Vec3::NEG_Y);
+            if let Some(hit) = bvh.closest_hit(&ray) {
+                batch.push_with_error(hit.p, hit.p_error, hit.ng, hit.ns, (j * side + i) as u32, 0);
+                geometry.push(hit.id);
+            }
+        }
+    }
+    // Filled whole or left empty (see `ShadingBatch::geometry`).
+    batch.geometry = geometry;
+}
+
+/// The schedule as an embedding app runs it, per light kind: 4 lights of the kind (one for the
+/// skies and the distant light) over a G-buffer on a real file, one light sample per point and
+/// its shadow ray among 65k triangles.
+fn schedule_per_kind(c: &mut Criterion) {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let mut g = c.benchmark_group("schedule_1M_gbuffer_sphere_65k");
+    g.sample_size(10).warm_up_time(std::time::Duration::from_secs(1));
+    for kind in KINDS {
+        let mut world = World::new();
+        let mut schedule = Schedule::default();
+        LightingPlugin::build(&mut world, &mut schedule);
+        spawn_gltf_file(&mut world, &data.join("gltf/bench/sphere_65k.glb")).expect("test data");
+        // The file's own point light goes: one kind at a time.
+        let own: Vec<Entity> = world.query_filtered::<Entity, With<PointLight>>().iter(&world).collect();
+        for e in own {
+            world.despawn(e);
+        }
+        spawn_kind(&mut world, kind, &data);
+        gbuffer(&mut world, &mut schedule);
+        let entries = world.resource::<ShadingBatch>().len() as u64;
+        g.throughput(Throughput::Elements(entries));
+        g.bench_function(kind, |b| b.iter(|| schedule.run(&mut world)));
+        let rays = world.resource::<ShadowRays>().len();
+        eprintln!("{kind}: {entries} points, {rays} shadow rays per run");
+    }
+    g.finish();
+}
+
 fn frame_update(c: &mut Criterion) {
     let n = 100_000;
     let mut world = World::new();
@@ -137,5 +257,5 @@ fn frame_update(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, sample_li_batch, frame_update);
+criterion_group!(benches, sample_li_batch, schedule_per_kind, frame_update);
 criterion_main!(benches);
