@@ -33,7 +33,7 @@ pub(super) struct BuildState {
     /// The image's (width, height) at the last build.
     size: (usize, usize),
     /// The compensation threshold the compensated table was built with.
-    mean: f64,
+    pub(super) mean: f64,
     /// Per texel row: its solid angle scaled so rows average 1 (a constant factor leaves the
     /// density unchanged), its luminance sum, and its non-finite texels.
     band: Vec<f64>,
