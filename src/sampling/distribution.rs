@@ -43,22 +43,60 @@ pub struct Bins<'a> {
 fn finish_bins(func: &mut [f32], cdf: &mut [f64]) -> f64 {
     let n = func.len();
     cdf[0] = 0.0;
-    let mut sum = 0.0f64;
-    for i in 0..n {
-        let v = cdf[i + 1];
-        let v = if v.is_nan() { 0.0 } else { v.abs().min(f32::MAX as f64) };
-        func[i] = v as f32;
-        sum += v;
-        cdf[i + 1] = sum;
+    // Three loops rather than one: the first and last vectorise; only the running sum is serial.
+    for (f, c) in func.iter_mut().zip(&mut cdf[1..]) {
+        let v = if c.is_nan() { 0.0 } else { c.abs().min(f32::MAX as f64) };
+        *f = v as f32;
+        *c = v;
     }
+    let sum = prefix_sum(&mut cdf[1..]);
     if sum > 0.0 {
-        cdf.iter_mut().for_each(|c| *c /= sum);
-        // Trailing zero bins already end at sum / sum == 1 exactly; make sure the last does.
-        cdf[n] = 1.0;
+        // Multiplying is monotone, so the CDF still rises; min(1) keeps it within [0, 1].
+        let inv = 1.0 / sum;
+        cdf.iter_mut().for_each(|c| *c = (*c * inv).min(1.0));
+        // From the end of the last nonzero bin on, exactly 1: trailing zero bins are never hit.
+        let last = func.iter().rposition(|&f| f > 0.0).unwrap_or(n - 1);
+        cdf[last + 1..].fill(1.0);
     } else {
         cdf.iter_mut().enumerate().for_each(|(i, c)| *c = i as f64 / n as f64);
     }
     sum
+}
+
+/// In-place inclusive prefix sum in f64; returns the total. Four interleaved segments, each a
+/// serial running sum, then each segment offset by the totals before it: four add chains in
+/// flight instead of one (the serial sum is bound by the add latency), with the same error bound.
+fn prefix_sum(v: &mut [f64]) -> f64 {
+    const K: usize = 4;
+    let seg = v.len() / K;
+    if seg < 16 {
+        let mut sum = 0.0;
+        v.iter_mut().for_each(|x| {
+            sum += *x;
+            *x = sum;
+        });
+        return sum;
+    }
+    let (head, tail) = v.split_at_mut(seg * K);
+    let mut acc = [0.0f64; K];
+    for i in 0..seg {
+        for (k, a) in acc.iter_mut().enumerate() {
+            *a += head[k * seg + i];
+            head[k * seg + i] = *a;
+        }
+    }
+    let mut offset = 0.0;
+    for (k, chunk) in head.chunks_mut(seg).enumerate() {
+        if k > 0 {
+            chunk.iter_mut().for_each(|x| *x += offset);
+        }
+        offset += acc[k];
+    }
+    for x in tail {
+        offset += *x;
+        *x = offset;
+    }
+    offset
 }
 
 impl PiecewiseConstant1D {
@@ -250,29 +288,9 @@ pub struct PiecewiseConstant2D {
     max: Vec2,
 }
 
-/// A block of consecutive rows of a [`PiecewiseConstant2D`] being filled by [`PiecewiseConstant2D::fill_rows`].
-pub struct RowBlock<'a> {
-    /// The index of the block's first row.
-    pub first_row: usize,
-    nu: usize,
-    cdf: &'a mut [f64],
-}
-
-impl RowBlock<'_> {
-    /// Number of rows in the block.
-    pub fn rows(&self) -> usize {
-        self.cdf.len() / (self.nu + 1)
-    }
-
-    /// The raw values (|f| is taken later) of the block's row `i`, `nu` of them, to be written.
-    pub fn values(&mut self, i: usize) -> &mut [f64] {
-        let s = i * (self.nu + 1);
-        &mut self.cdf[s + 1..s + self.nu + 1]
-    }
-}
-
-/// Rows per parallel task: enough to amortise a task, few enough to split 2 x 1024 rows evenly.
-const ROWS_PER_TASK: usize = 16;
+/// Rows per parallel task: enough to amortise a task (and a filter's halo rows), few enough to
+/// split 1024 rows evenly over the cores.
+const ROWS_PER_TASK: usize = 32;
 
 impl PiecewiseConstant2D {
     /// The distribution of |`func`| over [0, 1]^2; `func` is row-major: `nv` rows of `nu` values,
@@ -287,13 +305,9 @@ impl PiecewiseConstant2D {
     pub fn with_domain(func: &[f32], nu: usize, nv: usize, min: Vec2, max: Vec2) -> Self {
         let mut d = Self::zeros(nu, nv, min, max);
         let nu = d.nu;
-        Self::fill_rows(&mut [&mut d], 0..nv, |blocks| {
-            let [block] = blocks else { return };
-            for i in 0..block.rows() {
-                let v = block.first_row + i;
-                for (x, out) in block.values(i).iter_mut().enumerate() {
-                    *out = *func.get(v * nu + x).unwrap_or(&0.0) as f64;
-                }
+        Self::fill_rows(&mut [&mut d], 0..nv, |_| (), |_, v, rows| {
+            for (x, out) in rows[0].iter_mut().enumerate() {
+                *out = *func.get(v * nu + x).unwrap_or(&0.0) as f64;
             }
         });
         d
@@ -334,53 +348,58 @@ impl PiecewiseConstant2D {
         self.finish_marginal();
     }
 
-    /// Refills `rows` (clamped to the grid) of every distribution in `dists` in parallel: `fill`
-    /// writes each row's raw values through [`RowBlock::values`] (the same blocks of every
-    /// distribution at once, so one pass over the source serves them all), then each row's CDF
-    /// and the marginal are rebuilt. Rows outside `rows` are kept. Every distribution must have
-    /// the grid of the first; one that does not is left unchanged.
-    pub fn fill_rows(dists: &mut [&mut Self], rows: std::ops::Range<usize>, fill: impl Fn(&mut [RowBlock]) + Sync) {
+    /// Refills `rows` (clamped to the grid) of every distribution in `dists` in parallel, in
+    /// tasks of consecutive rows: `init(rows)` makes a task's state, then `fill(state, row,
+    /// values)` writes each row's raw values (|f| is taken after), one slice of `nu` per
+    /// distribution, so that one pass over a source serves them all; each row's CDF is built
+    /// while the row is in cache, and the marginals at the end. Rows outside `rows` are kept.
+    /// Every distribution must have the grid of the first; one that does not is left unchanged.
+    pub fn fill_rows<S>(
+        dists: &mut [&mut Self],
+        rows: std::ops::Range<usize>,
+        init: impl Fn(std::ops::Range<usize>) -> S + Sync,
+        fill: impl Fn(&mut S, usize, &mut [&mut [f64]]) + Sync,
+    ) {
         let Some((nu, nv)) = dists.first().map(|d| (d.nu, d.nv)) else { return };
         let (lo, hi) = (rows.start.min(nv), rows.end.min(nv));
-        let same: Vec<bool> = dists.iter().map(|d| (d.nu, d.nv) == (nu, nv)).collect();
-        // Per distribution, its blocks of ROWS_PER_TASK rows; then regrouped block by block.
+        // Per distribution, its tasks' rows; then regrouped task by task.
+        let k = ROWS_PER_TASK;
         let mut per_dist: Vec<_> = dists
             .iter_mut()
-            .zip(&same)
-            .filter(|(_, s)| **s)
-            .map(|(d, _)| {
+            .filter(|d| (d.nu, d.nv) == (nu, nv))
+            .map(|d| {
                 let d = &mut **d;
                 let span = d.max.x as f64 - d.min.x as f64;
-                let (f, c, r) = (
-                    &mut d.func[lo * nu..hi * nu],
-                    &mut d.cdf[lo * (nu + 1)..hi * (nu + 1)],
-                    &mut d.row_integral[lo..hi],
-                );
-                let k = ROWS_PER_TASK;
-                let blocks = f.chunks_mut(k * nu).zip(c.chunks_mut(k * (nu + 1))).zip(r.chunks_mut(k));
-                blocks.map(move |b| (span, b)).enumerate().collect::<Vec<_>>().into_iter()
+                let f = d.func[lo * nu..hi * nu].chunks_mut(k * nu);
+                let c = d.cdf[lo * (nu + 1)..hi * (nu + 1)].chunks_mut(k * (nu + 1));
+                let r = d.row_integral[lo..hi].chunks_mut(k);
+                f.zip(c).zip(r).map(move |((f, c), r)| (span, f, c, r)).collect::<Vec<_>>().into_iter()
             })
             .collect();
         let mut tasks = Vec::new();
-        while let Some(block) = per_dist.iter_mut().map(|it| it.next()).collect::<Option<Vec<_>>>() {
-            if block.is_empty() {
+        while let Some(task) = per_dist.iter_mut().map(|it| it.next()).collect::<Option<Vec<_>>>() {
+            if task.is_empty() {
                 break;
             }
-            tasks.push(block);
+            tasks.push(task);
         }
-        tasks.into_par_iter().for_each(|mut block| {
-            let first_row = lo + block[0].0 * ROWS_PER_TASK;
-            let mut views: Vec<RowBlock> =
-                block.iter_mut().map(|(_, (_, ((_, c), _)))| RowBlock { first_row, nu, cdf: &mut **c }).collect();
-            fill(&mut views);
-            drop(views);
-            for (_, (span, ((f, c), r))) in block.iter_mut() {
-                for ((f, c), r) in f.chunks_mut(nu).zip(c.chunks_mut(nu + 1)).zip(r.iter_mut()) {
-                    *r = finish_bins(f, c) * *span / nu as f64;
+        tasks.into_par_iter().enumerate().for_each(|(t, mut task)| {
+            let first = lo + t * k;
+            let n = task[0].3.len();
+            let mut state = init(first..first + n);
+            for i in 0..n {
+                let mut values: Vec<&mut [f64]> =
+                    task.iter_mut().map(|(_, _, c, _)| &mut c[i * (nu + 1) + 1..(i + 1) * (nu + 1)]).collect();
+                fill(&mut state, first + i, &mut values);
+                drop(values);
+                for (span, f, c, r) in task.iter_mut() {
+                    let sum = finish_bins(&mut f[i * nu..(i + 1) * nu], &mut c[i * (nu + 1)..(i + 1) * (nu + 1)]);
+                    r[i] = sum * *span / nu as f64;
                 }
             }
         });
-        for (d, _) in dists.iter_mut().zip(&same).filter(|(_, s)| **s) {
+        drop(per_dist);
+        for d in dists.iter_mut().filter(|d| (d.nu, d.nv) == (nu, nv)) {
             d.finish_marginal();
         }
     }

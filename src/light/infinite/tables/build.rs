@@ -17,7 +17,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::{EnvLookup, EnvMapTables, EnvTableOptions, clean_texel, row_band, row_divisor, table_resolution};
-use crate::sampling::{PiecewiseConstant2D, RowBlock};
+use crate::sampling::PiecewiseConstant2D;
 use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
 
 /// A partial rebuild keeps the compensation threshold (the mean) while the mean moves less than
@@ -110,56 +110,82 @@ fn solid_angle_mean(row_lum_sum: &[f64], band: &[f64], w: usize, lookup: EnvLook
 }
 
 thread_local! {
-    /// Per worker: one luminance row and three filtered rows (a ring), reused across blocks and
-    /// builds; allocating them per block costs page faults on every build.
+    /// Per worker, the rows of [`Window`], kept across tasks and builds: allocating them per task
+    /// costs page faults on every build.
     static SCRATCH: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
 }
 
-/// Fills a block of table rows (table = image resolution) of the plain table and, with a mean,
-/// the compensated one; stores each own row's non-finite count in `bad`.
-fn fill_block(image: &RgbImage, lookup: EnvLookup, band: &[f64], mean: Option<f64>, bad: &[AtomicUsize], blocks: &mut [RowBlock]) {
-    let [plain, rest @ ..] = blocks else { return };
-    let (first, n, h, w) = (plain.first_row, plain.rows(), band.len(), plain.values(0).len());
-    let mut comp = rest.first_mut().zip(mean);
-    SCRATCH.with_borrow_mut(|scratch| {
-        scratch.resize(4 * w, 0.0);
-        let (lum, ring) = scratch.split_at_mut(w);
-        // Texel rows this block reads: its own and, for bilinear, one either side.
-        let halo = usize::from(lookup == EnvLookup::Bilinear);
-        let mut next = first.saturating_sub(halo);
-        for y in first..first + n {
-            let (up, down) = (y.saturating_sub(halo), (y + halo).min(h - 1));
-            while next <= down {
-                let b = lum_row(image, next, lum);
-                if (first..first + n).contains(&next) {
-                    bad[next].store(b, Ordering::Relaxed);
-                }
-                let slot = &mut ring[(next % 3) * w..(next % 3 + 1) * w];
-                match lookup {
-                    EnvLookup::Nearest => slot.copy_from_slice(lum),
-                    EnvLookup::Bilinear => filter_row(lum, slot),
-                }
-                next += 1;
+/// A task's rolling view of the texel rows it reads (its own and, for bilinear, one either
+/// side): one luminance row and a ring of three filtered rows, each texel row computed once.
+struct Window<'a> {
+    buf: Vec<f64>,
+    image: &'a RgbImage,
+    lookup: EnvLookup,
+    own: Range<usize>,
+    next: usize,
+    w: usize,
+    h: usize,
+}
+
+impl<'a> Window<'a> {
+    fn new(image: &'a RgbImage, lookup: EnvLookup, own: Range<usize>, w: usize, h: usize) -> Self {
+        let mut buf = SCRATCH.with_borrow_mut(std::mem::take);
+        buf.resize(4 * w, 0.0);
+        let next = own.start.saturating_sub(usize::from(lookup == EnvLookup::Bilinear));
+        Self { buf, image, lookup, own, next, w, h }
+    }
+
+    /// Advances to table row `y`; returns its filtered rows above, at and below (clamped at the
+    /// poles), and stores the non-finite counts of the task's own rows in `bad`.
+    fn rows(&mut self, y: usize, bad: &[AtomicUsize]) -> (&[f64], &[f64], &[f64]) {
+        let (w, halo) = (self.w, usize::from(self.lookup == EnvLookup::Bilinear));
+        let (up, down) = (y.saturating_sub(halo), (y + halo).min(self.h - 1));
+        let (lum, ring) = self.buf.split_at_mut(w);
+        while self.next <= down {
+            let r = self.next;
+            let b = lum_row(self.image, r, lum);
+            if self.own.contains(&r) {
+                bad[r].store(b, Ordering::Relaxed);
             }
-            let row = |r: usize| &ring[(r % 3) * w..(r % 3 + 1) * w];
-            let (ru, rc, rd) = (row(up), row(y), row(down));
-            // The vertical half of the footprint filter, clamped at the poles.
-            let l = |x: usize| if halo == 1 { filter3(ru[x], rc[x], rd[x]) } else { rc[x] };
-            let (i, b) = (y - first, band[y]);
-            let pv = plain.values(i);
-            match comp.as_mut() {
-                Some((c, m)) => {
-                    let cv = c.values(i);
-                    for x in 0..w {
-                        let l = l(x);
-                        pv[x] = cell(l * b);
-                        cv[x] = cell(excess(l, *m) * b);
-                    }
-                }
-                None => (0..w).for_each(|x| pv[x] = cell(l(x) * b)),
+            let slot = &mut ring[(r % 3) * w..(r % 3 + 1) * w];
+            match self.lookup {
+                EnvLookup::Nearest => slot.copy_from_slice(lum),
+                EnvLookup::Bilinear => filter_row(lum, slot),
+            }
+            self.next += 1;
+        }
+        let row = |r: usize| &ring[(r % 3) * w..(r % 3 + 1) * w];
+        (row(up), row(y), row(down))
+    }
+}
+
+impl Drop for Window<'_> {
+    fn drop(&mut self) {
+        SCRATCH.with_borrow_mut(|s| *s = std::mem::take(&mut self.buf));
+    }
+}
+
+/// Table row `y` (table = image resolution) of the plain table into `out[0]` and, with a mean,
+/// the compensated one into `out[1]`.
+fn fill_row(win: &mut Window, y: usize, band: f64, mean: Option<f64>, bad: &[AtomicUsize], out: &mut [&mut [f64]]) {
+    let bilinear = win.lookup == EnvLookup::Bilinear;
+    let (ru, rc, rd) = win.rows(y, bad);
+    let (plain, comp) = match out {
+        [p, c, ..] => (p, Some(c)),
+        [p] => (p, None),
+        [] => return,
+    };
+    // One loop per case, so that each vectorises; the vertical half of the footprint filter.
+    let rows = ru.iter().zip(rc).zip(rd).map(|((&u, &c), &d)| if bilinear { filter3(u, c, d) } else { c });
+    match (comp, mean) {
+        (Some(c), Some(m)) => {
+            for ((l, p), c) in rows.zip(plain.iter_mut()).zip(c.iter_mut()) {
+                *p = cell(l * band);
+                *c = cell(excess(l, m) * band);
             }
         }
-    });
+        _ => rows.zip(plain.iter_mut()).for_each(|(l, p)| *p = cell(l * band)),
+    }
 }
 
 impl EnvMapTables {
@@ -234,7 +260,7 @@ impl EnvMapTables {
         let mean = solid_angle_mean(&s.row_lum_sum, &s.band, w, lookup);
         let halo = usize::from(lookup == EnvLookup::Bilinear);
         let mut table_rows = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
-        let mut plain = self.distribution.take().unwrap_or_else(|| PiecewiseConstant2D::zeros(w, h, Default::default(), glam::Vec2::ONE));
+        let mut plain = self.distribution.take().unwrap_or_else(|| PiecewiseConstant2D::zeros(w, h, glam::Vec2::ZERO, glam::Vec2::ONE));
         let comp = if s.compensate {
             let kept = keep_mean.filter(|&m| (mean - m).abs() <= MEAN_TOLERANCE * m && self.compensated.is_some());
             if kept.is_none() {
@@ -242,11 +268,12 @@ impl EnvMapTables {
                 table_rows = 0..h;
                 s.mean = mean;
             }
-            Some(self.compensated.take().unwrap_or_else(|| PiecewiseConstant2D::zeros(w, h, Default::default(), glam::Vec2::ONE)))
+            Some(self.compensated.take().unwrap_or_else(|| PiecewiseConstant2D::zeros(w, h, glam::Vec2::ZERO, glam::Vec2::ONE)))
         } else {
             None
         };
-        if table_rows == (0..h) {
+        // Every row is rewritten below; only a change of size needs the buffers reset.
+        if plain.resolution() != [w, h] {
             plain.reset(w, h);
         }
         let bad: Vec<AtomicUsize> = (0..h).map(|_| AtomicUsize::new(0)).collect();
@@ -254,18 +281,16 @@ impl EnvMapTables {
         let band = &s.band;
         // Pass 2: every table row in the range, both tables from one read of the texels.
         let mut comp = comp;
+        let init = |own: Range<usize>| Window::new(image, lookup, own, w, h);
+        let fill = |win: &mut Window, y: usize, out: &mut [&mut [f64]]| fill_row(win, y, band[y], threshold, &bad, out);
         match comp.as_mut() {
             Some(c) => {
-                if table_rows == (0..h) {
+                if c.resolution() != [w, h] {
                     c.reset(w, h);
                 }
-                PiecewiseConstant2D::fill_rows(&mut [&mut plain, c], table_rows.clone(), |b| {
-                    fill_block(image, lookup, band, threshold, &bad, b)
-                })
+                PiecewiseConstant2D::fill_rows(&mut [&mut plain, c], table_rows.clone(), init, fill)
             }
-            None => PiecewiseConstant2D::fill_rows(&mut [&mut plain], table_rows.clone(), |b| {
-                fill_block(image, lookup, band, None, &bad, b)
-            }),
+            None => PiecewiseConstant2D::fill_rows(&mut [&mut plain], table_rows.clone(), init, fill),
         }
         // Rows in the table range but outside `rows` were reread: their counts are the same.
         for y in rows {
