@@ -82,6 +82,17 @@ fn lum_row(image: &RgbImage, y: usize, out: &mut [f64]) -> usize {
     bad
 }
 
+/// Sum of a row in four interleaved chains: a serial sum waits on each add's latency.
+fn row_sum(v: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let chunks = v.chunks_exact(4);
+    let rest: f64 = chunks.remainder().iter().sum();
+    for c in chunks {
+        acc.iter_mut().zip(c).for_each(|(a, &x)| *a += x);
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
+}
+
 /// The filter across a row, wrapping in u (the seam).
 fn filter_row(lum: &[f64], out: &mut [f64]) {
     let w = lum.len();
@@ -253,7 +264,7 @@ impl EnvMapTables {
                 || vec![0.0; w],
                 |lum, (i, sum)| {
                     lum_row(image, rows.start + i, lum);
-                    *sum = lum.iter().sum();
+                    *sum = row_sum(lum);
                 },
             );
         }
@@ -311,7 +322,7 @@ impl EnvMapTables {
         let (mut bad, mut row_lum_sum) = (0, vec![0.0; h]);
         for (y, row) in lum.chunks_mut(w).enumerate() {
             bad += lum_row(image, y, row);
-            row_lum_sum[y] = row.iter().sum();
+            row_lum_sum[y] = row_sum(row);
         }
         if options.lookup == EnvLookup::Bilinear {
             lum = footprint_average(&lum, w, h);
