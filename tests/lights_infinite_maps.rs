@@ -174,7 +174,12 @@ fn check_pdf_integral_and_power(name: &str, img: &Arc<RgbImage>) {
 #[test]
 fn real_maps_parallel_tables_match_the_reference_and_partial_rebuilds_match_full_ones() {
     use kelvin::light::{EnvMapTables, EnvTableOptions};
-    for rel in ["spiaggia_di_mondello_1k.hdr", "luxcore/imagemap-00000.exr", "luxcore/sky.exr", "radeonprorender/envLightImage.exr"] {
+    for rel in [
+        "spiaggia_di_mondello_1k.hdr",
+        "luxcore/imagemap-00000.exr",
+        "luxcore/sky.exr",
+        "radeonprorender/envLightImage.exr",
+    ] {
         let (name, img) = env_map(rel);
         for lookup in [EnvLookup::Bilinear, EnvLookup::Nearest] {
             let options = EnvTableOptions { lookup, ..Default::default() };

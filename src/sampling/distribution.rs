@@ -305,11 +305,16 @@ impl PiecewiseConstant2D {
     pub fn with_domain(func: &[f32], nu: usize, nv: usize, min: Vec2, max: Vec2) -> Self {
         let mut d = Self::zeros(nu, nv, min, max);
         let nu = d.nu;
-        Self::fill_rows(&mut [&mut d], 0..nv, |_| (), |_, v, rows| {
-            for (x, out) in rows[0].iter_mut().enumerate() {
-                *out = *func.get(v * nu + x).unwrap_or(&0.0) as f64;
-            }
-        });
+        Self::fill_rows(
+            &mut [&mut d],
+            0..nv,
+            |_| (),
+            |_, v, rows| {
+                for (x, out) in rows[0].iter_mut().enumerate() {
+                    *out = *func.get(v * nu + x).unwrap_or(&0.0) as f64;
+                }
+            },
+        );
         d
     }
 

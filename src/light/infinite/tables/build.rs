@@ -115,7 +115,9 @@ fn solid_angle_mean(row_lum_sum: &[f64], band: &[f64], w: usize, lookup: EnvLook
     let h = row_lum_sum.len();
     let r = |y: usize| match lookup {
         EnvLookup::Nearest => row_lum_sum[y],
-        EnvLookup::Bilinear => filter3(row_lum_sum[y.saturating_sub(1)], row_lum_sum[y], row_lum_sum[(y + 1).min(h - 1)]),
+        EnvLookup::Bilinear => {
+            filter3(row_lum_sum[y.saturating_sub(1)], row_lum_sum[y], row_lum_sum[(y + 1).min(h - 1)])
+        }
     };
     (0..h).map(|y| r(y) * band[y]).sum::<f64>() / (w * h).max(1) as f64
 }
@@ -271,7 +273,10 @@ impl EnvMapTables {
         let mean = solid_angle_mean(&s.row_lum_sum, &s.band, w, lookup);
         let halo = usize::from(lookup == EnvLookup::Bilinear);
         let mut table_rows = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
-        let mut plain = self.distribution.take().unwrap_or_else(|| PiecewiseConstant2D::zeros(w, h, glam::Vec2::ZERO, glam::Vec2::ONE));
+        let mut plain = self
+            .distribution
+            .take()
+            .unwrap_or_else(|| PiecewiseConstant2D::zeros(w, h, glam::Vec2::ZERO, glam::Vec2::ONE));
         let comp = if s.compensate {
             let kept = keep_mean.filter(|&m| (mean - m).abs() <= MEAN_TOLERANCE * m && self.compensated.is_some());
             if kept.is_none() {
@@ -279,7 +284,11 @@ impl EnvMapTables {
                 table_rows = 0..h;
                 s.mean = mean;
             }
-            Some(self.compensated.take().unwrap_or_else(|| PiecewiseConstant2D::zeros(w, h, glam::Vec2::ZERO, glam::Vec2::ONE)))
+            Some(
+                self.compensated
+                    .take()
+                    .unwrap_or_else(|| PiecewiseConstant2D::zeros(w, h, glam::Vec2::ZERO, glam::Vec2::ONE)),
+            )
         } else {
             None
         };

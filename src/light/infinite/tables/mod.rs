@@ -214,4 +214,3 @@ fn density_over(pdf_uv: f32, divisor: f64) -> f32 {
     let pdf = (pdf_uv as f64 / divisor) as f32;
     if pdf.is_finite() { pdf } else { 0.0 }
 }
-

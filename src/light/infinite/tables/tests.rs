@@ -163,7 +163,12 @@ fn bumpy(w: usize, h: usize) -> RgbImage {
 /// The hard cases the fast build must agree with the reference on, named.
 fn hard_maps() -> Vec<(&'static str, RgbImage)> {
     let mut black_region = bumpy(64, 32);
-    black_region.pixels.iter_mut().enumerate().filter(|(i, _)| (i % 64) < 40 && (i / 64) > 4).for_each(|(_, p)| *p = Vec3::ZERO);
+    black_region
+        .pixels
+        .iter_mut()
+        .enumerate()
+        .filter(|(i, _)| (i % 64) < 40 && (i / 64) > 4)
+        .for_each(|(_, p)| *p = Vec3::ZERO);
     // Lit only in the first and last rows, whose solid angle is tiny next to the equator's.
     let poles = image(256, 4096, |_, y| if y == 0 || y == 4095 { Vec3::splat(5.0) } else { Vec3::ZERO });
     let mut bad = bumpy(16, 8);
@@ -188,9 +193,9 @@ fn hard_maps() -> Vec<(&'static str, RgbImage)> {
 }
 
 fn all_options() -> impl Iterator<Item = EnvTableOptions> {
-    [EnvLookup::Bilinear, EnvLookup::Nearest].into_iter().flat_map(|lookup| {
-        [true, false].map(|compensate| EnvTableOptions { compensate, lookup, max_width: None })
-    })
+    [EnvLookup::Bilinear, EnvLookup::Nearest]
+        .into_iter()
+        .flat_map(|lookup| [true, false].map(|compensate| EnvTableOptions { compensate, lookup, max_width: None }))
 }
 
 #[test]
@@ -223,7 +228,10 @@ fn hard_cases_have_the_expected_tables() {
     assert!(t("constant").compensated.is_none(), "max(0, L - mean) is 0 everywhere");
     assert_eq!(t("non-finite texels").bad_texels, 2);
     // A black region gets no samples from the nearest table (bilinear spreads a texel's edge).
-    let near = EnvMapTables::build_with(&maps["black region"], EnvTableOptions { lookup: EnvLookup::Nearest, ..Default::default() });
+    let near = EnvMapTables::build_with(
+        &maps["black region"],
+        EnvTableOptions { lookup: EnvLookup::Nearest, ..Default::default() },
+    );
     assert_eq!(near.pdf_uv(Vec2::new(0.3, 0.5), false), 0.0);
     // Only the pole rows are lit: every sample lands in them, with the density its pdf states.
     let poles = t("poles");
