@@ -20,7 +20,7 @@ pub mod spherical_f32;
 pub mod warp;
 
 pub use alias::AliasTable;
-pub use distribution::{PiecewiseConstant1D, PiecewiseConstant2D};
+pub use distribution::{Bins, PiecewiseConstant1D, PiecewiseConstant2D};
 pub use frame::Frame;
 pub use spherical::{
     invert_spherical_rectangle_sample, invert_spherical_triangle_sample, sample_spherical_rectangle,
