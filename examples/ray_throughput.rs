@@ -1,0 +1,128 @@
+//! Traces a file of rays against a glTF file's scene BVH and prints closest-hit and any-hit rays
+//! per second, one ray at a time in parallel batches and as 16-ray packets, as JSON. The rays
+//! file holds little-endian f32 records (origin xyz, direction xyz, t_max); `bench/mitsuba/rays.py`
+//! writes it and traces the same rays with Mitsuba.
+//! `cargo run --release --example ray_throughput -- SCENE.glb RAYS.f32 [repeats]`
+
+use std::time::Instant;
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+use kelvin::geometry::{GeometryId, Hit, Ray, SceneBvh, closest_hits, occluded};
+use kelvin::lanes::{self, LANES};
+use kelvin::systems::LightingPlugin;
+use rayon::prelude::*;
+
+fn read_rays(path: &str) -> Result<Vec<Ray>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{path}: {e}"))?;
+    if bytes.len() % 28 != 0 {
+        return Err(format!("{path}: {} bytes is not a whole number of 28-byte rays", bytes.len()));
+    }
+    let f = |c: &[u8], i: usize| f32::from_le_bytes(c[4 * i..4 * i + 4].try_into().expect("4 bytes"));
+    Ok(bytes
+        .chunks_exact(28)
+        .map(|c| Ray { origin: Vec3::new(f(c, 0), f(c, 1), f(c, 2)), dir: Vec3::new(f(c, 3), f(c, 4), f(c, 5)), t_max: f(c, 6) })
+        .collect())
+}
+
+/// Best of `repeats` timings of `run`, in seconds, and what the last run returned.
+fn best<T>(repeats: usize, mut run: impl FnMut() -> T) -> (f64, T) {
+    let mut out = run(); // warm-up
+    let mut best = f64::INFINITY;
+    for _ in 0..repeats {
+        let t = Instant::now();
+        out = run();
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    (best, out)
+}
+
+/// The rays of one packet as lane columns.
+fn columns(rays: &[Ray]) -> ([[f32; LANES]; 3], [[f32; LANES]; 3], [f32; LANES]) {
+    let (mut o, mut d, mut t) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3], [0f32; LANES]);
+    for (l, r) in rays.iter().enumerate() {
+        for a in 0..3 {
+            (o[a][l], d[a][l]) = (r.origin[a], r.dir[a]);
+        }
+        t[l] = r.t_max;
+    }
+    (o, d, t)
+}
+
+fn packet_hits(bvh: &SceneBvh, rays: &[Ray]) -> usize {
+    rays.par_chunks(LANES * 256)
+        .map(|chunk| {
+            lanes::widest(
+                #[inline(always)]
+                || {
+                    let mut hits = 0;
+                    for packet in chunk.chunks(LANES) {
+                        let (o, d, t) = columns(packet);
+                        let mut sink = |_: usize, hit: Option<Hit>| hits += hit.is_some() as usize;
+                        bvh.closest_hits_packet(&o, &d, &t, packet.len(), &mut sink);
+                    }
+                    hits
+                },
+            )
+        })
+        .sum()
+}
+
+fn packet_blocked(bvh: &SceneBvh, rays: &[Ray]) -> usize {
+    rays.par_chunks(LANES * 256)
+        .map(|chunk| {
+            lanes::widest(
+                #[inline(always)]
+                || {
+                    let mut blocked = 0;
+                    for packet in chunk.chunks(LANES) {
+                        let (o, d, t) = columns(packet);
+                        let mask = bvh.occluded_packet(&o, &d, &t, packet.len(), &[GeometryId::NONE; LANES]);
+                        blocked += mask.count_ones() as usize;
+                    }
+                    blocked
+                },
+            )
+        })
+        .sum()
+}
+
+fn main() -> Result<(), String> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [scene, rays_path, ..] = args.as_slice() else {
+        return Err("usage: ray_throughput SCENE.glb RAYS.f32 [repeats]".into());
+    };
+    let repeats = args.get(2).and_then(|r| r.parse().ok()).unwrap_or(5);
+    let rays = read_rays(rays_path)?;
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    LightingPlugin::build(&mut world, &mut schedule);
+    kelvin::render::scene_file::spawn_gltf_file(&mut world, std::path::Path::new(scene)).map_err(|e| e.to_string())?;
+    schedule.run(&mut world);
+    let bvh = world.resource::<SceneBvh>();
+    let (mut hit_buf, mut occ_buf) = (Vec::new(), Vec::new());
+    let (closest_s, hits) = best(repeats, || {
+        closest_hits(bvh, &rays, &mut hit_buf);
+        hit_buf.iter().filter(|h| h.is_some()).count()
+    });
+    let (any_s, blocked) = best(repeats, || {
+        occluded(bvh, &rays, &mut occ_buf);
+        occ_buf.iter().filter(|&&b| b).count()
+    });
+    let (closest_packet_s, packet_hit_count) = best(repeats, || packet_hits(bvh, &rays));
+    let (any_packet_s, packet_blocked_count) = best(repeats, || packet_blocked(bvh, &rays));
+    if (hits, blocked) != (packet_hit_count, packet_blocked_count) {
+        return Err(format!("packets disagree: hits {hits} vs {packet_hit_count}, blocked {blocked} vs {packet_blocked_count}"));
+    }
+    let n = rays.len() as f64;
+    println!(
+        "{{\"rays\": {}, \"hits\": {hits}, \"blocked\": {blocked}, \"threads\": {}, \"closest_per_s\": {:.0}, \"any_per_s\": {:.0}, \"closest_packet_per_s\": {:.0}, \"any_packet_per_s\": {:.0}}}",
+        rays.len(),
+        rayon::current_num_threads(),
+        n / closest_s,
+        n / any_s,
+        n / closest_packet_s,
+        n / any_packet_s
+    );
+    Ok(())
+}
