@@ -6,11 +6,11 @@
 
 use bevy_ecs::prelude::*;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::Vec2;
 use glam::Vec3;
 use kelvin::geometry::Transform;
-use kelvin::lanes::{self, LANES};
-use glam::Vec2;
 use kelvin::geometry::{Mesh, Ray, Rectangle, SceneBvh, Sphere};
+use kelvin::lanes::{self, LANES};
 use kelvin::light::{
     Amount, AreaLight, DistantLight, GoniometricLight, LightTable, PointLight, ProjectionLight, SpotLight,
     UniformInfiniteLight,
@@ -115,8 +115,18 @@ fn sample_li_batch(c: &mut Criterion) {
 }
 
 /// The light kinds of the per-kind group, each as a few entities spawned into `world`.
-const KINDS: [&str; 10] =
-    ["point", "spot", "distant", "rectangle", "sphere", "triangle_mesh", "uniform_sky", "image_sky", "ies", "projection"];
+const KINDS: [&str; 10] = [
+    "point",
+    "spot",
+    "distant",
+    "rectangle",
+    "sphere",
+    "triangle_mesh",
+    "uniform_sky",
+    "image_sky",
+    "ies",
+    "projection",
+];
 
 fn spawn_kind(world: &mut World, kind: &str, data: &Path) {
     let above = |x: f32, z: f32| Transform::from_translation(Vec3::new(x, 4.0, z)).looking_to(Vec3::NEG_Y, Vec3::Z);
@@ -161,7 +171,9 @@ fn spawn_kind(world: &mut World, kind: &str, data: &Path) {
         }
     }
     match kind {
-        "distant" => drop(world.spawn((DistantLight::default(), Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z)))),
+        "distant" => {
+            drop(world.spawn((DistantLight::default(), Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z))))
+        }
         "uniform_sky" => drop(world.spawn((UniformInfiniteLight::default(), Transform::default()))),
         "image_sky" => {
             let env = data.join("env/spiaggia_di_mondello_1k.hdr");

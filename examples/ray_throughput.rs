@@ -21,7 +21,11 @@ fn read_rays(path: &str) -> Result<Vec<Ray>, String> {
     let f = |c: &[u8], i: usize| f32::from_le_bytes(c[4 * i..4 * i + 4].try_into().expect("4 bytes"));
     Ok(bytes
         .chunks_exact(28)
-        .map(|c| Ray { origin: Vec3::new(f(c, 0), f(c, 1), f(c, 2)), dir: Vec3::new(f(c, 3), f(c, 4), f(c, 5)), t_max: f(c, 6) })
+        .map(|c| Ray {
+            origin: Vec3::new(f(c, 0), f(c, 1), f(c, 2)),
+            dir: Vec3::new(f(c, 3), f(c, 4), f(c, 5)),
+            t_max: f(c, 6),
+        })
         .collect())
 }
 
@@ -112,7 +116,9 @@ fn main() -> Result<(), String> {
     let (closest_packet_s, packet_hit_count) = best(repeats, || packet_hits(bvh, &rays));
     let (any_packet_s, packet_blocked_count) = best(repeats, || packet_blocked(bvh, &rays));
     if (hits, blocked) != (packet_hit_count, packet_blocked_count) {
-        return Err(format!("packets disagree: hits {hits} vs {packet_hit_count}, blocked {blocked} vs {packet_blocked_count}"));
+        return Err(format!(
+            "packets disagree: hits {hits} vs {packet_hit_count}, blocked {blocked} vs {packet_blocked_count}"
+        ));
     }
     let n = rays.len() as f64;
     println!(
