@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
-use kelvin::geometry::{GeometryId, Hit, Ray, SceneBvh, closest_hits, occluded};
+use kelvin::geometry::{GeometryId, Hit, Ray, SceneBvh, closest_hits, occluded, ray_columns};
 use kelvin::lanes::{self, LANES};
 use kelvin::systems::LightingPlugin;
 use rayon::prelude::*;
@@ -41,18 +41,6 @@ fn best<T>(repeats: usize, mut run: impl FnMut() -> T) -> (f64, T) {
     (best, out)
 }
 
-/// The rays of one packet as lane columns.
-fn columns(rays: &[Ray]) -> ([[f32; LANES]; 3], [[f32; LANES]; 3], [f32; LANES]) {
-    let (mut o, mut d, mut t) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3], [0f32; LANES]);
-    for (l, r) in rays.iter().enumerate() {
-        for a in 0..3 {
-            (o[a][l], d[a][l]) = (r.origin[a], r.dir[a]);
-        }
-        t[l] = r.t_max;
-    }
-    (o, d, t)
-}
-
 fn packet_hits(bvh: &SceneBvh, rays: &[Ray]) -> usize {
     rays.par_chunks(LANES * 256)
         .map(|chunk| {
@@ -61,7 +49,7 @@ fn packet_hits(bvh: &SceneBvh, rays: &[Ray]) -> usize {
                 || {
                     let mut hits = 0;
                     for packet in chunk.chunks(LANES) {
-                        let (o, d, t) = columns(packet);
+                        let (o, d, t) = ray_columns(packet);
                         let mut sink = |_: usize, hit: Option<Hit>| hits += hit.is_some() as usize;
                         bvh.closest_hits_packet(&o, &d, &t, packet.len(), &mut sink);
                     }
@@ -80,7 +68,7 @@ fn packet_blocked(bvh: &SceneBvh, rays: &[Ray]) -> usize {
                 || {
                     let mut blocked = 0;
                     for packet in chunk.chunks(LANES) {
-                        let (o, d, t) = columns(packet);
+                        let (o, d, t) = ray_columns(packet);
                         let mask = bvh.occluded_packet(&o, &d, &t, packet.len(), &[GeometryId::NONE; LANES]);
                         blocked += mask.count_ones() as usize;
                     }

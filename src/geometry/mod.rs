@@ -20,7 +20,7 @@ mod wide;
 
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
 pub use mesh::Mesh;
-pub use packets::HitSink;
+pub use packets::{HitSink, ray_columns};
 pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin, triangle_surface_point};
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};
 pub use transform::{Placement, Transform};

@@ -27,6 +27,19 @@ impl<F: FnMut(usize, Option<Hit>)> HitSink for F {
     }
 }
 
+/// Up to [`LANES`] rays as the lane columns the packet queries take: origins, directions and
+/// t_max (lanes past `rays.len()` are zero, and a query told `n = rays.len()` ignores them).
+pub fn ray_columns(rays: &[Ray]) -> ([[f32; LANES]; 3], [[f32; LANES]; 3], [f32; LANES]) {
+    let (mut o, mut d, mut t) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3], [0f32; LANES]);
+    for (l, r) in rays.iter().take(LANES).enumerate() {
+        for a in 0..3 {
+            (o[a][l], d[a][l]) = (r.origin[a], r.dir[a]);
+        }
+        t[l] = r.t_max;
+    }
+    (o, d, t)
+}
+
 impl SceneBvh {
     /// The closest hit of each of the first `n` rays `origin[l] + t dir[l]`, t in (0, t_max[l]],
     /// handed to `out` lane by lane (lanes past `n` are not reported). Run it inside
@@ -266,17 +279,6 @@ mod tests {
         (soup, Mesh::from_triangles(&fan).unwrap())
     }
 
-    fn lanes_of(rays: &[Ray; LANES]) -> ([[f32; LANES]; 3], [[f32; LANES]; 3], [f32; LANES]) {
-        let (mut o, mut d, mut t) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3], [0.0; LANES]);
-        for (l, r) in rays.iter().enumerate() {
-            for a in 0..3 {
-                (o[a][l], d[a][l]) = (r.origin[a], r.dir[a]);
-            }
-            t[l] = r.t_max;
-        }
-        (o, d, t)
-    }
-
     /// Each lane of a packet gets `closest_hit`'s answer bit for bit, in lane code and not:
     /// coherent packets (one origin, a narrow cone), incoherent ones whose lanes have different
     /// dominant axes, rays down the fan's shared edges and centre vertex (edge functions exactly
@@ -330,7 +332,7 @@ mod tests {
                 rays[7].t_max = 0.0;
             }
             let n = if case % 5 == 0 { 1 + case % LANES } else { LANES };
-            let (o, d, t) = lanes_of(&rays);
+            let (o, d, t) = super::ray_columns(&rays);
             for wide in [false, true] {
                 let mut got: [Option<Option<Hit>>; LANES] = [None; LANES];
                 let mut sink = |l: usize, h: Option<Hit>| got[l] = Some(h);
