@@ -80,7 +80,7 @@ fn quick_report_is_written_and_its_numbers_are_sane() {
 #[test]
 fn color_checker_patches_render_albedo_times_white_luminance() {
     use bevy_ecs::prelude::*;
-    use kelvin::render::renderer::{RenderOptions, Strategy, render};
+    use kelvin::render::renderer::{Integrator, RenderOptions, Strategy, render};
     use kelvin::report::accuracy::patch_means;
     use kelvin::scenes::color_checker::spawn_color_checker;
     use kelvin::spectrum::Spectrum;
@@ -94,7 +94,7 @@ fn color_checker_patches_render_albedo_times_white_luminance() {
     let (film, _) = render(
         &mut world,
         &mut schedule,
-        &RenderOptions { width: w, height: h, spp: 1, strategy: Strategy::Mis },
+        &RenderOptions { width: w, height: h, spp: 1, strategy: Strategy::Mis, integrator: Integrator::Direct },
         |_| {},
     );
     let means = patch_means(&film.pixels(), &checker, w, h);

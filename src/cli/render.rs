@@ -1,5 +1,5 @@
 //! `kelvin render [SCENE] [-o out.exr] [--spp N] [--size WxH] [--env map [--env-intensity X]]
-//! [--light-sampler uniform|power|bvh] [--color rgb|spectral] [--seed S] [--threads T] [--report]`.
+//! [--integrator path|direct] [--max-depth N] [--roulette-depth N] [--light-sampler uniform|power|bvh] [--color rgb|spectral] [--seed S] [--threads T] [--report]`.
 
 use std::path::{Path, PathBuf};
 
@@ -7,7 +7,8 @@ use bevy_ecs::prelude::*;
 use indicatif::{ProgressBar, ProgressStyle};
 use kelvin::render::camera::CameraModel;
 use kelvin::render::film_io::{write_exr, write_png};
-use kelvin::render::renderer::{RenderOptions, Strategy, render_with};
+use kelvin::render::path::PathDepth;
+use kelvin::render::renderer::{Integrator, RenderOptions, Strategy, render_with};
 use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, Settings};
 use kelvin::systems::LightingPlugin;
 
@@ -18,6 +19,14 @@ enum SamplerArg {
     Uniform,
     Power,
     Bvh,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum IntegratorArg {
+    /// Paths of up to --max-depth bounces, every bounce through the light system.
+    Path,
+    /// Light and BSDF samples at the surface the camera sees.
+    Direct,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -45,6 +54,15 @@ pub struct RenderArgs {
     /// Luminance (nit) of an environment texel of value 1.
     #[arg(long, default_value_t = 1.0)]
     env_intensity: f32,
+    /// How light reaches the camera.
+    #[arg(long, value_enum, default_value = "path")]
+    integrator: IntegratorArg,
+    /// Path tracer: surfaces after the camera's at most (1 = direct lighting, 0 = emission only).
+    #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth)]
+    max_depth: u32,
+    /// Path tracer: Russian roulette may end a path from this many surfaces on.
+    #[arg(long, default_value_t = PathDepth::DEFAULT.roulette_depth)]
+    roulette_depth: u32,
     /// How a light is chosen per sample.
     #[arg(long, value_enum, default_value = "bvh")]
     light_sampler: SamplerArg,
@@ -179,6 +197,12 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         height,
         spp: args.spp.max(1),
         strategy: if args.no_mis { Strategy::LightOnly } else { Strategy::Mis },
+        integrator: match args.integrator {
+            IntegratorArg::Path => {
+                Integrator::Path(PathDepth { max_depth: args.max_depth, roulette_depth: args.roulette_depth })
+            }
+            IntegratorArg::Direct => Integrator::Direct,
+        },
     };
     let bar = ProgressBar::new(1000);
     bar.set_style(

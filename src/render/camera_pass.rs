@@ -172,7 +172,44 @@ pub(super) fn trace_camera_rays(
     camera: &CameraModel,
     range: SampleRange,
 ) {
-    let n = range.len;
+    for_each_chunk(batch, columns, range.len, |c, chunk| {
+        crate::lanes::widest(
+            #[inline(always)]
+            || trace_chunk(chunk, range.first + c * RAY_CHUNK, bvh, camera, range),
+        )
+    });
+}
+
+/// A surface a ray found, with the sample whose path it continues.
+#[derive(Clone, Copy)]
+pub(super) struct FoundSurface {
+    /// Unit direction of the ray.
+    pub(super) dir: Vec3,
+    pub(super) hit: Hit,
+    pub(super) pixel: u32,
+    pub(super) sample: u32,
+}
+
+/// Writes slot `i` of `batch` (resized, wavelengths left empty) and `columns` for surface `i`
+/// of `surfaces`, as the camera pass writes a hit: the path tracer's next bounce.
+pub(super) fn write_found_surfaces(batch: &mut ShadingBatch, columns: &mut CameraColumns, surfaces: &[FoundSurface]) {
+    for_each_chunk(batch, columns, surfaces.len(), |c, chunk| {
+        let first = c * RAY_CHUNK;
+        for (i, s) in surfaces[first..first + chunk.pixel.len()].iter().enumerate() {
+            (chunk.pixel[i], chunk.sample[i]) = (s.pixel, s.sample);
+            write_slot(chunk, i, s.dir, Some(s.hit));
+        }
+    });
+}
+
+/// Sizes `batch` (wavelengths emptied) and `columns` to `n` slots and calls `write` on each
+/// `RAY_CHUNK` of them in parallel, with the chunk's index.
+fn for_each_chunk(
+    batch: &mut ShadingBatch,
+    columns: &mut CameraColumns,
+    n: usize,
+    write: impl Fn(usize, &mut BatchChunk) + Sync,
+) {
     batch.set_len(n);
     columns.resize(n);
     let CameraColumns { dir: [dx, dy, dz], uv: [u, v], material, instance, flipped } = columns;
@@ -214,10 +251,7 @@ pub(super) fn trace_camera_rays(
             instance,
             flipped,
         };
-        crate::lanes::widest(
-            #[inline(always)]
-            || trace_chunk(&mut chunk, range.first + c * RAY_CHUNK, bvh, camera, range),
-        )
+        write(c, &mut chunk);
     });
 }
 

@@ -1,10 +1,12 @@
-//! Rendering: camera, materials and BSDFs, the direct-lighting renderer, film and image output.
+//! Rendering: camera, materials and BSDFs, the direct-lighting and path-tracing renderer, film and image output.
 pub mod bsdf;
 pub mod camera;
 mod camera_pass;
 pub mod film;
 pub mod film_io;
 pub mod material;
+pub mod path;
 pub mod renderer;
 pub mod scene_file;
+mod shade;
 mod shade_lanes;

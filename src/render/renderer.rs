@@ -6,20 +6,16 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::bsdf::Bsdf;
 use super::camera::{Camera, CameraModel, PinholeCamera};
-use super::camera_pass::{CameraColumns, SampleRange, SampleSurface, trace_camera_rays};
+use super::camera_pass::{CameraColumns, SampleRange, trace_camera_rays};
 use super::film::Film;
-use super::material::Material;
-use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
+use super::path::{PathDepth, PathJob, Paths};
+use super::shade::{Materials, ShadeContext};
+use crate::geometry::{RAY_CHUNK, SceneBvh};
 use crate::lanes::LANES;
-use crate::light::{ColorQuery, LightSampleContext, LightTable};
-use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
-use crate::sampling::Frame;
-use crate::shading::{ColorMode, DirectLighting, RunReport, RunSummary, SceneBounds, Settings, ShadingBatch};
+use crate::shading::{ColorMode, RunReport, RunSummary, SceneBounds, Settings, ShadingBatch};
 use crate::spectrum::{SampledSpectrum, SampledWavelengths, color};
-use crate::systems::GeometryIndex;
 
 /// Camera samples per batch handed to the light system.
 const BATCH_SAMPLES: usize = 1 << 14;
@@ -48,12 +44,27 @@ impl Strategy {
         }
     }
     /// Weight of a BSDF sample that reached a light.
-    fn bsdf_weight(self, bsdf_pdf: f32, light_pdf: f32) -> f32 {
+    pub(super) fn bsdf_weight(self, bsdf_pdf: f32, light_pdf: f32) -> f32 {
         match self {
             Self::Mis => power_heuristic(bsdf_pdf, light_pdf),
             Self::LightOnly => 0.0,
             Self::BsdfOnly => 1.0,
         }
+    }
+}
+
+/// How light is carried from the lights to the camera.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// Direct lighting: light and BSDF samples at the surface the camera sees.
+    Direct,
+    /// Path tracing (`render::path`): every bounce's surfaces go through the light system.
+    Path(PathDepth),
+}
+
+impl Default for Integrator {
+    fn default() -> Self {
+        Self::Path(PathDepth::DEFAULT)
     }
 }
 
@@ -63,13 +74,22 @@ pub struct RenderOptions {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
-    /// How light and BSDF samples are combined. Defaults to MIS.
+    /// How light and BSDF samples are combined (at every bounce). Defaults to MIS.
     pub strategy: Strategy,
+    /// Defaults to path tracing.
+    pub integrator: Integrator,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { width: 256, height: 256, spp: 16, strategy: Strategy::Mis }
+        Self { width: 256, height: 256, spp: 16, strategy: Strategy::Mis, integrator: Integrator::default() }
+    }
+}
+
+impl RenderOptions {
+    /// Direct lighting at `width` x `height` and `spp`, with MIS.
+    pub fn direct(width: u32, height: u32, spp: u32) -> Self {
+        Self { width, height, spp, integrator: Integrator::Direct, ..Default::default() }
     }
 }
 
@@ -109,15 +129,12 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 }
 
 /// Photometric linear sRGB of a 4-lane value in the given mode.
-fn to_rgb(v: SampledSpectrum, wavelengths: Option<&SampledWavelengths>) -> Vec3 {
+pub(super) fn to_rgb(v: SampledSpectrum, wavelengths: Option<&SampledWavelengths>) -> Vec3 {
     match wavelengths {
         None => Vec3::new(v.0[0], v.0[1], v.0[2]),
         Some(w) => color::xyz_to_srgb(w.to_xyz(v).as_dvec3()).as_vec3(),
     }
 }
-
-/// The material of geometry that has none.
-static DEFAULT_MATERIAL: std::sync::LazyLock<Material> = std::sync::LazyLock::new(Material::default);
 
 /// The camera of the world (the first `Camera` with a `Transform`), or one framing the scene.
 fn find_camera(world: &mut World, width: u32, height: u32) -> PinholeCamera {
@@ -188,11 +205,7 @@ fn render_on_pool(
     // is kept in the render's own.
     stats.report.add(world.resource::<RunReport>());
     let camera = camera.unwrap_or_else(|| CameraModel::Pinhole(find_camera(world, opts.width, opts.height)));
-    let materials: Vec<Material> = {
-        let entities = world.resource::<GeometryIndex>().entities.clone();
-        entities.iter().map(|&e| world.get::<Material>(e).cloned().unwrap_or_default()).collect()
-    };
-    let uniform_bsdfs: Vec<Option<Bsdf>> = materials.iter().map(Material::uniform_rgb_bsdf).collect();
+    let materials = Materials::of(world);
     let settings = world.resource::<Settings>().clone();
     let spectral = settings.color_mode == ColorMode::Spectral;
     let seed = settings.seed ^ RENDER_SALT;
@@ -201,6 +214,7 @@ fn render_on_pool(
     let total = opts.width as usize * opts.height as usize * opts.spp as usize;
     let mut columns = CameraColumns::default();
     let mut contributions: Vec<Vec3> = Vec::new();
+    let mut paths = Paths::default();
     let mut first = 0usize;
     while first < total {
         let len = BATCH_SAMPLES.min(total - first);
@@ -221,52 +235,64 @@ fn render_on_pool(
                 batch.wavelengths.par_extend(lambda);
             }
         });
+        stats.passes.camera += camera_start.elapsed().as_secs_f64();
+        match opts.integrator {
+            Integrator::Direct => {
+                let job = DirectJob { columns: &columns, materials: &materials, seed, strategy: opts.strategy };
+                job.shade(world, schedule, (&mut film, first, opts.spp as usize), &mut contributions, &mut stats);
+            }
+            Integrator::Path(depth) => {
+                let job = PathJob { depth, materials: &materials, seed, strategy: opts.strategy };
+                paths.trace(world, schedule, &mut columns, &job, &mut contributions, &mut stats);
+                let film_start = std::time::Instant::now();
+                film.par_add_samples(first, opts.spp as usize, &contributions);
+                stats.passes.shading += film_start.elapsed().as_secs_f64();
+            }
+        }
+        stats.camera_samples += len as u64;
+        first += len;
+        progress(first as f32 / total as f32);
+    }
+    stats.seconds = start.elapsed().as_secs_f64();
+    (film, stats)
+}
+
+/// What the direct integrator needs beyond the world.
+struct DirectJob<'a> {
+    columns: &'a CameraColumns,
+    materials: &'a Materials,
+    seed: u64,
+    strategy: Strategy,
+}
+
+impl DirectJob<'_> {
+    /// Runs the schedule on the camera pass's batch, shades each sample, and adds them to the
+    /// film (samples `first..` of `spp` per pixel), using `contributions` as scratch.
+    fn shade(
+        &self,
+        world: &mut World,
+        schedule: &mut Schedule,
+        (film, first, spp): (&mut Film, usize, usize),
+        contributions: &mut Vec<Vec3>,
+        stats: &mut RenderStats,
+    ) {
         let light_system_start = std::time::Instant::now();
         schedule.run(world);
         let shading_start = std::time::Instant::now();
         stats.report.add(world.resource::<RunReport>());
-        stats.passes.camera += (light_system_start - camera_start).as_secs_f64();
         stats.passes.light_system += (shading_start - light_system_start).as_secs_f64();
         stats.shadow_rays += world.resource::<crate::systems::ShadowRays>().len() as u64;
 
-        let world_ref = &*world;
-        let shade = ShadeContext {
-            table: world_ref.resource::<LightTable>(),
-            sampler: world_ref.resource::<LightSampler>(),
-            lighting: world_ref.resource::<DirectLighting>(),
-            batch: world_ref.resource::<ShadingBatch>(),
-            bvh: world_ref.resource::<SceneBvh>(),
-            columns: &columns,
-            lights_of_instance: {
-                let table = world_ref.resource::<LightTable>();
-                world_ref.resource::<GeometryIndex>().entities.iter().map(|&e| table.rows_of(e)).collect()
-            },
-            materials: &materials,
-            uniform_bsdfs: &uniform_bsdfs,
-            seed,
-            strategy: opts.strategy,
-            offset: settings.shadow_offset,
-            all_lights: settings.selection == crate::shading::LightSelection::All,
-        };
-        let escape_ids: Vec<_> = shade.table.escape_lights().collect();
-        let bsdf_sampling = opts.strategy != Strategy::LightOnly && shade.table.has_non_delta_lights();
-        let shade_one = |k: usize| {
-            let lambda = shade.batch.wavelengths.get(k);
-            if !columns.escaped(k) {
-                return shade.shade(k, lambda, &escape_ids, bsdf_sampling);
-            }
-            // Escaped camera rays see the infinite lights directly.
-            let query = lambda.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
-            let le = escape_ids
-                .iter()
-                .fold(SampledSpectrum::default(), |acc, &id| acc.add(shade.table.le(id, columns.dir(k), query)));
-            (to_rgb(le, lambda), false)
-        };
+        let shade = ShadeContext::new(world, self.columns, self.materials, self.seed, self.strategy);
+        let len = shade.batch.len();
+        let bsdf_sampling = shade.bsdf_sampling();
+        let shade_one = |k: usize| shade.shade_direct(k, bsdf_sampling);
         // Where the lane kernel may apply (`shade_lanes.rs`), blocks of the common case go
         // through it; elsewhere samples are shaded one at a time. Either way the tasks count
         // their BSDF rays as they go (a pass of its own cost a parallel region per batch), and
         // write every contribution, so that column is only resized (no serial fill in steady
         // state).
+        let spectral = !shade.batch.wavelengths.is_empty();
         let lanes = !spectral && !bsdf_sampling && !super::shade_lanes::turned_off();
         let shade_chunk = |c: usize, out: &mut [Vec3]| -> usize {
             let first = c * RAY_CHUNK;
@@ -301,7 +327,6 @@ fn render_on_pool(
         // Sample k is sample k % spp of pixel k / spp (see `SampleRange`). Where each chunk holds
         // whole pixels, the task that shaded it adds them to the film (while they are in cache,
         // and without a parallel region of its own).
-        let spp = opts.spp as usize;
         let bsdf_rays: usize = if let Some(runs) = film.pixel_runs_mut(first, len, spp, RAY_CHUNK) {
             chunks
                 .zip(runs)
@@ -313,133 +338,10 @@ fn render_on_pool(
                 .sum()
         } else {
             let traced = chunks.map(|(c, out)| shade_chunk(c, out)).sum();
-            film.par_add_samples(first, spp, &contributions);
+            film.par_add_samples(first, spp, contributions);
             traced
         };
         stats.passes.shading += shading_start.elapsed().as_secs_f64();
         stats.bsdf_rays += bsdf_rays as u64;
-        stats.camera_samples += len as u64;
-        first += len;
-        progress(first as f32 / total as f32);
-    }
-    stats.seconds = start.elapsed().as_secs_f64();
-    (film, stats)
-}
-
-/// Read-only state for shading one batch in parallel.
-pub(super) struct ShadeContext<'a> {
-    table: &'a LightTable,
-    sampler: &'a LightSampler,
-    pub(super) lighting: &'a DirectLighting,
-    pub(super) batch: &'a ShadingBatch,
-    bvh: &'a SceneBvh,
-    /// The camera samples' directions and surfaces, indexed like `batch`.
-    pub(super) columns: &'a CameraColumns,
-    /// The light rows of each BVH instance's entity (empty for geometry that emits nothing).
-    pub(super) lights_of_instance: Vec<&'a [crate::light::LightId]>,
-    materials: &'a [Material],
-    /// Each material's [`Material::uniform_rgb_bsdf`].
-    pub(super) uniform_bsdfs: &'a [Option<Bsdf>],
-    seed: u64,
-    pub(super) strategy: Strategy,
-    /// How BSDF rays leave the surface (as shadow rays do).
-    offset: crate::geometry::ShadowOffset,
-    /// Every light is sampled for every point (pmf 1) rather than one chosen by the sampler.
-    all_lights: bool,
-}
-
-impl ShadeContext<'_> {
-    /// The area light `hit` landed on and its radiance toward `w` (unit, away from the surface).
-    fn emitted(&self, hit: &Hit, w: Vec3, query: ColorQuery) -> Option<(crate::light::LightId, SampledSpectrum)> {
-        let surface = SampleSurface {
-            uv: hit.uv,
-            material: hit.material,
-            instance: hit.instance,
-            primitive: hit.id.primitive,
-            flipped: false,
-        };
-        self.emitted_at(&surface, hit.p, hit.ng, w, query)
-    }
-
-    /// [`Self::emitted`] at point `p` of `surface`, whose geometric normal is `ng`.
-    fn emitted_at(
-        &self,
-        surface: &SampleSurface,
-        p: Vec3,
-        ng: Vec3,
-        w: Vec3,
-        query: ColorQuery,
-    ) -> Option<(crate::light::LightId, SampledSpectrum)> {
-        let rows = self.lights_of_instance.get(surface.instance as usize)?;
-        if rows.is_empty() {
-            return None;
-        }
-        let id = self.table.area_light_among(rows, surface.primitive)?;
-        let light = &self.table.area.items[id.row as usize].light;
-        Some((id, light.radiance(p, ng, surface.uv, w, query)))
-    }
-
-    /// Direct light at camera sample `j`, which hit a surface (at `wavelengths` in spectral mode):
-    /// the light system's samples weighted by MIS, plus one BSDF sample toward non-delta lights.
-    /// Returns RGB and whether a ray was traced.
-    fn shade(
-        &self,
-        j: usize,
-        wavelengths: Option<&SampledWavelengths>,
-        escape_ids: &[crate::light::LightId],
-        bsdf_sampling: bool,
-    ) -> (Vec3, bool) {
-        let surface = self.columns.surface(j, self.batch.geometry[j].primitive);
-        let (p, n) = (self.batch.position[j], self.batch.normal[j]);
-        let query = wavelengths.map_or(ColorQuery::Rgb, ColorQuery::Spectral);
-        let wo = -self.columns.dir(j);
-        let ns = self.batch.shading_normal[j];
-        let material = self.materials.get(surface.material as usize).unwrap_or(&DEFAULT_MATERIAL);
-        let bsdf = match (query, self.uniform_bsdfs.get(surface.material as usize)) {
-            (ColorQuery::Rgb, Some(Some(b))) => Bsdf { frame: Frame::from_z(ns), ..*b },
-            _ => material.bsdf(surface.uv, ns, query),
-        };
-        // Light the camera sees on emitters directly (their sidedness needs the unflipped normal).
-        let ng = if surface.flipped { -n } else { n };
-        let mut l = self.emitted_at(&surface, p, ng, wo, query).map_or(SampledSpectrum::default(), |(_, le)| le);
-        for e in self.lighting.entries(j) {
-            let (li, wi, pdf) = (self.lighting.radiance[e], self.lighting.wi[e], self.lighting.pdf[e]);
-            if pdf <= 0.0 {
-                continue;
-            }
-            let f = bsdf.f(wo, wi);
-            let w = if self.lighting.delta[e] { 1.0 } else { self.strategy.light_weight(pdf, bsdf.pdf(wo, wi)) };
-            if w == 0.0 {
-                continue;
-            }
-            l = l.add(f.mul(li).scale(wi.dot(ns).abs() * w / pdf));
-        }
-        let mut traced = false;
-        if bsdf_sampling {
-            let mut rng = SampleStream::new(self.seed, self.batch.pixel[j], self.batch.sample[j]).at_dimension(16);
-            if let Some(bs) = bsdf.sample(wo, rng.next_f32(), rng.next_2d()) {
-                traced = true;
-                let from = crate::geometry::SurfacePoint { p, p_error: self.batch.position_error[j], n };
-                let ray = self.offset.spawn_ray(&from, bs.wi);
-                let ctx = LightSampleContext { p, n, ns };
-                let pmf = |id| if self.all_lights { 1.0 } else { self.sampler.pmf(&ctx, id) };
-                if let Some(h2) = self.bvh.closest_hit(&ray) {
-                    if let Some((id, le)) = self.emitted(&h2, -bs.wi, query) {
-                        let w = self.strategy.bsdf_weight(bs.pdf, pmf(id) * self.table.pdf_li(id, &ctx, bs.wi));
-                        l = l.add(bs.f.mul(le).scale(bs.wi.dot(ns).abs() * w / bs.pdf));
-                    }
-                } else {
-                    for &id in escape_ids {
-                        let Some((le, pdf)) = self.table.le_and_pdf_li(id, &ctx, bs.wi, query) else {
-                            continue;
-                        };
-                        let light_pdf = pmf(id) * pdf;
-                        let w = self.strategy.bsdf_weight(bs.pdf, light_pdf);
-                        l = l.add(bs.f.mul(le).scale(bs.wi.dot(ns).abs() * w / bs.pdf));
-                    }
-                }
-            }
-        }
-        (to_rgb(l, wavelengths), traced)
     }
 }

@@ -9,7 +9,8 @@ use std::f32::consts::FRAC_1_PI;
 use glam::Vec3;
 
 use super::camera_pass::SampleSurface;
-use super::renderer::{ShadeContext, Strategy, power_heuristic};
+use super::renderer::{Strategy, power_heuristic};
+use super::shade::ShadeContext;
 use crate::lanes::{self, LANES};
 use crate::sampling::cosine_hemisphere_pdf;
 
@@ -178,7 +179,7 @@ mod tests {
     use crate::light::{DistantLight, PointLight, SpotLight};
     use crate::render::camera::Camera;
     use crate::render::material::Material;
-    use crate::render::renderer::{RenderOptions, Strategy, render};
+    use crate::render::renderer::{Integrator, RenderOptions, Strategy, render};
     use crate::shading::{LightSamplerKind, Settings};
     use crate::systems::LightingPlugin;
 
@@ -203,7 +204,7 @@ mod tests {
         world.spawn((DistantLight::default(), Transform::default().looking_to(Vec3::Y, Vec3::Z)));
         let eye = Vec3::new(0.0, 1.5, 5.0);
         world.spawn((Camera { yfov: 1.2 }, Transform::from_translation(eye).looking_to(-eye, Vec3::Y)));
-        let opts = RenderOptions { width: 24, height: 16, spp: 4, strategy };
+        let opts = RenderOptions { width: 24, height: 16, spp: 4, strategy, integrator: Integrator::Direct };
         render(&mut world, &mut schedule, &opts, |_| {}).0.pixels()
     }
 

@@ -19,7 +19,7 @@ use std::time::Instant;
 use bevy_ecs::prelude::*;
 use serde::Serialize;
 
-use crate::render::renderer::{PassSeconds, RenderOptions, RenderStats, Strategy, render};
+use crate::render::renderer::{Integrator, PassSeconds, RenderOptions, RenderStats, Strategy, render};
 use crate::render::scene_file::{spawn_env_map, spawn_gltf_file};
 use crate::scene::spawn::SpawnReport;
 use crate::shading::{ColorMode, LightSamplerKind, LightSelection, Settings};
@@ -140,7 +140,7 @@ impl SuiteScene {
 
 /// The render options of the suite: MIS, `width` x `height`, `spp`.
 pub fn suite_options(width: u32, height: u32, spp: u32) -> RenderOptions {
-    RenderOptions { width, height, spp: spp.max(1), strategy: Strategy::Mis }
+    RenderOptions { width, height, spp: spp.max(1), strategy: Strategy::Mis, integrator: Integrator::Direct }
 }
 
 /// What to run.

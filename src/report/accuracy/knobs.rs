@@ -5,7 +5,7 @@ use bevy_ecs::prelude::*;
 
 use crate::geometry::ShadowOffset;
 use crate::light::ImageInfiniteLight;
-use crate::render::renderer::{RenderOptions, Strategy};
+use crate::render::renderer::{Integrator, RenderOptions, Strategy};
 use crate::shading::{ColorMode, LightPrecision, LightSamplerKind, LightSelection, Settings};
 
 /// Everything the report varies about one render.
@@ -41,7 +41,7 @@ impl Config {
 
     /// The render options of this configuration.
     pub fn render_options(&self, width: u32, height: u32) -> RenderOptions {
-        RenderOptions { width, height, spp: self.spp, strategy: self.strategy }
+        RenderOptions { width, height, spp: self.spp, strategy: self.strategy, integrator: Integrator::Direct }
     }
 
     /// Writes the light-system settings (with `seed`) and the env-table width into `world`. The

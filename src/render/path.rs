@@ -1,0 +1,197 @@
+//! The path tracer: a batch of camera samples becomes paths, and each bounce is a wavefront. The
+//! bounce's surfaces are one `ShadingBatch`, run through the light system's schedule (light
+//! choice, Sample_Li, shadow rays); each surface then adds its MIS-weighted light samples and
+//! draws a BSDF sample; the BSDF rays are traced together, and what they find is weighted by MIS
+//! against the light sampler (an emitter they hit, or the infinite lights when they escape). The
+//! surfaces they hit are the next bounce's batch.
+//!
+//! Depth counts surfaces after the camera's, as in pbrt-v4: `max_depth` 1 is direct lighting
+//! (light and BSDF samples at the camera's surface, and the emitters the BSDF ray finds), and a
+//! closed furnace of albedo a and emission Le gives Le (1 - a^(d+1)) / (1 - a) at depth d.
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::camera_pass::{CameraColumns, FoundSurface, write_found_surfaces};
+use super::renderer::{RenderStats, Strategy, to_rgb};
+use super::shade::{Bounce, BounceRules, Continuation, Materials, ShadeContext};
+use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
+use crate::light::ColorQuery;
+use crate::rng::mix64;
+use crate::shading::{RunReport, Settings, ShadingBatch};
+use crate::spectrum::{SampledSpectrum, SampledWavelengths};
+use crate::systems::ShadowRays;
+
+/// How long paths are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PathDepth {
+    /// Surfaces after the camera's at most (1 = direct lighting, 0 = emission only).
+    pub max_depth: u32,
+    /// Russian roulette may end a path from this many surfaces on (pbrt-v4 starts after one).
+    pub roulette_depth: u32,
+}
+
+impl PathDepth {
+    /// 16 bounces, roulette from the fourth surface: a white room (albedo 0.8) keeps 0.8^17 =
+    /// 2% of its light past 16 bounces, and roulette ends most paths long before.
+    pub const DEFAULT: Self = Self { max_depth: 16, roulette_depth: 3 };
+}
+
+/// The light system's seed for the surfaces at `depth`: the settings' own at the camera's
+/// surface (so that depth 1 draws what the direct integrator draws), a mix of it after.
+pub fn bounce_seed(seed: u64, depth: u32) -> u64 {
+    if depth == 0 { seed } else { mix64(seed ^ mix64(depth as u64 + 0x9e37_79b9)) }
+}
+
+/// Per-batch path state, reused across batches.
+#[derive(Default)]
+pub(super) struct Paths {
+    /// Per camera sample of the batch: the light its path has gathered.
+    radiance: Vec<SampledSpectrum>,
+    /// Per camera sample: its pixel, sample and (spectral mode) wavelengths.
+    pixel: Vec<u32>,
+    sample: Vec<u32>,
+    wavelengths: Vec<SampledWavelengths>,
+    /// Per slot of the current bounce's batch: the camera sample whose path it is, and the
+    /// path's throughput up to that surface.
+    path: Vec<u32>,
+    beta: Vec<SampledSpectrum>,
+    bounces: Vec<Bounce>,
+    continuations: Vec<(u32, Continuation)>,
+    hits: Vec<Option<Hit>>,
+    found: Vec<SampledSpectrum>,
+    next: Vec<FoundSurface>,
+}
+
+/// What the path tracer needs beyond the world.
+pub(super) struct PathJob<'a> {
+    pub(super) depth: PathDepth,
+    pub(super) materials: &'a Materials,
+    /// Seed of the renderer's own streams.
+    pub(super) seed: u64,
+    pub(super) strategy: Strategy,
+}
+
+impl Paths {
+    /// Traces the paths of the camera samples in `batch` and `columns` (as the camera pass wrote
+    /// them) and writes each sample's RGB into `rgb`. Runs the schedule once per bounce; the
+    /// light system's seed is restored afterwards.
+    pub(super) fn trace(
+        &mut self,
+        world: &mut World,
+        schedule: &mut Schedule,
+        columns: &mut CameraColumns,
+        job: &PathJob,
+        rgb: &mut Vec<Vec3>,
+        stats: &mut RenderStats,
+    ) {
+        let seed = world.resource::<Settings>().seed;
+        let n = self.start(world.resource::<ShadingBatch>());
+        let PathDepth { max_depth, roulette_depth } = job.depth;
+        for depth in 0.. {
+            if world.resource::<ShadingBatch>().is_empty() {
+                break;
+            }
+            let rules = BounceRules {
+                emission_only: depth == max_depth,
+                last: depth + 1 >= max_depth,
+                roulette: depth + 1 >= roulette_depth,
+            };
+            let light_start = std::time::Instant::now();
+            if !rules.emission_only {
+                world.resource_mut::<Settings>().seed = bounce_seed(seed, depth);
+                schedule.run(world);
+                stats.report.add(world.resource::<RunReport>());
+                stats.shadow_rays += world.resource::<ShadowRays>().len() as u64;
+            }
+            let shading_start = std::time::Instant::now();
+            stats.passes.light_system += (shading_start - light_start).as_secs_f64();
+            let ctx = ShadeContext::new(world, columns, job.materials, job.seed, job.strategy);
+            self.shade(&ctx, depth, rules);
+            self.follow(&ctx, rules);
+            stats.bsdf_rays += self.continuations.len() as u64;
+            drop(ctx);
+            world.resource_scope(|_, mut batch: Mut<ShadingBatch>| self.next_batch(&mut batch, columns));
+            stats.passes.shading += shading_start.elapsed().as_secs_f64();
+        }
+        world.resource_mut::<Settings>().seed = seed;
+        rgb.clear();
+        rgb.par_extend((0..n).into_par_iter().with_min_len(RAY_CHUNK).map(|k| {
+            let wavelengths = self.wavelengths.get(k);
+            to_rgb(self.radiance[k], wavelengths)
+        }));
+    }
+
+    /// Starts one path per camera sample of `batch`; returns their number.
+    fn start(&mut self, batch: &ShadingBatch) -> usize {
+        let n = batch.len();
+        self.radiance.clear();
+        self.radiance.resize(n, SampledSpectrum::default());
+        self.pixel.clone_from(&batch.pixel);
+        self.sample.clone_from(&batch.sample);
+        self.wavelengths.clone_from(&batch.wavelengths);
+        self.path.clear();
+        self.path.extend(0..n as u32);
+        self.beta.clear();
+        self.beta.resize(n, SampledSpectrum([1.0; 4]));
+        n
+    }
+
+    /// Shades every surface of the bounce and adds its light to its path.
+    fn shade(&mut self, ctx: &ShadeContext, depth: u32, rules: BounceRules) {
+        let beta = &self.beta;
+        self.bounces.clear();
+        self.bounces.par_extend((0..beta.len()).into_par_iter().with_min_len(64).map(|j| {
+            if ctx.columns.escaped(j) {
+                // Only camera rays escape into the batch; later ones are weighed where traced.
+                return Bounce { radiance: beta[j].mul(ctx.escaped(j)), next: None };
+            }
+            ctx.shade_path_vertex(j, depth, beta[j], rules)
+        }));
+        self.continuations.clear();
+        for (j, b) in self.bounces.iter().enumerate() {
+            let p = self.path[j];
+            let r = &mut self.radiance[p as usize];
+            *r = r.add(b.radiance);
+            if let Some(c) = b.next {
+                self.continuations.push((p, c));
+            }
+        }
+    }
+
+    /// Traces the continuing paths' BSDF rays and adds the light they find; keeps the surfaces
+    /// they hit for the next bounce unless this one was the last.
+    fn follow(&mut self, ctx: &ShadeContext, rules: BounceRules) {
+        let bvh: &SceneBvh = ctx.bvh;
+        self.hits.clear();
+        self.hits.par_extend(self.continuations.par_iter().with_min_len(64).map(|(_, c)| bvh.closest_hit(&c.ray)));
+        let wavelengths = &self.wavelengths;
+        self.found.clear();
+        self.found.par_extend(self.continuations.par_iter().zip(&self.hits).with_min_len(64).map(|((p, c), hit)| {
+            let query = wavelengths.get(*p as usize).map_or(ColorQuery::Rgb, ColorQuery::Spectral);
+            c.beta.mul(ctx.found_by_bsdf_ray(&c.from, c.wi, c.bsdf_pdf, hit.as_ref(), query))
+        }));
+        self.next.clear();
+        let (mut path, mut beta) = (std::mem::take(&mut self.path), std::mem::take(&mut self.beta));
+        (path.clear(), beta.clear());
+        for (((p, c), hit), found) in self.continuations.iter().zip(&self.hits).zip(&self.found) {
+            let r = &mut self.radiance[*p as usize];
+            *r = r.add(*found);
+            if let (Some(hit), false) = (hit, rules.last) {
+                let (pixel, sample) = (self.pixel[*p as usize], self.sample[*p as usize]);
+                self.next.push(FoundSurface { dir: c.wi, hit: *hit, pixel, sample });
+                (path.push(*p), beta.push(c.beta));
+            }
+        }
+        (self.path, self.beta) = (path, beta);
+    }
+
+    /// Writes the next bounce's surfaces into the batch (with their paths' wavelengths).
+    fn next_batch(&self, batch: &mut ShadingBatch, columns: &mut CameraColumns) {
+        write_found_surfaces(batch, columns, &self.next);
+        if !self.wavelengths.is_empty() {
+            batch.wavelengths.extend(self.path.iter().map(|&p| self.wavelengths[p as usize]));
+        }
+    }
+}

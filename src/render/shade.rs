@@ -1,0 +1,317 @@
+//! Shading a surface point from the light system's answers: the light samples weighted by MIS,
+//! and the light a BSDF ray finds (an emitter it hits, or the infinite lights when it escapes)
+//! weighted against the light sampler's pmf and `pdf_li`. The direct integrator and each bounce
+//! of the path tracer use the same pieces.
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+
+use super::bsdf::{Bsdf, BsdfSample};
+use super::camera_pass::{CameraColumns, SampleSurface};
+use super::material::Material;
+use super::renderer::{Strategy, to_rgb};
+use crate::geometry::{Hit, SceneBvh, ShadowOffset, SurfacePoint};
+use crate::light::{ColorQuery, LightId, LightSampleContext, LightTable};
+use crate::light_sampler::LightSampler;
+use crate::rng::SampleStream;
+use crate::sampling::Frame;
+use crate::shading::{DirectLighting, LightSelection, Settings, ShadingBatch};
+use crate::spectrum::SampledSpectrum;
+use crate::systems::GeometryIndex;
+
+/// The material of geometry that has none.
+static DEFAULT_MATERIAL: std::sync::LazyLock<Material> = std::sync::LazyLock::new(Material::default);
+
+/// Dimension of a sample's renderer stream where the BSDF sample of its first surface starts;
+/// each later surface takes the next `BSDF_DIMENSIONS` (lobe, direction, roulette).
+pub(super) const BSDF_DIMENSION: u32 = 16;
+pub(super) const BSDF_DIMENSIONS: u32 = 4;
+
+/// The world's materials, in the order of the scene BVH's instances, and what is worked out
+/// from them once per render.
+pub(super) struct Materials {
+    pub(super) materials: Vec<Material>,
+    /// Each material's [`Material::uniform_rgb_bsdf`].
+    pub(super) uniform_bsdfs: Vec<Option<Bsdf>>,
+}
+
+impl Materials {
+    pub(super) fn of(world: &World) -> Self {
+        let entities = &world.resource::<GeometryIndex>().entities;
+        let materials: Vec<Material> =
+            entities.iter().map(|&e| world.get::<Material>(e).cloned().unwrap_or_default()).collect();
+        let uniform_bsdfs = materials.iter().map(Material::uniform_rgb_bsdf).collect();
+        Self { materials, uniform_bsdfs }
+    }
+}
+
+/// Read-only state for shading one batch in parallel.
+pub(super) struct ShadeContext<'a> {
+    pub(super) table: &'a LightTable,
+    sampler: &'a LightSampler,
+    pub(super) lighting: &'a DirectLighting,
+    pub(super) batch: &'a ShadingBatch,
+    pub(super) bvh: &'a SceneBvh,
+    /// The samples' directions and surfaces, indexed like `batch`.
+    pub(super) columns: &'a CameraColumns,
+    /// The light rows of each BVH instance's entity (empty for geometry that emits nothing).
+    pub(super) lights_of_instance: Vec<&'a [LightId]>,
+    materials: &'a [Material],
+    /// Each material's [`Material::uniform_rgb_bsdf`].
+    pub(super) uniform_bsdfs: &'a [Option<Bsdf>],
+    /// Seed of the renderer's own streams.
+    pub(super) seed: u64,
+    pub(super) strategy: Strategy,
+    /// How BSDF rays leave the surface (as shadow rays do).
+    pub(super) offset: ShadowOffset,
+    /// Every light is sampled for every point (pmf 1) rather than one chosen by the sampler.
+    all_lights: bool,
+    /// The infinite lights, which rays that hit nothing see.
+    pub(super) escape_ids: Vec<LightId>,
+}
+
+impl<'a> ShadeContext<'a> {
+    /// The context of the world's last schedule run, for the samples of `columns`.
+    pub(super) fn new(
+        world: &'a World,
+        columns: &'a CameraColumns,
+        materials: &'a Materials,
+        seed: u64,
+        strategy: Strategy,
+    ) -> Self {
+        let table = world.resource::<LightTable>();
+        let settings = world.resource::<Settings>();
+        Self {
+            table,
+            sampler: world.resource::<LightSampler>(),
+            lighting: world.resource::<DirectLighting>(),
+            batch: world.resource::<ShadingBatch>(),
+            bvh: world.resource::<SceneBvh>(),
+            columns,
+            lights_of_instance: world.resource::<GeometryIndex>().entities.iter().map(|&e| table.rows_of(e)).collect(),
+            materials: &materials.materials,
+            uniform_bsdfs: &materials.uniform_bsdfs,
+            seed,
+            strategy,
+            offset: settings.shadow_offset,
+            all_lights: settings.selection == LightSelection::All,
+            escape_ids: table.escape_lights().collect(),
+        }
+    }
+
+    /// Whether BSDF samples can find light the light samples miss (some light is not delta).
+    pub(super) fn bsdf_sampling(&self) -> bool {
+        self.strategy != Strategy::LightOnly && self.table.has_non_delta_lights()
+    }
+
+    /// The area light `hit` landed on and its radiance toward `w` (unit, away from the surface).
+    fn emitted(&self, hit: &Hit, w: Vec3, query: ColorQuery) -> Option<(LightId, SampledSpectrum)> {
+        let surface = SampleSurface {
+            uv: hit.uv,
+            material: hit.material,
+            instance: hit.instance,
+            primitive: hit.id.primitive,
+            flipped: false,
+        };
+        self.emitted_at(&surface, hit.p, hit.ng, w, query)
+    }
+
+    /// [`Self::emitted`] at point `p` of `surface`, whose geometric normal is `ng`.
+    fn emitted_at(
+        &self,
+        surface: &SampleSurface,
+        p: Vec3,
+        ng: Vec3,
+        w: Vec3,
+        query: ColorQuery,
+    ) -> Option<(LightId, SampledSpectrum)> {
+        let rows = self.lights_of_instance.get(surface.instance as usize)?;
+        if rows.is_empty() {
+            return None;
+        }
+        let id = self.table.area_light_among(rows, surface.primitive)?;
+        let light = &self.table.area.items[id.row as usize].light;
+        Some((id, light.radiance(p, ng, surface.uv, w, query)))
+    }
+
+    /// The query of sample `j`'s colour mode.
+    fn query(&self, j: usize) -> ColorQuery<'a> {
+        self.batch.wavelengths.get(j).map_or(ColorQuery::Rgb, ColorQuery::Spectral)
+    }
+
+    /// The surface sample `j` lies on, and its BSDF.
+    fn surface_and_bsdf(&self, j: usize) -> (SampleSurface, Bsdf) {
+        let surface = self.columns.surface(j, self.batch.geometry[j].primitive);
+        let ns = self.batch.shading_normal[j];
+        let material = self.materials.get(surface.material as usize).unwrap_or(&DEFAULT_MATERIAL);
+        let bsdf = match (self.query(j), self.uniform_bsdfs.get(surface.material as usize)) {
+            (ColorQuery::Rgb, Some(Some(b))) => Bsdf { frame: Frame::from_z(ns), ..*b },
+            (query, _) => material.bsdf(surface.uv, ns, query),
+        };
+        (surface, bsdf)
+    }
+
+    /// The light the camera (or a BSDF ray, for the path tracer's later surfaces) sees on sample
+    /// `j`'s surface when it emits, unweighted (its sidedness needs the unflipped normal).
+    fn emitted_toward_viewer(&self, j: usize, surface: &SampleSurface) -> SampledSpectrum {
+        let n = self.batch.normal[j];
+        let ng = if surface.flipped { -n } else { n };
+        let wo = -self.columns.dir(j);
+        self.emitted_at(surface, self.batch.position[j], ng, wo, self.query(j))
+            .map_or(SampledSpectrum::default(), |e| e.1)
+    }
+
+    /// The light system's samples at sample `j`, each weighted by MIS against `bsdf`.
+    fn light_samples(&self, j: usize, bsdf: &Bsdf) -> SampledSpectrum {
+        let (wo, ns) = (-self.columns.dir(j), self.batch.shading_normal[j]);
+        let mut l = SampledSpectrum::default();
+        for e in self.lighting.entries(j) {
+            let (li, wi, pdf) = (self.lighting.radiance[e], self.lighting.wi[e], self.lighting.pdf[e]);
+            if pdf <= 0.0 {
+                continue;
+            }
+            let f = bsdf.f(wo, wi);
+            let w = if self.lighting.delta[e] { 1.0 } else { self.strategy.light_weight(pdf, bsdf.pdf(wo, wi)) };
+            if w == 0.0 {
+                continue;
+            }
+            l = l.add(f.mul(li).scale(wi.dot(ns).abs() * w / pdf));
+        }
+        l
+    }
+
+    /// Sample `j`'s light-sampling context: where its light samples were drawn from.
+    fn context(&self, j: usize) -> LightSampleContext {
+        LightSampleContext { p: self.batch.position[j], n: self.batch.normal[j], ns: self.batch.shading_normal[j] }
+    }
+
+    /// The BSDF sample at sample `j`'s surface from the renderer's stream at dimension `dim`
+    /// (lobe, then direction), with the ray it leaves along.
+    fn sample_bsdf(&self, j: usize, bsdf: &Bsdf, dim: u32) -> Option<(BsdfSample, crate::geometry::Ray)> {
+        let mut rng = SampleStream::new(self.seed, self.batch.pixel[j], self.batch.sample[j]).at_dimension(dim);
+        let bs = bsdf.sample(-self.columns.dir(j), rng.next_f32(), rng.next_2d())?;
+        let from =
+            SurfacePoint { p: self.batch.position[j], p_error: self.batch.position_error[j], n: self.batch.normal[j] };
+        Some((bs, self.offset.spawn_ray(&from, bs.wi)))
+    }
+
+    /// The light a BSDF ray along `wi` (drawn with solid-angle pdf `bsdf_pdf` at `from`) finds,
+    /// weighted by MIS against the light sampler: the emitter at `hit`, or the infinite lights
+    /// when it escaped.
+    pub(super) fn found_by_bsdf_ray(
+        &self,
+        from: &LightSampleContext,
+        wi: Vec3,
+        bsdf_pdf: f32,
+        hit: Option<&Hit>,
+        query: ColorQuery,
+    ) -> SampledSpectrum {
+        let pmf = |id| if self.all_lights { 1.0 } else { self.sampler.pmf(from, id) };
+        match hit {
+            Some(h) => self.emitted(h, -wi, query).map_or(SampledSpectrum::default(), |(id, le)| {
+                le.scale(self.strategy.bsdf_weight(bsdf_pdf, pmf(id) * self.table.pdf_li(id, from, wi)))
+            }),
+            None => self.escape_ids.iter().fold(SampledSpectrum::default(), |acc, &id| {
+                let Some((le, pdf)) = self.table.le_and_pdf_li(id, from, wi, query) else { return acc };
+                acc.add(le.scale(self.strategy.bsdf_weight(bsdf_pdf, pmf(id) * pdf)))
+            }),
+        }
+    }
+
+    /// What escaped sample `j` sees: the infinite lights along its direction, unweighted.
+    pub(super) fn escaped(&self, j: usize) -> SampledSpectrum {
+        let (dir, query) = (self.columns.dir(j), self.query(j));
+        self.escape_ids.iter().fold(SampledSpectrum::default(), |acc, &id| acc.add(self.table.le(id, dir, query)))
+    }
+
+    /// Direct light at camera sample `j`, in RGB, and whether a ray was traced: emission, the
+    /// light system's samples weighted by MIS, plus one BSDF sample toward non-delta lights.
+    pub(super) fn shade_direct(&self, j: usize, bsdf_sampling: bool) -> (Vec3, bool) {
+        let wavelengths = self.batch.wavelengths.get(j);
+        if self.columns.escaped(j) {
+            return (to_rgb(self.escaped(j), wavelengths), false);
+        }
+        let (surface, bsdf) = self.surface_and_bsdf(j);
+        let mut l = self.emitted_toward_viewer(j, &surface).add(self.light_samples(j, &bsdf));
+        let mut traced = false;
+        if bsdf_sampling && let Some((bs, ray)) = self.sample_bsdf(j, &bsdf, BSDF_DIMENSION) {
+            traced = true;
+            let found = self.found_by_bsdf_ray(
+                &self.context(j),
+                bs.wi,
+                bs.pdf,
+                self.bvh.closest_hit(&ray).as_ref(),
+                self.query(j),
+            );
+            l = l.add(bs.f.mul(found).scale(bs.wi.dot(bsdf.frame.z).abs() / bs.pdf));
+        }
+        (to_rgb(l, wavelengths), traced)
+    }
+}
+
+/// What the path tracer's shading of one surface gives: the light to add to the path's radiance
+/// (already times its throughput), and the ray that continues it, if it goes on.
+pub(super) struct Bounce {
+    pub(super) radiance: SampledSpectrum,
+    pub(super) next: Option<Continuation>,
+}
+
+/// A path leaving a surface along a BSDF sample.
+#[derive(Clone, Copy)]
+pub(super) struct Continuation {
+    pub(super) ray: crate::geometry::Ray,
+    /// Unit direction of `ray`.
+    pub(super) wi: Vec3,
+    /// Throughput after this surface (roulette included).
+    pub(super) beta: SampledSpectrum,
+    /// The surface it leaves, as the light sampler saw it (for MIS of what the ray finds).
+    pub(super) from: LightSampleContext,
+    pub(super) bsdf_pdf: f32,
+}
+
+/// The path tracer's per-surface knobs.
+#[derive(Clone, Copy)]
+pub(super) struct BounceRules {
+    /// Whether the surface only shows its emission (depth 0 of a `max_depth` 0 render).
+    pub(super) emission_only: bool,
+    /// Whether this surface is the path's last: its BSDF ray only looks for emitters.
+    pub(super) last: bool,
+    /// Whether Russian roulette may end the path here.
+    pub(super) roulette: bool,
+}
+
+impl ShadeContext<'_> {
+    /// Sample `j` as surface `depth` (0 = the camera's) of a path with throughput `beta`: its
+    /// emission when the camera sees it, its light samples, and the BSDF sample that continues
+    /// the path (always traced, for MIS, unless roulette ends it).
+    pub(super) fn shade_path_vertex(&self, j: usize, depth: u32, beta: SampledSpectrum, rules: BounceRules) -> Bounce {
+        let (surface, bsdf) = self.surface_and_bsdf(j);
+        // Emission found by later BSDF rays is added, MIS-weighted, where they are traced.
+        let mut l = if depth == 0 { self.emitted_toward_viewer(j, &surface) } else { SampledSpectrum::default() };
+        if rules.emission_only {
+            return Bounce { radiance: beta.mul(l), next: None };
+        }
+        l = l.add(self.light_samples(j, &bsdf));
+        let radiance = beta.mul(l);
+        let dim = BSDF_DIMENSION + depth * BSDF_DIMENSIONS;
+        let Some((bs, ray)) = self.sample_bsdf(j, &bsdf, dim) else { return Bounce { radiance, next: None } };
+        let mut next_beta = beta.mul(bs.f).scale(bs.wi.dot(bsdf.frame.z).abs() / bs.pdf);
+        if rules.roulette && !rules.last {
+            // pbrt-v4's roulette: continue with probability max(beta) when that is below 1.
+            let keep = next_beta.0.iter().fold(0.0f32, |m, &c| m.max(c));
+            if keep < 1.0 {
+                let u = SampleStream::new(self.seed, self.batch.pixel[j], self.batch.sample[j])
+                    .at_dimension(dim + 3)
+                    .next_f32();
+                if u >= keep {
+                    return Bounce { radiance, next: None };
+                }
+                next_beta = next_beta.scale(1.0 / keep);
+            }
+        }
+        let finite = next_beta.0.iter().all(|c| c.is_finite());
+        let next =
+            finite.then_some(Continuation { ray, wi: bs.wi, beta: next_beta, from: self.context(j), bsdf_pdf: bs.pdf });
+        Bounce { radiance, next }
+    }
+}
