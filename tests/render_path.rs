@@ -1,0 +1,177 @@
+//! The path tracer against closed forms: a closed emitting furnace, the white furnace under a
+//! uniform sky, and depth 1 against the direct integrator on a real file.
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+use kelvin::geometry::{Mesh, Sphere, Transform};
+use kelvin::light::{Amount, AreaLight, UniformInfiniteLight};
+use kelvin::render::bsdf::Bsdf;
+use kelvin::render::camera::Camera;
+use kelvin::render::material::Material;
+use kelvin::render::path::PathDepth;
+use kelvin::render::renderer::{Integrator, RenderOptions, render};
+use kelvin::sampling::Frame;
+use kelvin::shading::{ColorMode, Settings};
+use kelvin::spectrum::SampledSpectrum;
+use kelvin::systems::LightingPlugin;
+
+fn luminance(c: Vec3) -> f64 {
+    (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64
+}
+
+/// Mean luminance over pixels and its standard error (pixels are independent estimates).
+fn mean_and_error(pixels: &[Vec3]) -> (f64, f64) {
+    let n = pixels.len() as f64;
+    let ys: Vec<f64> = pixels.iter().map(|&p| luminance(p)).collect();
+    let mean = ys.iter().sum::<f64>() / n;
+    let var = ys.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+fn path(max_depth: u32) -> Integrator {
+    Integrator::Path(PathDepth { max_depth, ..PathDepth::DEFAULT })
+}
+
+fn world_with(mode: ColorMode, seed: u64) -> (World, Schedule) {
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    world.insert_resource(Settings { color_mode: mode, seed, ..Default::default() });
+    LightingPlugin::build(&mut world, &mut schedule);
+    (world, schedule)
+}
+
+/// The camera at the centre of a closed UV sphere (radius 1) whose inside is Lambertian of
+/// albedo `albedo` and emits `le` nit, wound so that its front faces point inward.
+fn closed_furnace(mode: ColorMode, albedo: f32, le: f32) -> (World, Schedule) {
+    let (mut world, schedule) = world_with(mode, 3);
+    let sphere = Mesh::uv_sphere(1.0, 24, 12);
+    let inward: Vec<u32> = sphere.indices().chunks(3).flat_map(|t| [t[0], t[2], t[1]]).collect();
+    let mesh = Mesh::new(sphere.positions().to_vec(), inward).unwrap();
+    let light = AreaLight { amount: Amount::Nits(le), ..Default::default() };
+    world.spawn((mesh, Transform::default(), Material::lambertian(Vec3::splat(albedo)), light));
+    world.spawn((Camera { yfov: 1.5 }, Transform::default().looking_to(Vec3::new(0.3, -0.2, -1.0), Vec3::Y)));
+    (world, schedule)
+}
+
+fn render_pixels(world: &mut World, schedule: &mut Schedule, size: u32, spp: u32, integrator: Integrator) -> Vec<Vec3> {
+    let opts = RenderOptions { width: size, height: size, spp, integrator, ..Default::default() };
+    render(world, schedule, &opts, |_| {}).0.pixels()
+}
+
+/// Inside a closed furnace every path sees Le at each surface and keeps a fraction a of its
+/// throughput per bounce: L = Le (1 - a^(d+1)) / (1 - a) with at most d bounces after the
+/// camera's surface, Le / (1 - a) without a limit (roulette ends the paths, without bias).
+#[test]
+fn closed_furnace_gives_the_geometric_series_of_its_albedo_at_every_depth() {
+    let le = 2.0f32;
+    let cases = [
+        (ColorMode::Rgb, 0.5, Some(0)),
+        (ColorMode::Rgb, 0.5, Some(1)),
+        (ColorMode::Rgb, 0.5, Some(3)),
+        (ColorMode::Rgb, 0.3, None),
+        (ColorMode::Rgb, 0.8, None),
+        (ColorMode::Spectral, 0.5, Some(2)),
+        (ColorMode::Spectral, 0.7, None),
+    ];
+    for (mode, a, depth) in cases {
+        let (mut world, mut schedule) = closed_furnace(mode, a, le);
+        let max_depth = depth.unwrap_or(u32::MAX);
+        let spp = if mode == ColorMode::Rgb { 16 } else { 64 };
+        let pixels = render_pixels(&mut world, &mut schedule, 16, spp, path(max_depth));
+        let (got, error) = mean_and_error(&pixels);
+        let a = a as f64;
+        let want = match depth {
+            Some(d) => le as f64 * (1.0 - a.powi(d as i32 + 1)) / (1.0 - a),
+            None => le as f64 / (1.0 - a),
+        };
+        eprintln!("{mode:?} a = {a} depth {depth:?}: {got:.5} +- {error:.5}, expected {want:.5}");
+        // The sphere is of triangles and the light's radiance is exact: only noise remains,
+        // plus the colour conversion's rounding in spectral mode.
+        let tolerance = 3.0 * error + want * if mode == ColorMode::Rgb { 1e-4 } else { 5e-3 };
+        assert!((got - want).abs() < tolerance, "{mode:?} a = {a} depth {depth:?}: {got} vs {want} (+- {error})");
+    }
+}
+
+/// A convex white object under a uniform sky: whatever a path does, it ends seeing the sky, so
+/// every pixel is the sky's radiance times the surface's directional albedo, at any depth >= 1.
+fn furnace_pixels(material: Material, max_depth: u32, mode: ColorMode) -> Vec<Vec3> {
+    let (mut world, mut schedule) = world_with(mode, 5);
+    world.spawn((UniformInfiniteLight { amount: Amount::Nits(3.0), ..Default::default() }, Transform::default()));
+    world.spawn((Sphere { radius: 1.0 }, Transform::default(), material));
+    let eye = Vec3::new(0.0, 0.0, 4.0);
+    world.spawn((Camera { yfov: 0.2 }, Transform::from_translation(eye).looking_to(-eye, Vec3::Y)));
+    render_pixels(&mut world, &mut schedule, 12, 32, path(max_depth))
+}
+
+#[test]
+fn white_lambertian_furnace_is_the_sky_at_every_pixel_and_depth() {
+    for (mode, depth) in [(ColorMode::Rgb, 1), (ColorMode::Rgb, 2), (ColorMode::Rgb, 16), (ColorMode::Spectral, 5)] {
+        let pixels = furnace_pixels(Material::lambertian(Vec3::ONE), depth, mode);
+        let (got, error) = mean_and_error(&pixels);
+        eprintln!("{mode:?} depth {depth}: {got:.5} +- {error:.5}");
+        let tolerance = 3.0 * error + if mode == ColorMode::Rgb { 1e-4 } else { 0.01 };
+        assert!((got - 3.0).abs() < tolerance, "{mode:?} depth {depth}: {got} +- {error}");
+        // No pixel loses or gains energy beyond noise.
+        assert!(pixels.iter().all(|&p| (luminance(p) - 3.0).abs() < 1.5), "{mode:?} depth {depth}");
+    }
+}
+
+/// Single-scattering GGX loses energy: a white rough metal reflects E(wo) = integral of f cos
+/// over the hemisphere, below 1. The furnace's centre pixels (seen head-on) must show the sky
+/// times E at normal incidence, which is integrated here from `Bsdf::f` on a fine grid.
+#[test]
+fn white_ggx_furnace_loses_the_energy_its_directional_albedo_says() {
+    let roughness = 1.0;
+    let material = Material { base_color: Vec3::ONE, metallic: 1.0, roughness, ..Default::default() };
+    let bsdf = Bsdf::new(Frame::from_z(Vec3::Z), SampledSpectrum([1.0; 4]), 1.0, roughness, 0.0);
+    let (n_theta, n_phi) = (2000, 64);
+    let mut albedo = 0.0f64;
+    for i in 0..n_theta {
+        let cos = (i as f64 + 0.5) / n_theta as f64;
+        let sin = (1.0 - cos * cos).sqrt();
+        for j in 0..n_phi {
+            let phi = std::f64::consts::TAU * (j as f64 + 0.5) / n_phi as f64;
+            let wi = Vec3::new((sin * phi.cos()) as f32, (sin * phi.sin()) as f32, cos as f32);
+            // d omega = d cos d phi.
+            albedo += bsdf.f(Vec3::Z, wi).0[1] as f64 * cos / n_theta as f64 * std::f64::consts::TAU / n_phi as f64;
+        }
+    }
+    eprintln!("white GGX metal, roughness {roughness}: E(normal incidence) = {albedo:.4}, lost {:.4}", 1.0 - albedo);
+    // At alpha 1, D = 1/pi and V = 1/(2 (cos_i + 1)) head-on, so E = 1 - ln 2 in closed form.
+    assert!((albedo - (1.0 - 2f64.ln())).abs() < 1e-4, "{albedo}");
+    for depth in [1, 4] {
+        let pixels = furnace_pixels(material.clone(), depth, ColorMode::Rgb);
+        // The 2x2 centre pixels see the sphere within 0.7 degrees of head-on.
+        let centre: Vec<Vec3> = [(5, 5), (5, 6), (6, 5), (6, 6)].iter().map(|&(x, y)| pixels[y * 12 + x]).collect();
+        let (got, error) = mean_and_error(&centre);
+        let want = 3.0 * albedo;
+        eprintln!("depth {depth}: centre {got:.4} +- {error:.4}, expected {want:.4}");
+        assert!((got - want).abs() < 4.0 * error + 0.01 * want, "depth {depth}: {got} vs {want}");
+    }
+}
+
+/// At depth 1 the path tracer does what the direct integrator does (light and BSDF samples at
+/// the camera's surface), with the same random numbers: the images agree to rounding.
+#[test]
+fn depth_one_agrees_with_the_direct_integrator_on_the_cornell_box() {
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/gltf/bevy/CornellBox.glb");
+    let mut images = Vec::new();
+    for integrator in [Integrator::Direct, path(1)] {
+        let (mut world, mut schedule) = world_with(ColorMode::Rgb, 11);
+        kelvin::render::scene_file::spawn_gltf_file(&mut world, std::path::Path::new(file)).unwrap();
+        images.push(render_pixels(&mut world, &mut schedule, 32, 8, integrator));
+    }
+    let (direct, traced) = (&images[0], &images[1]);
+    let (mean, _) = mean_and_error(direct);
+    assert!(mean > 0.0, "the box is lit");
+    for (i, (d, p)) in direct.iter().zip(traced).enumerate() {
+        let diff = (*d - *p).abs().max_element();
+        assert!(diff <= 1e-4 * d.max_element().max(mean as f32), "pixel {i}: direct {d} path {p}");
+    }
+    // And a deeper path adds the light that bounces: the box gets brighter.
+    let (mut world, mut schedule) = world_with(ColorMode::Rgb, 11);
+    kelvin::render::scene_file::spawn_gltf_file(&mut world, std::path::Path::new(file)).unwrap();
+    let (deep, _) = mean_and_error(&render_pixels(&mut world, &mut schedule, 32, 8, path(8)));
+    eprintln!("mean luminance: direct {mean:.4}, path depth 8 {deep:.4}");
+    assert!(deep > 1.2 * mean, "indirect light: {deep} vs {mean}");
+}
