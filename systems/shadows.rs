@@ -7,7 +7,7 @@ use glam::Vec3;
 use crate::geometry::ray::spawn_rays_to_points_lanes;
 use crate::geometry::{GeometryId, RAY_CHUNK, Ray, SHADOW_EPSILON, SceneBvh, ShadowOffset, SurfacePoint};
 use crate::lanes::{self, LANES};
-use crate::shading::{RunReport, Settings, ShadingBatch};
+use crate::shading::{RunReport, SceneBounds, Settings, ShadingBatch};
 
 use super::{ShadowRays, ShadowTarget, Work};
 
@@ -48,6 +48,7 @@ pub fn trace_shadow_rays(
     batch: Res<ShadingBatch>,
     bvh: Res<SceneBvh>,
     settings: Res<Settings>,
+    bounds: Res<SceneBounds>,
 ) {
     use rayon::prelude::*;
     let offset = settings.shadow_offset;
@@ -68,7 +69,9 @@ pub fn trace_shadow_rays(
     };
     // Segments traced LANES at a time (a pixel's samples: coherent packets). Blocks of
     // point-light segments, one entry per point, are built from columns by a lane kernel; others
-    // one segment at a time.
+    // one segment at a time. Blocks whose points lie apart (a path's later bounces) are traced
+    // one ray at a time: a packet's shared traversal would visit every point's nodes.
+    let scattered = SCATTERED_FRACTION * bounds.sphere.radius;
     let chunks = r.occluded.par_chunks_mut(RAY_CHUNK).enumerate();
     r.blocked = chunks
         .map(|(c, chunk)| {
@@ -87,6 +90,13 @@ pub fn trace_shadow_rays(
                                     *o = batch.geometry_of(point_of(first + l));
                                 }
                             }
+                        }
+                        if spread(&batch.position, (first..first + n).map(point_of)) > scattered {
+                            for (l, occluded) in chunk[b..b + n].iter_mut().enumerate() {
+                                *occluded = bvh.occluded_from(&segment(first + l), origins[l]);
+                            }
+                            b += LANES;
+                            continue;
                         }
                         // Cache-line aligned: the packet loads these columns whole.
                         #[repr(C, align(64))]
@@ -130,6 +140,24 @@ pub fn trace_shadow_rays(
             )
         })
         .sum();
+}
+
+/// Points of a block further apart than this fraction of the scene's bounding radius are traced
+/// one ray at a time. A pixel's samples on the surface the camera sees lie well within it at
+/// any useful resolution; the surfaces its paths bounce to are spread over the scene.
+const SCATTERED_FRACTION: f32 = 0.1;
+
+/// The largest extent, over the axes, of the box around `points` (non-finite ones ignored).
+#[inline(always)]
+fn spread(positions: &[Vec3], points: impl Iterator<Item = usize>) -> f32 {
+    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    for i in points {
+        let p = positions[i];
+        if p.is_finite() {
+            (lo, hi) = (lo.min(p), hi.max(p));
+        }
+    }
+    (hi - lo).max_element().max(0.0)
 }
 
 /// The ray of an entry without one: invalid (zero direction), so never occluded.

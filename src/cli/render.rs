@@ -43,7 +43,7 @@ pub struct RenderArgs {
     #[arg(short, long, default_value = "render.exr")]
     output: PathBuf,
     /// Camera samples per pixel.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 32)]
     spp: u32,
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "512x512", value_parser = parse_size)]

@@ -5,6 +5,7 @@ use bevy_ecs::prelude::*;
 
 use crate::geometry::ShadowOffset;
 use crate::light::ImageInfiniteLight;
+use crate::render::path::PathDepth;
 use crate::render::renderer::{Integrator, RenderOptions, Strategy};
 use crate::shading::{ColorMode, LightPrecision, LightSamplerKind, LightSelection, Settings};
 
@@ -20,11 +21,14 @@ pub struct Config {
     pub precision: LightPrecision,
     /// Largest env sampling-table width; None for the image's own width.
     pub env_table_width: Option<usize>,
+    /// Direct lighting or paths (with their depth and roulette).
+    pub integrator: Integrator,
 }
 
 impl Config {
     /// kelvin's defaults (light-BVH sampler, one light per sample, MIS, error-bound offsets, f32:
-    /// the light system's from `Settings::default`) at `spp` in colour mode `color`.
+    /// the light system's from `Settings::default`; the path tracer with its default depth) at
+    /// `spp` in colour mode `color`.
     pub fn baseline(spp: u32, color: ColorMode) -> Self {
         let settings = Settings::default();
         Self {
@@ -36,12 +40,13 @@ impl Config {
             offset: settings.shadow_offset,
             precision: settings.light_precision,
             env_table_width: None,
+            integrator: Integrator::default(),
         }
     }
 
     /// The render options of this configuration.
     pub fn render_options(&self, width: u32, height: u32) -> RenderOptions {
-        RenderOptions { width, height, spp: self.spp, strategy: self.strategy, integrator: Integrator::Direct }
+        RenderOptions { width, height, spp: self.spp, strategy: self.strategy, integrator: self.integrator }
     }
 
     /// Writes the light-system settings (with `seed`) and the env-table width into `world`. The
@@ -76,6 +81,10 @@ pub enum Knob {
     Selection,
     ShadowOffset,
     Precision,
+    /// The path tracer's largest depth (direct lighting is depth 1).
+    Depth,
+    /// The depth from which roulette may end paths.
+    Roulette,
 }
 
 /// Fixed-epsilon shadow offsets the report tries, m (scenes are 1-50 m across): none at all, the
@@ -86,7 +95,7 @@ pub const ENV_TABLE_WIDTHS: [usize; 4] = [4, 16, 64, 256];
 
 impl Knob {
     /// Every knob, in table order.
-    pub const ALL: [Knob; 8] = [
+    pub const ALL: [Knob; 10] = [
         Knob::Spp,
         Knob::LightSampler,
         Knob::Color,
@@ -95,6 +104,8 @@ impl Knob {
         Knob::Selection,
         Knob::ShadowOffset,
         Knob::Precision,
+        Knob::Depth,
+        Knob::Roulette,
     ];
 
     /// Short name (tables, CSV, plot legends).
@@ -108,6 +119,8 @@ impl Knob {
             Knob::Selection => "lights per sample",
             Knob::ShadowOffset => "shadow offset",
             Knob::Precision => "light math",
+            Knob::Depth => "path depth",
+            Knob::Roulette => "roulette",
         }
     }
 
@@ -178,6 +191,27 @@ impl Knob {
                 .into_iter()
                 .map(|(l, p)| (l.to_string(), with(&|c| c.precision = p)))
                 .collect(),
+            Knob::Depth | Knob::Roulette => {
+                let Integrator::Path(depth) = base.integrator else { return vec![("direct".to_string(), *base)] };
+                let path = |d: PathDepth| with(&|c| c.integrator = Integrator::Path(d));
+                // The baseline's own value first, then the others of the ladder.
+                let (own, ladder): (u32, &[u32]) = if self == Knob::Depth {
+                    (depth.max_depth, &[1, 2, 4, 8, 16, 32])
+                } else {
+                    (depth.roulette_depth, &[1, 3, 8, u32::MAX])
+                };
+                let mut values: Vec<u32> = std::iter::once(own).chain(ladder.iter().copied()).collect();
+                values.sort_unstable();
+                values.dedup();
+                values
+                    .into_iter()
+                    .map(|v| match self {
+                        Knob::Depth => (format!("depth {v}"), path(PathDepth { max_depth: v, ..depth })),
+                        _ if v == u32::MAX => ("off".to_string(), path(PathDepth { roulette_depth: v, ..depth })),
+                        _ => (format!("from {v}"), path(PathDepth { roulette_depth: v, ..depth })),
+                    })
+                    .collect()
+            }
         }
     }
 }

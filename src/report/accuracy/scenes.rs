@@ -67,7 +67,9 @@ impl SceneId {
     pub fn knobs(self) -> Vec<Knob> {
         use Knob::*;
         match self {
-            SceneId::Default => vec![Spp, LightSampler, Color, Strategy, Selection, ShadowOffset, Precision],
+            SceneId::Default => {
+                vec![Spp, LightSampler, Color, Strategy, Selection, ShadowOffset, Precision, Depth, Roulette]
+            }
             SceneId::ManyLights => vec![Spp, LightSampler, Color, Selection, ShadowOffset, Precision],
             SceneId::EnvSun => vec![Spp, Color, EnvTable, Strategy, ShadowOffset],
             SceneId::CheckerBlackbody | SceneId::CheckerF11 => vec![Spp, Color],
