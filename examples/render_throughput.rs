@@ -19,8 +19,14 @@ fn main() {
     } else {
         kelvin::scenes::bench_scenes::spawn_point_over_plane(&mut world);
     }
-    let opts =
-        RenderOptions { width: 128, height: 128, spp: 64, strategy: Strategy::Mis, integrator: Integrator::Direct };
+    let opts = RenderOptions {
+        width: 128,
+        height: 128,
+        spp: 64,
+        strategy: Strategy::Mis,
+        integrator: Integrator::Direct,
+        ..Default::default()
+    };
     for _ in 0..repeats {
         let (_, stats) = render(&mut world, &mut schedule, &opts, |_| {});
         let p = stats.passes;

@@ -113,6 +113,7 @@ fn main() {
         spp: SPP as u32,
         strategy: Strategy::Mis,
         integrator: Integrator::Direct,
+        ..Default::default()
     };
     let mut best = f64::INFINITY;
     let mut pixels = Vec::new();

@@ -30,9 +30,11 @@ fn report_covers_every_batch_of_the_render() {
     let env = dir.join("sky.exr");
     kelvin::render::film_io::write_exr(&env, 4, 2, &[glam::Vec3::ONE; 8]).unwrap();
     let out = dir.join("report.png");
-    // 96 x 96 x 4 = 36864 camera samples: three batches of the light system.
+    // 96 x 96 x 4 = 36864 camera samples: three batches of the light system (one update each
+    // with direct lighting; the path tracer adds one per bounce).
     let output = Command::new(env!("CARGO_BIN_EXE_kelvin"))
         .args(["render", "-o", out.to_str().unwrap(), "--size", "96x96", "--spp", "4", "--report"])
+        .args(["--integrator", "direct"])
         .args(["--env", env.to_str().unwrap(), "--env-intensity=-1"])
         .output()
         .expect("kelvin runs");

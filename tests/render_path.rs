@@ -175,3 +175,23 @@ fn depth_one_agrees_with_the_direct_integrator_on_the_cornell_box() {
     eprintln!("mean luminance: direct {mean:.4}, path depth 8 {deep:.4}");
     assert!(deep > 1.2 * mean, "indirect light: {deep} vs {mean}");
 }
+
+/// A time budget renders passes of `spp` samples until it is spent, each pass drawing the next
+/// samples of every pixel: the picture is the one-pass render at the total spp, bit for bit.
+#[test]
+fn time_budget_renders_passes_equal_to_one_render_at_their_total_spp() {
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/gltf/bevy/CornellBox.glb");
+    let render_with = |spp: u32, budget: Option<std::time::Duration>| {
+        let (mut world, mut schedule) = world_with(ColorMode::Rgb, 2);
+        kelvin::render::scene_file::spawn_gltf_file(&mut world, std::path::Path::new(file)).unwrap();
+        let opts = RenderOptions { width: 12, height: 10, spp, time_budget: budget, ..Default::default() };
+        let (film, stats) = render(&mut world, &mut schedule, &opts, |_| {});
+        (film.pixels(), stats.spp)
+    };
+    let (passes, total) = render_with(2, Some(std::time::Duration::from_millis(300)));
+    assert!(total >= 4 && total.is_multiple_of(2), "{total} spp in passes of 2");
+    let (once, spp) = render_with(total, None);
+    assert_eq!(spp, total);
+    let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    assert_eq!(bits(&passes), bits(&once), "{total} spp");
+}

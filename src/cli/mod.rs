@@ -21,7 +21,7 @@ enum Command {
     Spectrum(spectrum::SpectrumArgs),
     /// Header, flux, peak intensity and beam angles of an IES LM-63 photometric file.
     Ies(ies::IesArgs),
-    /// Render a glTF scene (or the embedded default scene) with direct lighting.
+    /// Render a glTF scene (or the embedded default scene): path traced, or direct lighting.
     Render(render::RenderArgs),
     /// Reports: `report accuracy` prices each accuracy knob in render time.
     Report(report::ReportArgs),

@@ -1,5 +1,6 @@
-//! `kelvin render [SCENE] [-o out.exr] [--spp N] [--size WxH] [--env map [--env-intensity X]]
-//! [--integrator path|direct] [--max-depth N] [--roulette-depth N] [--light-sampler uniform|power|bvh] [--color rgb|spectral] [--seed S] [--threads T] [--report]`.
+//! `kelvin render [SCENE] [-o out.exr] [--spp N] [--time SECONDS] [--size WxH] [--env map [--env-intensity X]]
+//! [--integrator path|direct] [--max-depth N] [--roulette-depth N] [--light-sampler uniform|power|bvh]
+//! [--color rgb|spectral] [--seed S] [--threads T] [--report]`.
 
 use std::path::{Path, PathBuf};
 
@@ -23,9 +24,7 @@ enum SamplerArg {
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum IntegratorArg {
-    /// Paths of up to --max-depth bounces, every bounce through the light system.
     Path,
-    /// Light and BSDF samples at the surface the camera sees.
     Direct,
 }
 
@@ -42,9 +41,12 @@ pub struct RenderArgs {
     /// Output image: .exr (linear, photometric) or .png (tone-mapped). An .exr also gets a .png preview.
     #[arg(short, long, default_value = "render.exr")]
     output: PathBuf,
-    /// Camera samples per pixel.
+    /// Camera samples per pixel (per pass, with --time).
     #[arg(long, default_value_t = 32)]
     spp: u32,
+    /// Render passes of --spp samples per pixel until this many seconds have passed (at least one).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    time: Option<f64>,
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
     size: (u32, u32),
@@ -54,7 +56,8 @@ pub struct RenderArgs {
     /// Luminance (nit) of an environment texel of value 1.
     #[arg(long, default_value_t = 1.0)]
     env_intensity: f32,
-    /// How light reaches the camera.
+    /// How light reaches the camera: paths of up to --max-depth bounces, every bounce through the
+    /// light system, or direct lighting (light and BSDF samples at the surface the camera sees).
     #[arg(long, value_enum, default_value = "path")]
     integrator: IntegratorArg,
     /// Path tracer: surfaces after the camera's at most (1 = direct lighting, 0 = emission only).
@@ -100,6 +103,13 @@ fn parse_point(s: &str) -> Result<glam::Vec3, String> {
     match v[..] {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
         _ => Err(format!("'{s}': expected three numbers X,Y,Z")),
+    }
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t.is_finite() && t >= 0.0 && t < 1e7 => Ok(t),
+        _ => Err(format!("'{s}': expected a number of seconds, 0 or more")),
     }
 }
 
@@ -203,6 +213,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             }
             IntegratorArg::Direct => Integrator::Direct,
         },
+        time_budget: args.time.map(std::time::Duration::from_secs_f64),
     };
     let bar = ProgressBar::new(1000);
     bar.set_style(
@@ -221,7 +232,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let secs = stats.seconds.max(1e-9);
     println!(
         "rendered {width}x{height} at {} spp in {:.3} s: {:.2} M samples/s, {:.2} M shadow rays/s, {:.2} M BSDF rays/s",
-        opts.spp,
+        stats.spp,
         stats.seconds,
         stats.camera_samples as f64 / secs / 1e6,
         stats.shadow_rays as f64 / secs / 1e6,

@@ -80,8 +80,8 @@ impl CameraColumns {
     }
 }
 
-/// Which samples a batch holds and how they map to pixels: sample index k is sample k % spp of
-/// pixel k / spp, so a pixel's samples are adjacent.
+/// Which samples a batch holds and how they map to pixels: sample index k is sample
+/// `first_sample + k % spp` of pixel k / spp, so a pixel's samples are adjacent.
 #[derive(Clone, Copy)]
 pub(super) struct SampleRange {
     pub(super) first: usize,
@@ -89,6 +89,8 @@ pub(super) struct SampleRange {
     pub(super) width: u32,
     pub(super) spp: u32,
     pub(super) seed: u64,
+    /// Samples of each pixel that earlier passes took.
+    pub(super) first_sample: u32,
 }
 
 /// Writes slot `i` of every column for a ray with direction `dir` and closest hit `hit`. Escaped
@@ -277,7 +279,7 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
             // value, where the loop below would store lane by lane and stall the vector loads.
             (pixel, x, y) = ([next_pixel; LANES], [next_x; LANES], [next_y; LANES]);
             for (l, s) in sample.iter_mut().enumerate() {
-                *s = next_sample + l as u32;
+                *s = range.first_sample + next_sample + l as u32;
             }
             next_sample += LANES as u32;
             if next_sample == spp {
@@ -288,7 +290,7 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
             }
         } else {
             for l in 0..end - b {
-                (pixel[l], sample[l], x[l], y[l]) = (next_pixel, next_sample, next_x, next_y);
+                (pixel[l], sample[l], x[l], y[l]) = (next_pixel, range.first_sample + next_sample, next_x, next_y);
                 next_sample += 1;
                 if next_sample == spp {
                     (next_pixel, next_sample, next_x) = (next_pixel + 1, 0, next_x + 1);

@@ -78,11 +78,21 @@ pub struct RenderOptions {
     pub strategy: Strategy,
     /// Defaults to path tracing.
     pub integrator: Integrator,
+    /// Render passes of `spp` samples per pixel until this much time has passed (at least one
+    /// pass); None for one pass.
+    pub time_budget: Option<std::time::Duration>,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { width: 256, height: 256, spp: 16, strategy: Strategy::Mis, integrator: Integrator::default() }
+        Self {
+            width: 256,
+            height: 256,
+            spp: 16,
+            strategy: Strategy::Mis,
+            integrator: Integrator::default(),
+            time_budget: None,
+        }
     }
 }
 
@@ -97,6 +107,8 @@ impl RenderOptions {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RenderStats {
     pub seconds: f64,
+    /// Samples per pixel rendered (more than asked under a time budget).
+    pub spp: u32,
     pub camera_samples: u64,
     pub shadow_rays: u64,
     pub bsdf_rays: u64,
@@ -215,43 +227,56 @@ fn render_on_pool(
     let mut columns = CameraColumns::default();
     let mut contributions: Vec<Vec3> = Vec::new();
     let mut paths = Paths::default();
-    let mut first = 0usize;
-    while first < total {
-        let len = BATCH_SAMPLES.min(total - first);
-        let range = SampleRange { first, len, width: opts.width, spp: opts.spp, seed };
-        let camera_start = std::time::Instant::now();
-        // Every camera sample takes a slot of the batch (one with no point if its ray escaped).
-        world.resource_scope(|world, mut batch: Mut<ShadingBatch>| {
-            trace_camera_rays(&mut batch, &mut columns, world.resource::<SceneBvh>(), &camera, range);
-            // Spectral mode: the wavelengths of each sample (dimension 2 of its stream).
-            if spectral {
-                let batch = &mut *batch;
-                let lambda =
-                    batch.pixel.par_iter().zip(&batch.sample).with_min_len(RAY_CHUNK).map(|(&pixel, &sample)| {
-                        SampledWavelengths::sample_visible(
-                            SampleStream::new(seed, pixel, sample).at_dimension(2).next_f32(),
-                        )
-                    });
-                batch.wavelengths.par_extend(lambda);
+    // Passes of `spp` samples per pixel: one, or as many as fit in the time budget (each pass
+    // draws the next samples of every pixel's streams).
+    for pass in 0u32.. {
+        let first_sample = pass * opts.spp;
+        let mut first = 0usize;
+        while first < total {
+            let len = BATCH_SAMPLES.min(total - first);
+            let range = SampleRange { first, len, width: opts.width, spp: opts.spp, seed, first_sample };
+            let camera_start = std::time::Instant::now();
+            // Every camera sample takes a slot of the batch (one with no point if its ray escaped).
+            world.resource_scope(|world, mut batch: Mut<ShadingBatch>| {
+                trace_camera_rays(&mut batch, &mut columns, world.resource::<SceneBvh>(), &camera, range);
+                // Spectral mode: the wavelengths of each sample (dimension 2 of its stream).
+                if spectral {
+                    let batch = &mut *batch;
+                    let lambda =
+                        batch.pixel.par_iter().zip(&batch.sample).with_min_len(RAY_CHUNK).map(|(&pixel, &sample)| {
+                            SampledWavelengths::sample_visible(
+                                SampleStream::new(seed, pixel, sample).at_dimension(2).next_f32(),
+                            )
+                        });
+                    batch.wavelengths.par_extend(lambda);
+                }
+            });
+            stats.passes.camera += camera_start.elapsed().as_secs_f64();
+            match opts.integrator {
+                Integrator::Direct => {
+                    let job = DirectJob { columns: &columns, materials: &materials, seed, strategy: opts.strategy };
+                    job.shade(world, schedule, (&mut film, first, opts.spp as usize), &mut contributions, &mut stats);
+                }
+                Integrator::Path(depth) => {
+                    let job = PathJob { depth, materials: &materials, seed, strategy: opts.strategy };
+                    paths.trace(world, schedule, &mut columns, &job, &mut contributions, &mut stats);
+                    let film_start = std::time::Instant::now();
+                    film.par_add_samples(first, opts.spp as usize, &contributions);
+                    stats.passes.shading += film_start.elapsed().as_secs_f64();
+                }
             }
-        });
-        stats.passes.camera += camera_start.elapsed().as_secs_f64();
-        match opts.integrator {
-            Integrator::Direct => {
-                let job = DirectJob { columns: &columns, materials: &materials, seed, strategy: opts.strategy };
-                job.shade(world, schedule, (&mut film, first, opts.spp as usize), &mut contributions, &mut stats);
-            }
-            Integrator::Path(depth) => {
-                let job = PathJob { depth, materials: &materials, seed, strategy: opts.strategy };
-                paths.trace(world, schedule, &mut columns, &job, &mut contributions, &mut stats);
-                let film_start = std::time::Instant::now();
-                film.par_add_samples(first, opts.spp as usize, &contributions);
-                stats.passes.shading += film_start.elapsed().as_secs_f64();
-            }
+            stats.camera_samples += len as u64;
+            first += len;
+            let done = match opts.time_budget {
+                None => first as f32 / total as f32,
+                Some(budget) => (start.elapsed().as_secs_f64() / budget.as_secs_f64()).min(1.0) as f32,
+            };
+            progress(done);
         }
-        stats.camera_samples += len as u64;
-        first += len;
-        progress(first as f32 / total as f32);
+        stats.spp += opts.spp;
+        if opts.time_budget.is_none_or(|budget| start.elapsed() >= budget) {
+            break;
+        }
     }
     stats.seconds = start.elapsed().as_secs_f64();
     (film, stats)

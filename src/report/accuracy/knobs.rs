@@ -46,7 +46,14 @@ impl Config {
 
     /// The render options of this configuration.
     pub fn render_options(&self, width: u32, height: u32) -> RenderOptions {
-        RenderOptions { width, height, spp: self.spp, strategy: self.strategy, integrator: self.integrator }
+        RenderOptions {
+            width,
+            height,
+            spp: self.spp,
+            strategy: self.strategy,
+            integrator: self.integrator,
+            ..Default::default()
+        }
     }
 
     /// Writes the light-system settings (with `seed`) and the env-table width into `world`. The
