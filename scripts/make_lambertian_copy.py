@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Write a copy of a glTF 2.0 file (.glb or .gltf) whose materials are Lambertian and whose emitters are one-sided.
 
-    python3 scripts/make_lambertian_copy.py IN.glb|IN.gltf OUT.glb|OUT.gltf
+    python3 scripts/make_lambertian_copy.py [--emitters-only] IN.glb|IN.gltf OUT.glb|OUT.gltf
 
 Why: to compare kelvin's path tracer with Mitsuba 3 on the same scene. Mitsuba's `principled` BSDF is not
 glTF's BRDF, and Mitsuba's area lights emit from the front face only, so both sides are made to agree:
@@ -11,6 +11,8 @@ glTF's BRDF, and Mitsuba's area lights emit from the front face only, so both si
     is kept; baseColor factor and texture, normals and alpha are kept;
   * every emissive material (emissiveFactor > 0 or an emissiveTexture): doubleSided false (front face only);
   * "KHR_materials_specular" is added to extensionsUsed.
+With --emitters-only, only the emitters are made one-sided and the materials are left as they are (to compare
+glTF's own BRDF, e.g. with bench/mitsuba/gltf_bsdf.py).
 The output keeps the input's form (.glb in, .glb out; .gltf in, .gltf out). For a .gltf written to another
 folder, the external buffers and images it names are copied beside it under the same relative paths.
 Standard library only. Prints one line per changed material.
@@ -64,6 +66,15 @@ def is_emissive(m):
     return any(float(c) > 0 for c in m.get("emissiveFactor", [0, 0, 0])) or "emissiveTexture" in m
 
 
+def one_sided_emitters(doc):
+    changes = []
+    for i, m in enumerate(doc.get("materials", [])):
+        if is_emissive(m) and m.get("doubleSided", False):
+            m["doubleSided"] = False
+            changes.append(f"material {i} '{m.get('name', '')}': emissive: doubleSided -> false")
+    return changes
+
+
 def lambertian(doc):
     """Edits doc's materials in place; -> list of change descriptions."""
     changes = []
@@ -115,6 +126,8 @@ def copy_external(doc, src_dir, dst_dir):
 
 
 def main(argv):
+    emitters_only = "--emitters-only" in argv
+    argv = [x for x in argv if x != "--emitters-only"]
     if len(argv) != 2 or argv[0] in ("-h", "--help"):
         print(__doc__)
         return 0 if argv and argv[0] in ("-h", "--help") else 2
@@ -124,7 +137,7 @@ def main(argv):
         raise SystemExit(f"{src}: not a glTF 2.x file")
     if glb != dst.lower().endswith(".glb"):
         raise SystemExit(f"{dst}: give the same form as the input ({'.glb' if glb else '.gltf'})")
-    for line in lambertian(doc):
+    for line in (one_sided_emitters(doc) if emitters_only else lambertian(doc)):
         print(line)
     os.makedirs(os.path.dirname(os.path.abspath(dst)), exist_ok=True)
     if glb:

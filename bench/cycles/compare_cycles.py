@@ -9,7 +9,9 @@
 For each kelvin depth d: kelvin `render --integrator path --max-depth d` at N spp (seed 0), Cycles
 (cycles_gltf.py beside this file, bounces d-1) at N spp (seed 1) and a Cycles reference at N*M spp (seed 2).
 Prints the same figures as bench/mitsuba/compare_path.py: image mean ratio kelvin/reference (goal: within 2%),
-Cycles@N/reference, per-pixel RMSE(kelvin@N, ref) / RMSE(Cycles@N, ref) (goal: within 1.5), and the 8x8 tile
+Cycles@N/reference, per-pixel RMSE(kelvin@N, ref) / RMSE(Cycles@N, ref) (goal: within 1.5; Cycles samples
+with a tabulated Sobol sequence, kelvin with independent random numbers, so this also measures the samplers),
+RMSE(kelvin@N, ref) over kelvin's own noise (from a second kelvin seed; ~1 when unbiased), and the 8x8 tile
 where kelvin departs most from the reference. With --lambertian both render the Lambertian, one-sided-emitter
 copy of scripts/make_lambertian_copy.py instead (a check of units, camera and sidedness without the BRDFs).
 Run it with the Mitsuba venv's python (numpy and its EXR reader); Cycles runs in its own venv's python.
@@ -61,9 +63,10 @@ def main(argv=None):
     for d in (int(x) for x in a.depths.split(",")):
         tag = out / f"{label}_d{d}"
         k = kelvin_render(a, scene, None, d, a.spp, 0, f"{tag}_kelvin.exr")
+        kelvin_render(a, scene, None, d, a.spp, 1, f"{tag}_kelvin_seed1.exr")
         c = cycles_render(a, scene, d, a.spp, 1, f"{tag}_cycles.exr")
         cr = cycles_render(a, scene, d, a.spp * a.ref_mult, 2, f"{tag}_ref.exr")
-        r = image_metrics(*(load_exr(f"{tag}_{s}.exr") for s in ("kelvin", "cycles", "ref")))
+        r = image_metrics(*(load_exr(f"{tag}_{s}.exr") for s in ("kelvin", "cycles", "ref", "kelvin_seed1")))
         r.update({"scene": label, "depth": d, "cycles_bounces": d - 1, "kelvin_seconds": k["seconds"],
                   "cycles_seconds": c["seconds"], "cycles_ref_seconds": cr["seconds"]})
         results["rows"].append(r)
@@ -71,7 +74,7 @@ def main(argv=None):
         ok = abs(r["mean_k_ref"] - 1) <= 0.02 and r["rmse_ratio"] <= 1.5
         print(f"{label} d={d} (Cycles bounces {d - 1}): mean k/ref {r['mean_k_ref']:.4f} "
               f"(RGB {'/'.join(f'{x:.3f}' for x in r['mean_k_ref_rgb'])}), cycles/ref {r['mean_m_ref']:.4f}, "
-              f"k/cycles {r['mean_k_m']:.4f}; RMSE ratio {r['rmse_ratio']:.3f}; worst tile x{wt['x']} y{wt['y']}: "
+              f"k/cycles {r['mean_k_m']:.4f}; RMSE ratio {r['rmse_ratio']:.3f} (over kelvin's own noise {r['rmse_k_over_noise']:.3f}); worst tile x{wt['x']} y{wt['y']}: "
               f"k/ref {wt['k_ref']:.3f}, cycles/ref {wt['m_ref']:.3f}  {'ok' if ok else 'OUTSIDE GOALS'}", flush=True)
     if a.json_out:
         Path(a.json_out).write_text(json.dumps(results, indent=1, default=str) + "\n")

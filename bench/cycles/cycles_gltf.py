@@ -4,7 +4,7 @@ comparison.
 
     /tmp/cycles-venv/bin/python bench/cycles/cycles_gltf.py SCENE.glb|.gltf [--size 128x128] [--spp 64]
         [--max-depth 5] [--seed 0] [--out OUT.exr] [--filter-width 1.0] [--lighting-mode COMPAT]
-        [--sampling-pattern TABULATED_SOBOL] [--threads 0] [--json]
+        [--sampling-pattern TABULATED_SOBOL] [--distribution MULTI_GGX|GGX] [--threads 0] [--json]
 
 Needs the `bpy` wheel (pip install bpy==5.0.1 in a Python 3.11 venv, see README.md beside this file).
   * Import: Blender's own glTF importer (bpy.ops.import_scene.gltf) into an empty file, with --lighting-mode:
@@ -44,6 +44,8 @@ def parse_args(argv):
     ap.add_argument("--lighting-mode", choices=["SPEC", "COMPAT", "RAW"], default="COMPAT")
     ap.add_argument("--sampling-pattern", default="TABULATED_SOBOL",
                     help="Cycles sampling pattern (default TABULATED_SOBOL; AUTOMATIC uses blue noise)")
+    ap.add_argument("--distribution", choices=["MULTI_GGX", "GGX"], default=None,
+                    help="set every Principled BSDF's distribution (default: the importer's, multiscatter GGX)")
     ap.add_argument("--threads", type=int, default=0, help="0: all cores")
     ap.add_argument("--json", action="store_true", help="print a JSON line last")
     a = ap.parse_args(argv)
@@ -119,6 +121,11 @@ def setup(bpy, mathutils, a, notes):
             ob.data.shadow_soft_size = 0.0
             if ob.data.type == "SUN":
                 ob.data.angle = 0.0
+    if a.distribution:
+        for mat in bpy.data.materials:
+            for node in (mat.node_tree.nodes if mat.node_tree else []):
+                if node.type == "BSDF_PRINCIPLED":
+                    node.distribution = a.distribution
     world = bpy.data.worlds.new("black")
     world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0

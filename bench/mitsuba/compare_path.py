@@ -3,7 +3,7 @@
 
     /tmp/mitsuba-venv/bin/python bench/mitsuba/compare_path.py [--kelvin /tmp/kelvin-path] [--size 128x128]
         [--spp 64] [--ref-mult 16] [--depths 5,1] [--scenes cornell_box,env_objects] [--out-dir /tmp/peers]
-        [--variant llvm_ad_rgb] [--speed] [--speed-spp 256] [--rounds 3] [--json-out FILE]
+        [--variant llvm_ad_rgb] [--brdf lambertian|gltf] [--speed] [--speed-spp 256] [--rounds 3] [--json-out FILE]
 
 Per scene: scripts/make_lambertian_copy.py writes a copy whose materials are Lambertian and whose emitters are
 one-sided (Mitsuba's `principled` is not glTF's BRDF and its area lights emit from the front only). Then, for
@@ -16,8 +16,12 @@ and prints
   k/m                     kelvin's mean over Mitsuba@N's
   RMSE ratio              per-pixel RMSE(kelvin@N, ref) / RMSE(Mitsuba@N, ref); goal: within 1.5 (the
                           reference's own noise, 1/M of Mitsuba@N's variance, is in both)
+  over kelvin's own noise RMSE(kelvin@N, ref) / (RMSE(kelvin@N, kelvin@N seed 1) / sqrt 2): ~1 when kelvin
+                          is unbiased per pixel, whatever the other renderer's sampler
   worst tile              of an 8x8 grid of tiles, the one where kelvin's mean departs most from the
                           reference's, with Mitsuba@N's ratio there (noise level) and the tile's pixel box
+With --brdf gltf, the copy keeps the file's materials (only the emitters become one-sided) and Mitsuba renders
+them with gltf_bsdf.py, glTF's BRDF written from the specification, instead of `principled`.
 With --speed: camera samples/s and rays/s of both, alternating kelvin and Mitsuba (--variant, the same max
 depth, Mitsuba's rr_depth = kelvin's --roulette-depth) --rounds times, best of each. kelvin's own line
 (`rendered ... in T s: A M samples/s, B M shadow rays/s, C M BSDF rays/s`) times the render without loading the
@@ -86,6 +90,8 @@ def mitsuba_render(a, scene, env, depth, spp, seed, out=None, repeat=1, size=Non
         cmd += ["--out", out]
     if env:
         cmd += ["--env", env[0], "--env-intensity", env[1]]
+    if a.brdf == "gltf":
+        cmd += ["--gltf-brdf"]
     out_text = run(cmd, a.env)
     return json.loads([ln for ln in out_text.splitlines() if ln.startswith("{")][-1])
 
@@ -98,13 +104,17 @@ def tiles(img, n=8):
     return means, ys, xs
 
 
-def image_metrics(k, m, ref):
-    rmse = lambda x: float(np.sqrt(((x - ref) ** 2).mean()))  # noqa: E731
+def image_metrics(k, m, ref, k2=None):
+    """k, m: the two renderers at N spp; ref: the reference; k2: kelvin at another seed (its own noise)."""
+    rmse = lambda x, y=ref: float(np.sqrt(((x - y) ** 2).mean()))  # noqa: E731
     r = {"mean_k_ref": float(k.mean() / ref.mean()), "mean_m_ref": float(m.mean() / ref.mean()),
          "mean_k_m": float(k.mean() / m.mean()),
          "mean_k_ref_rgb": [float(x) for x in k.reshape(-1, 3).mean(0) / ref.reshape(-1, 3).mean(0)],
          "rmse_k": rmse(k), "rmse_m": rmse(m)}
     r["rmse_ratio"] = r["rmse_k"] / r["rmse_m"]
+    if k2 is not None:  # RMSE(k, ref) over kelvin's own noise: ~1 (plus the reference's noise) if unbiased
+        r["rmse_k_noise"] = rmse(k, k2) / np.sqrt(2.0)
+        r["rmse_k_over_noise"] = r["rmse_k"] / r["rmse_k_noise"]
     tk, ys, xs = tiles(k)
     tm, _, _ = tiles(m)
     tr, _, _ = tiles(ref)
@@ -118,18 +128,19 @@ def image_metrics(k, m, ref):
 
 def accuracy(a, name, scene, env, results):
     for d in a.depths:
-        tag = f"{a.out_dir}/{name}_d{d}"
+        tag = f"{a.out_dir}/{name}_{a.brdf}_d{d}"
         kelvin_render(a, scene, env, d, a.spp, 0, f"{tag}_kelvin.exr")
+        kelvin_render(a, scene, env, d, a.spp, 1, f"{tag}_kelvin_seed1.exr")
         mitsuba_render(a, scene, env, d, a.spp, 1, f"{tag}_mitsuba.exr")
         mitsuba_render(a, scene, env, d, a.spp * a.ref_mult, 2, f"{tag}_ref.exr")
-        k, m, ref = (load_exr(f"{tag}_{s}.exr") for s in ("kelvin", "mitsuba", "ref"))
-        r = image_metrics(k, m, ref)
-        r.update({"scene": name, "depth": d, "mitsuba_max_depth": d + 1})
+        k, m, ref, k2 = (load_exr(f"{tag}_{s}.exr") for s in ("kelvin", "mitsuba", "ref", "kelvin_seed1"))
+        r = image_metrics(k, m, ref, k2)
+        r.update({"scene": name, "brdf": a.brdf, "depth": d, "mitsuba_max_depth": d + 1})
         results["accuracy"].append(r)
         wt = r["worst_tile"]
         ok = abs(r["mean_k_ref"] - 1) <= 0.02 and r["rmse_ratio"] <= 1.5
-        print(f"{name} d={d}: mean k/ref {r['mean_k_ref']:.4f} (RGB {'/'.join(f'{x:.3f}' for x in r['mean_k_ref_rgb'])}),"
-              f" m/ref {r['mean_m_ref']:.4f}, k/m {r['mean_k_m']:.4f}; RMSE ratio {r['rmse_ratio']:.3f}; worst tile "
+        print(f"{name} ({a.brdf}) d={d}: mean k/ref {r['mean_k_ref']:.4f} (RGB {'/'.join(f'{x:.3f}' for x in r['mean_k_ref_rgb'])}),"
+              f" m/ref {r['mean_m_ref']:.4f}, k/m {r['mean_k_m']:.4f}; RMSE ratio {r['rmse_ratio']:.3f} (over kelvin's own noise {r['rmse_k_over_noise']:.3f}); worst tile "
               f"x{wt['x']} y{wt['y']}: k/ref {wt['k_ref']:.3f}, m/ref {wt['m_ref']:.3f}  {'ok' if ok else 'OUTSIDE GOALS'}",
               flush=True)
 
@@ -137,11 +148,12 @@ def accuracy(a, name, scene, env, results):
 def speed(a, name, scene, env, results):
     d, n = a.speed_depth, a.speed_spp
     tmp = f"{a.out_dir}/{name}_speed.exr"
-    k_runs, k1_runs, m_runs = [], [], []
+    k_runs, k1_runs, m_runs, load = [], [], [], [os.getloadavg()[0]]
     for _ in range(a.rounds):
         k1_runs.append(kelvin_render(a, scene, env, d, 1, 0, tmp))
         k_runs.append(kelvin_render(a, scene, env, d, n, 0, tmp))
         m_runs.append(mitsuba_render(a, scene, env, d, n, 0, repeat=3))
+        load.append(os.getloadavg()[0])
     k = min(k_runs, key=lambda r: r["seconds"])
     t1 = min(r["seconds"] for r in k1_runs)
     m_sps = max(r["samples_per_s"] for r in m_runs)
@@ -152,7 +164,8 @@ def speed(a, name, scene, env, results):
          "kelvin_rays_per_sample": rays_per_sample, "kelvin_rays_per_s": k["samples_per_s"] * rays_per_sample,
          "mitsuba_seconds": min(r["seconds_best"] for r in m_runs), "mitsuba_samples_per_s": m_sps,
          "mitsuba_rays_per_s_est": m_sps * rays_per_sample, "ratio": k["samples_per_s"] / m_sps,
-         "ratio_net": net / m_sps, "kelvin_runs": k_runs, "mitsuba_runs": [x["seconds_all"] for x in m_runs]}
+         "ratio_net": net / m_sps, "kelvin_runs": k_runs, "mitsuba_runs": [x["seconds_all"] for x in m_runs],
+         "load_average_1min": load, "threads_mitsuba": m_runs[0]["threads"]}
     results["speed"].append(r)
 
 
@@ -167,6 +180,8 @@ def main(argv=None):
     ap.add_argument("--scenes", default="cornell_box,env_objects", help=f"comma-separated, of {list(SCENES)}")
     ap.add_argument("--out-dir", default="/tmp/peers", help="Lambertian copies and EXRs go here")
     ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--brdf", choices=["lambertian", "gltf"], default="lambertian",
+                    help="lambertian: Lambertian copies; gltf: the file's materials, Mitsuba with gltf_bsdf.py")
     ap.add_argument("--no-accuracy", action="store_true", help="skip the image comparison")
     ap.add_argument("--speed", action="store_true", help="also time both renderers")
     ap.add_argument("--speed-spp", type=int, default=256)
@@ -187,8 +202,9 @@ def main(argv=None):
             raise SystemExit(f"unknown scene {name}; known: {list(SCENES)}")
         rel, env_map, env_int = SCENES[name]
         src = DATA / rel
-        copy = Path(a.out_dir) / name / ("lambertian" + src.suffix)
-        run([sys.executable, REPO / "scripts" / "make_lambertian_copy.py", src, copy])
+        copy = Path(a.out_dir) / name / (a.brdf + src.suffix)
+        run([sys.executable, REPO / "scripts" / "make_lambertian_copy.py"]
+            + (["--emitters-only"] if a.brdf == "gltf" else []) + [src, copy])
         env = (DATA / env_map, env_int) if env_map else None
         if not a.no_accuracy:
             accuracy(a, name, copy, env, results)
@@ -197,6 +213,9 @@ def main(argv=None):
     if results["speed"]:
         print(f"\nspeed: {a.size}, kelvin --max-depth {a.speed_depth} vs Mitsuba {a.variant} path max_depth "
               f"{a.speed_depth + 1}, {a.speed_spp} spp, best of {a.rounds} alternating rounds\n")
+        loads = [x for r in results["speed"] for x in r["load_average_1min"]]
+        print(f"machine: {os.cpu_count()} cores, 1-min load average {min(loads):.1f}-{max(loads):.1f} during the runs "
+              f"(other users' work included)\n")
         print("| scene | kelvin M samples/s (net of 1-spp frame) | kelvin M rays/s (rays/sample) "
               "| Mitsuba M samples/s | Mitsuba M rays/s (est.) | ratio (net) |")
         print("|---|---:|---:|---:|---:|---:|")
