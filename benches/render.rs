@@ -5,7 +5,7 @@
 
 use bevy_ecs::prelude::*;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use kelvin::render::renderer::{Integrator, RenderOptions, Strategy, render};
+use kelvin::render::renderer::{RenderOptions, render};
 use kelvin::report::render_bench::{RenderBenchConfig, SUITE, suite_options};
 use kelvin::systems::LightingPlugin;
 
@@ -18,14 +18,7 @@ fn world_with(spawn: fn(&mut World)) -> (World, Schedule) {
 }
 
 fn bench_render(c: &mut Criterion) {
-    let opts = RenderOptions {
-        width: 128,
-        height: 128,
-        spp: 64,
-        strategy: Strategy::Mis,
-        integrator: Integrator::Direct,
-        ..Default::default()
-    };
+    let opts = RenderOptions::direct(128, 128, 64);
     let mut group = c.benchmark_group("render_128x128_64spp");
     group.sample_size(10).throughput(Throughput::Elements(128 * 128 * 64));
     for (name, spawn) in [

@@ -4,7 +4,7 @@
 //! `cargo run --release --example render_throughput [default] [repeats]`
 
 use bevy_ecs::prelude::*;
-use kelvin::render::renderer::{Integrator, RenderOptions, Strategy, render};
+use kelvin::render::renderer::{RenderOptions, render};
 use kelvin::systems::LightingPlugin;
 
 fn main() {
@@ -19,14 +19,7 @@ fn main() {
     } else {
         kelvin::scenes::bench_scenes::spawn_point_over_plane(&mut world);
     }
-    let opts = RenderOptions {
-        width: 128,
-        height: 128,
-        spp: 64,
-        strategy: Strategy::Mis,
-        integrator: Integrator::Direct,
-        ..Default::default()
-    };
+    let opts = RenderOptions::direct(128, 128, 64);
     for _ in 0..repeats {
         let (_, stats) = render(&mut world, &mut schedule, &opts, |_| {});
         let p = stats.passes;

@@ -13,7 +13,7 @@
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
-use kelvin::render::renderer::{Integrator, RenderOptions, Strategy, render};
+use kelvin::render::renderer::{RenderOptions, render};
 use kelvin::rng::SampleStream;
 use rayon::prelude::*;
 
@@ -107,14 +107,7 @@ fn main() {
     let (mut world, mut schedule) = (World::new(), Schedule::default());
     kelvin::systems::LightingPlugin::build(&mut world, &mut schedule);
     kelvin::scenes::bench_scenes::spawn_point_over_plane(&mut world);
-    let opts = RenderOptions {
-        width: WIDTH as u32,
-        height: HEIGHT as u32,
-        spp: SPP as u32,
-        strategy: Strategy::Mis,
-        integrator: Integrator::Direct,
-        ..Default::default()
-    };
+    let opts = RenderOptions::direct(WIDTH as u32, HEIGHT as u32, SPP as u32);
     let mut best = f64::INFINITY;
     let mut pixels = Vec::new();
     for _ in 0..repeats {

@@ -5,7 +5,7 @@ use glam::Vec3;
 use kelvin::geometry::Transform;
 use kelvin::light::{LightKind, LightTable, PointLight};
 use kelvin::light_sampler::LightSampler;
-use kelvin::render::renderer::{Integrator, RenderOptions, Strategy, render};
+use kelvin::render::renderer::{RenderOptions, render};
 use kelvin::shading::{LightSamplerKind, RunReport, Settings};
 use kelvin::systems::LightingPlugin;
 
@@ -15,19 +15,7 @@ fn default_scene_has_area_spot_blackbody_point_and_sky_lights_and_renders() {
     let mut schedule = Schedule::default();
     LightingPlugin::build(&mut world, &mut schedule);
     kelvin::scenes::default_scene::spawn_default_scene(&mut world);
-    let (film, stats) = render(
-        &mut world,
-        &mut schedule,
-        &RenderOptions {
-            width: 24,
-            height: 24,
-            spp: 2,
-            strategy: Strategy::Mis,
-            integrator: Integrator::Direct,
-            ..Default::default()
-        },
-        |_| {},
-    );
+    let (film, stats) = render(&mut world, &mut schedule, &RenderOptions::direct(24, 24, 2), |_| {});
     assert!(stats.report.warnings.is_empty(), "{}", stats.report);
     // Lights are chosen by the light BVH unless the settings say otherwise (as in pbrt-v4).
     assert_eq!(Settings::default().light_sampler, LightSamplerKind::Bvh);
@@ -69,14 +57,7 @@ fn render_report_keeps_every_warning_and_sums_counts_over_batches() {
     kelvin::scenes::default_scene::spawn_default_scene(&mut world);
     world.spawn((PointLight::candela(-5.0), Transform::from_translation(Vec3::Y)));
     // 96 x 96 x 4 = 36864 camera samples: three batches, after the update that syncs the scene.
-    let opts = RenderOptions {
-        width: 96,
-        height: 96,
-        spp: 4,
-        strategy: Strategy::Mis,
-        integrator: Integrator::Direct,
-        ..Default::default()
-    };
+    let opts = RenderOptions::direct(96, 96, 4);
     let (_, stats) = render(&mut world, &mut schedule, &opts, |_| {});
     let report = &stats.report;
     assert_eq!(report.updates, 4, "{report}");

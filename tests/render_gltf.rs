@@ -24,7 +24,7 @@ mod irradiance;
 
 use bevy_ecs::prelude::*;
 use kelvin::light::LightTable;
-use kelvin::render::renderer::{Integrator, RenderOptions, Strategy, render};
+use kelvin::render::renderer::{RenderOptions, render};
 use kelvin::scene::gltf::load_gltf;
 use kelvin::scene::spawn::{SpawnReport, spawn_gltf};
 use kelvin::systems::LightingPlugin;
@@ -155,14 +155,7 @@ fn every_real_gltf_scene_has_exactly_its_lights_in_the_table() {
 fn every_real_gltf_scene_renders_lit() {
     for e in SCENES {
         let Loaded { mut world, mut schedule, report } = load(e.file);
-        let opts = RenderOptions {
-            width: 24,
-            height: 16,
-            spp: 2,
-            strategy: Strategy::Mis,
-            integrator: Integrator::Direct,
-            ..Default::default()
-        };
+        let opts = RenderOptions::direct(24, 16, 2);
         let (film, stats) = render(&mut world, &mut schedule, &opts, |_| {});
         let pixels = film.pixels();
         assert!(
@@ -196,14 +189,7 @@ fn every_real_gltf_scene_renders_lit() {
 #[test]
 fn kajiya_emissive_triangle_pixels_see_its_radiance() {
     let Loaded { mut world, mut schedule, .. } = load("kajiya/emissive_triangle/triangle.glb");
-    let opts = RenderOptions {
-        width: 24,
-        height: 16,
-        spp: 2,
-        strategy: Strategy::Mis,
-        integrator: Integrator::Direct,
-        ..Default::default()
-    };
+    let opts = RenderOptions::direct(24, 16, 2);
     let (film, _) = render(&mut world, &mut schedule, &opts, |_| {});
     let max = film.pixels().iter().map(|p| lum_rgb(*p)).fold(0.0, f64::max);
     eprintln!("triangle.glb: brightest pixel Y {max:.6} (expected 1)");

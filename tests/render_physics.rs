@@ -62,14 +62,7 @@ fn point_light_over_lambertian_floor_gives_rho_over_pi_i_over_h2() {
 fn shadow_rays_leaving_a_floor_are_not_blocked_by_it_and_a_ball_aside_changes_nothing() {
     let (mut world, mut schedule) = floor_scene(ColorMode::Rgb, 0.5);
     world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.0, 2.0, 0.0))));
-    let opts = RenderOptions {
-        width: 5,
-        height: 5,
-        spp: 4,
-        strategy: Strategy::Mis,
-        integrator: Integrator::Direct,
-        ..Default::default()
-    };
+    let opts = RenderOptions::direct(5, 5, 4);
     let (alone, stats) = render(&mut world, &mut schedule, &opts, |_| {});
     assert_eq!(stats.shadow_rays, stats.camera_samples);
     assert!(alone.pixel(2, 2).max_element() > 0.0, "the floor shadowed itself");

@@ -80,7 +80,7 @@ fn quick_report_is_written_and_its_numbers_are_sane() {
 #[test]
 fn color_checker_patches_render_albedo_times_white_luminance() {
     use bevy_ecs::prelude::*;
-    use kelvin::render::renderer::{Integrator, RenderOptions, Strategy, render};
+    use kelvin::render::renderer::{RenderOptions, render};
     use kelvin::report::accuracy::patch_means;
     use kelvin::scenes::color_checker::spawn_color_checker;
     use kelvin::spectrum::Spectrum;
@@ -91,19 +91,7 @@ fn color_checker_patches_render_albedo_times_white_luminance() {
     LightingPlugin::build(&mut world, &mut schedule);
     let checker = spawn_color_checker(&mut world, Spectrum::d65());
     let (w, h) = (64, 48);
-    let (film, _) = render(
-        &mut world,
-        &mut schedule,
-        &RenderOptions {
-            width: w,
-            height: h,
-            spp: 1,
-            strategy: Strategy::Mis,
-            integrator: Integrator::Direct,
-            ..Default::default()
-        },
-        |_| {},
-    );
+    let (film, _) = render(&mut world, &mut schedule, &RenderOptions::direct(w, h, 1), |_| {});
     let means = patch_means(&film.pixels(), &checker, w, h);
     for (p, m) in checker.patches.iter().zip(&means) {
         let want = p.albedo.as_dvec3() * checker.white_luminance as f64;
