@@ -38,6 +38,11 @@ pub enum LightSelection {
     OneSampled,
     /// Every light, each with its own sample (pmf 1).
     All,
+    /// Resampled importance sampling (Talbot et al. 2005): `candidates` light samples drawn as
+    /// `OneSampled` draws one, one kept in proportion to its unshadowed contribution, one shadow
+    /// ray. The entry's pdf is then the estimator's 1/W, which no BSDF sample can know: a
+    /// renderer weighs such entries 1 and gives BSDF samples that find emitters weight 0.
+    Resampled { candidates: u32 },
 }
 
 /// Floating-point precision of the light math where kelvin has both (point and spot Sample_Li:

@@ -114,7 +114,7 @@ pub fn update_light_sampler(
 fn entries_per_point(settings: &Settings, n_lights: usize) -> usize {
     let spp = settings.samples_per_point.max(1) as usize;
     match settings.selection {
-        LightSelection::OneSampled => spp,
+        LightSelection::OneSampled | LightSelection::Resampled { .. } => spp,
         LightSelection::All => spp * n_lights,
     }
 }
@@ -233,7 +233,7 @@ impl Sampling<'_> {
         // One entry per point is the common case; it spares a 64-bit division per entry.
         let (i, slot) = if self.k == 1 { (e, 0) } else { (e / self.k, e % self.k) };
         let s = match self.settings.selection {
-            LightSelection::OneSampled => slot,
+            LightSelection::OneSampled | LightSelection::Resampled { .. } => slot,
             LightSelection::All => slot / self.all_ids.len(),
         };
         (i, slot, self.batch.sample[i] * self.spp + s as u32)
@@ -262,6 +262,10 @@ impl Sampling<'_> {
             LightSelection::OneSampled => {
                 let u = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream).next_f32();
                 (self.sampler.sample(&ctx, u), 1)
+            }
+            LightSelection::Resampled { candidates } => {
+                let (light, sampled) = self.resampled(i, stream, &ctx, candidates);
+                return self.write(cols, e, light, sampled);
             }
         };
         let sampled = chosen.and_then(|c| self.evaluate(i, stream, dim, &ctx, c));
@@ -463,5 +467,6 @@ pub fn apply_visibility(rays: Res<ShadowRays>, mut out: ResMut<DirectLighting>) 
     });
 }
 
+mod resampled;
 #[cfg(test)]
 mod tests;

@@ -1,5 +1,5 @@
 //! `kelvin render [SCENE] [-o out.exr] [--spp N] [--time SECONDS] [--size WxH] [--env map [--env-intensity X]]
-//! [--integrator path|direct] [--max-depth N] [--roulette-depth N] [--light-sampler uniform|power|bvh]
+//! [--integrator path|direct] [--max-depth N] [--roulette-depth N] [--light-sampler uniform|power|bvh|ris [--candidates M]]
 //! [--color rgb|spectral] [--seed S] [--threads T] [--report]`.
 
 use std::path::{Path, PathBuf};
@@ -20,6 +20,7 @@ enum SamplerArg {
     Uniform,
     Power,
     Bvh,
+    Ris,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -66,12 +67,16 @@ pub struct RenderArgs {
     /// Path tracer: Russian roulette may end a path from this many surfaces on.
     #[arg(long, default_value_t = PathDepth::DEFAULT.roulette_depth)]
     roulette_depth: u32,
-    /// How a light is chosen per sample.
+    /// How a light is chosen per sample (ris: resampled importance sampling over --candidates
+    /// light-BVH samples, one shadow ray for the one it keeps).
     #[arg(long, value_enum, default_value = "bvh")]
     light_sampler: SamplerArg,
     /// Colour mode.
     #[arg(long, value_enum, default_value = "rgb")]
     color: ColorArg,
+    /// Light samples drawn per resampled one (--light-sampler ris).
+    #[arg(long, default_value_t = 8)]
+    candidates: u32,
     /// Sample every light at every point instead of one chosen light.
     #[arg(long)]
     all_lights: bool,
@@ -134,9 +139,13 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
         light_sampler: match args.light_sampler {
             SamplerArg::Uniform => LightSamplerKind::Uniform,
             SamplerArg::Power => LightSamplerKind::Power,
-            SamplerArg::Bvh => LightSamplerKind::Bvh,
+            SamplerArg::Bvh | SamplerArg::Ris => LightSamplerKind::Bvh,
         },
-        selection: if args.all_lights { LightSelection::All } else { LightSelection::OneSampled },
+        selection: match args.light_sampler {
+            _ if args.all_lights => LightSelection::All,
+            SamplerArg::Ris => LightSelection::Resampled { candidates: args.candidates.max(1) },
+            _ => LightSelection::OneSampled,
+        },
         seed: args.seed,
         ..Default::default()
     });

@@ -92,7 +92,11 @@ impl<'a> ShadeContext<'a> {
             materials: &materials.materials,
             uniform_bsdfs: &materials.uniform_bsdfs,
             seed,
-            strategy,
+            // A resampled light sample's density is not `pmf * pdf_li` (see `LightSelection`).
+            strategy: match settings.selection {
+                LightSelection::Resampled { .. } => Strategy::LightOnly,
+                _ => strategy,
+            },
             offset: settings.shadow_offset,
             all_lights: settings.selection == LightSelection::All,
             escape_ids: table.escape_lights().collect(),
