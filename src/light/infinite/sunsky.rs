@@ -315,7 +315,8 @@ impl SunDisc {
         let mu = self.mu(self.sin2_in_disc(wi)?);
         Some(match query {
             ColorQuery::Rgb => {
-                let c = self.rgb_limb.iter().rev().fold(Vec3::ZERO, |acc, &c| acc * mu + c);
+                // A low sun is redder than sRGB's gamut: its negative blue is clipped.
+                let c = self.rgb_limb.iter().rev().fold(Vec3::ZERO, |acc, &c| acc * mu + c).max(Vec3::ZERO);
                 SampledSpectrum([c.x, c.y, c.z, 0.0])
             }
             ColorQuery::Spectral(w) => SampledSpectrum(w.lambda.map(|l| self.model.spectral(l, mu) * self.size_factor)),
