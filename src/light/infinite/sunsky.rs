@@ -122,6 +122,28 @@ impl SunSkyLight {
         Self { sun: SunPosition::Location { latitude_deg, longitude_deg, time }, ..Default::default() }
     }
 
+    /// Parses `LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]` (degrees north and east, a UTC date-time,
+    /// optionally seconds `:SS`), the form of `kelvin render --sky`, and checks the result.
+    pub fn parse(spec: &str) -> Result<Self, LightError> {
+        let form = "expected LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY] (degrees, UTC)";
+        let parts: Vec<&str> = spec.split(',').map(str::trim).collect();
+        let number = |name: &str, v: &str| -> Result<f64, LightError> {
+            v.parse::<f64>().map_err(|_| invalid(format!("'{spec}': {name} '{v}' is not a number; {form}")))
+        };
+        let (lat, lon, time, turbidity) = match parts[..] {
+            [lat, lon, time] => (lat, lon, time, None),
+            [lat, lon, time, t] => (lat, lon, time, Some(t)),
+            _ => return Err(invalid(format!("'{spec}': {form}"))),
+        };
+        let mut light = Self::at(number("latitude", lat)?, number("longitude", lon)?, UtcDateTime::parse(time)?);
+        if let Some(t) = turbidity {
+            light.turbidity = number("turbidity", t)? as f32;
+        }
+        light.validate()?;
+        light.sun_direction()?;
+        Ok(light)
+    }
+
     /// The unit direction toward the sun (world frame).
     pub fn sun_direction(&self) -> Result<Vec3, LightError> {
         match self.sun {
@@ -138,7 +160,8 @@ impl SunSkyLight {
         }
     }
 
-    fn validate(&self) -> Result<(), LightError> {
+    /// Checks every field is in range (what [`Self::resolve`] checks first).
+    pub fn validate(&self) -> Result<(), LightError> {
         let (t, a, d) = (self.turbidity, self.ground_albedo, self.sun_angular_diameter);
         if !(TURBIDITY_RANGE.0..=TURBIDITY_RANGE.1).contains(&t) {
             return Err(invalid(format!("turbidity {t} must be in [1, 10], the model's range")));
