@@ -349,3 +349,22 @@ fn the_ecs_rebuilds_the_sky_only_when_it_changes_and_reuses_its_buffers() {
         let _ = LUMINANCE_WEIGHTS;
     }
 }
+
+#[test]
+fn the_sky_table_image_is_the_model_at_texel_centres() {
+    let r = resolve(&SunSkyLight { table_width: 64, ..toward(20.0, 135.0) });
+    let (img, sky) = (&r.buffers.image, r.sky.as_ref().unwrap());
+    assert_eq!((img.width, img.height), (64, 32));
+    for y in 0..img.height {
+        for x in 0..img.width {
+            let uv = Vec2::new((x as f32 + 0.5) / 64.0, (y as f32 + 0.5) / 32.0);
+            let want = sky.rgb_nits(lat_long_direction(uv), r.sun_dir);
+            let got = img.get(x, y);
+            assert!(
+                (got - want).abs().max_element() <= 1e-4 * want.max_element().max(1e-3),
+                "({x}, {y}): {got} vs {want}"
+            );
+            assert_eq!(got == Vec3::ZERO, 2 * y >= img.height, "({x}, {y}) is black exactly below the horizon");
+        }
+    }
+}

@@ -32,13 +32,13 @@ use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions};
 use super::{ColorQuery, LiSample, LightError, LightFlags, LightSampleContext, SceneSphere, far_distance};
 use crate::light::distant::SUN_ANGULAR_DIAMETER;
 use crate::sampling::{Frame, sample_uniform_cone_sin2};
-use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage, lat_long_direction};
+use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
 use crate::spectrum::SampledSpectrum;
 use crate::spectrum::cie::CIE_1931;
 use crate::spectrum::color::XYZ_TO_SRGB;
 use crate::spectrum::photometry::K_M;
 
-pub use hosek::{ChannelConfig, SkyModel, SunModel, TURBIDITY_RANGE, WAVELENGTHS_NM};
+pub use hosek::{ChannelConfig, RgbRow, SkyModel, SunModel, TURBIDITY_RANGE, WAVELENGTHS_NM};
 pub use solar::{SolarPosition, UtcDateTime, direction_from_angles, solar_position};
 
 /// Default turbidity: a clear sky (Hosek and Wilkie's tables span 1 to 10).
@@ -104,11 +104,13 @@ pub struct SkyBuffers {
     pub image: RgbImage,
     /// Tables of `image`; None until first built.
     pub tables: Option<EnvMapTables>,
+    /// Per image column, (cos, sin) of its azimuth: scratch for the image fill.
+    pub columns: Vec<Vec2>,
 }
 
 impl Default for SkyBuffers {
     fn default() -> Self {
-        Self { image: RgbImage { width: 1, height: 1, pixels: vec![Vec3::ZERO] }, tables: None }
+        Self { image: RgbImage { width: 1, height: 1, pixels: vec![Vec3::ZERO] }, tables: None, columns: Vec::new() }
     }
 }
 
@@ -199,7 +201,7 @@ impl SunSkyLight {
             .then(|| SunDisc::new(SunModel::new(elevation, self.turbidity), sun_dir, self.sun_angular_diameter));
         let (mut sky_lum, mut sky_rad) = (0.0, 0.0);
         if let Some(sky) = &sky {
-            fill_sky_image(&mut buffers.image, self.table_width, sky, sun_dir);
+            fill_sky_image(&mut buffers.image, &mut buffers.columns, self.table_width, sky, sun_dir);
             let options = EnvTableOptions { compensate: false, max_width: None, lookup: EnvLookup::Nearest };
             match &mut buffers.tables {
                 Some(t) => t.rebuild(&buffers.image, options),
@@ -227,16 +229,29 @@ impl SunSkyLight {
 }
 
 /// Fills `image` (resized to `width` x its even half, buffers reused) with the sky's luminance
-/// at texel centres, in parallel over rows; the lower half (below the horizon) is black.
-fn fill_sky_image(image: &mut RgbImage, width: usize, sky: &SkyModel, sun: Vec3) {
+/// at texel centres, in parallel over rows; the lower half (below the horizon) is black. The
+/// directions are those of [`crate::scene::image::lat_long_direction`], with each row's zenith-angle factors and each
+/// column's sin/cos of phi computed once (`columns`, reused).
+fn fill_sky_image(image: &mut RgbImage, columns: &mut Vec<Vec2>, width: usize, sky: &SkyModel, sun: Vec3) {
     let height = width.div_ceil(4) * 2;
     (image.width, image.height) = (width, height);
     image.pixels.resize(width * height, Vec3::ZERO);
+    columns.clear();
+    columns.extend((0..width).map(|x| {
+        let (s, c) = (std::f32::consts::TAU * ((x as f32 + 0.5) / width as f32 - 0.5)).sin_cos();
+        Vec2::new(c, s)
+    }));
+    let columns = &columns[..];
     image.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        let v = (y as f32 + 0.5) / height as f32;
-        for (x, px) in row.iter_mut().enumerate() {
-            let w = lat_long_direction(Vec2::new((x as f32 + 0.5) / width as f32, v));
-            *px = if 2 * y < height { sky.rgb_nits(w, sun) } else { Vec3::ZERO };
+        if 2 * y >= height {
+            row.fill(Vec3::ZERO);
+            return;
+        }
+        let (sin_t, cos_t) = (PI * (y as f32 + 0.5) / height as f32).sin_cos();
+        let factors = sky.rgb_row(cos_t);
+        for (px, cs) in row.iter_mut().zip(columns) {
+            let w = Vec3::new(sin_t * cs.x, cos_t, sin_t * cs.y);
+            *px = sky.rgb_nits_in_row(&factors, w, sun);
         }
     });
 }

@@ -75,11 +75,25 @@ impl ChannelConfig {
     /// angle to the sun, radians.
     #[inline]
     pub fn eval(&self, cos_theta: f32, gamma: f32, cos_gamma: f32) -> f32 {
-        let [a, b, c, d, e, f, g, i, h] = self.params;
-        let mie = (1.0 + cos_gamma * cos_gamma) / (1.0 + h * h - 2.0 * h * cos_gamma).powf(1.5);
-        let dome = 1.0 + a * (b / (cos_theta + 0.01)).exp();
-        let circum = c + d * (e * gamma).exp() + f * cos_gamma * cos_gamma + g * mie + i * cos_theta.sqrt();
-        dome * circum * self.radiance
+        self.dome(cos_theta) * self.circumsolar(cos_theta.sqrt(), gamma, cos_gamma)
+    }
+
+    /// The factor of F that depends on theta alone, times L_M: (1 + A e^(B / (cos theta + 0.01))) L_M,
+    /// once per row of a lat-long image.
+    #[inline]
+    pub fn dome(&self, cos_theta: f32) -> f32 {
+        let [a, b, ..] = self.params;
+        (1.0 + a * (b / (cos_theta + 0.01)).exp()) * self.radiance
+    }
+
+    /// The other factor: C + D e^(E gamma) + F cos^2 gamma + G chi(H, gamma) + I sqrt(cos theta).
+    #[inline]
+    pub fn circumsolar(&self, sqrt_cos_theta: f32, gamma: f32, cos_gamma: f32) -> f32 {
+        let [_, _, c, d, e, f, g, i, h] = self.params;
+        let x = 1.0 + h * h - 2.0 * h * cos_gamma;
+        // x^(3/2) as x sqrt(x): the sky table evaluates this per texel.
+        let mie = (1.0 + cos_gamma * cos_gamma) / (x * x.sqrt());
+        c + d * (e * gamma).exp() + f * cos_gamma * cos_gamma + g * mie + i * sqrt_cos_theta
     }
 }
 
@@ -144,8 +158,22 @@ impl SkyModel {
     /// Photometric linear sRGB radiance, nit, toward unit `w` for a sun toward unit `sun`; zero
     /// below the horizon (w.y <= 0), where the model is not defined.
     pub fn rgb_nits(&self, w: Vec3, sun: Vec3) -> Vec3 {
-        let Some((cos_theta, gamma, cos_gamma)) = angles(w, sun) else { return Vec3::ZERO };
-        Vec3::from_array(self.rgb.map(|c| c.eval(cos_theta, gamma, cos_gamma).max(0.0))) * K_M as f32
+        self.rgb_nits_in_row(&self.rgb_row(w.y), w, sun)
+    }
+
+    /// What [`Self::rgb_nits`] computes from the zenith angle alone, for directions of zenith
+    /// cosine `cos_theta`: a lat-long row's share, computed once for the row.
+    pub fn rgb_row(&self, cos_theta: f32) -> RgbRow {
+        let c = cos_theta.clamp(0.0, 1.0);
+        RgbRow { dome: Vec3::from_array(self.rgb.map(|ch| ch.dome(c))) * K_M as f32, sqrt_cos_theta: c.sqrt() }
+    }
+
+    /// [`Self::rgb_nits`] toward `w`, whose zenith cosine `row` was made for.
+    #[inline]
+    pub fn rgb_nits_in_row(&self, row: &RgbRow, w: Vec3, sun: Vec3) -> Vec3 {
+        let Some((_, gamma, cos_gamma)) = angles(w, sun) else { return Vec3::ZERO };
+        let circ = Vec3::from_array(self.rgb.map(|ch| ch.circumsolar(row.sqrt_cos_theta, gamma, cos_gamma)));
+        (row.dome * circ).max(Vec3::ZERO)
     }
 
     /// Spectral radiance, W/(m^2 sr nm), at `lambda` nm toward `w`: linear between the model's
@@ -157,6 +185,14 @@ impl SkyModel {
         let v = if f > 0.0 { lo + f * (self.spectral[i + 1].eval(cos_theta, gamma, cos_gamma) - lo) } else { lo };
         v.max(0.0)
     }
+}
+
+/// The zenith-angle factors of the RGB sky for one zenith cosine (see [`SkyModel::rgb_row`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RgbRow {
+    /// (1 + A e^(B / (cos theta + 0.01))) L_M per channel, times 683 (nit).
+    pub dome: Vec3,
+    pub sqrt_cos_theta: f32,
 }
 
 /// (cos theta, gamma, cos gamma) of view `w` and sun `sun` (both unit), None below the horizon.
