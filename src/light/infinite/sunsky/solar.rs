@@ -3,8 +3,9 @@
 //! The equations are those of NOAA's Solar Calculator spreadsheet (NOAA Global Monitoring
 //! Laboratory, "General Solar Position Calculations" / NOAA_Solar_Calculations_day.xls), which
 //! follow J. Meeus, *Astronomical Algorithms* (2nd ed., 1998), chapters 7 (Julian day), 25 (solar
-//! coordinates, low accuracy) and 28 (equation of time). NOAA states them accurate to about
-//! 0.01 degree for dates between 1800 and 2100 (UT is used for TT: Delta T is ignored). Azimuth
+//! coordinates, low accuracy) and 28 (equation of time), for the years 1800-2100 that NOAA gives
+//! them for; UT stands in for TT (Delta T is ignored). Against NREL's SPA they agree to better
+//! than 0.01 degree (tests/lights_sunsky.rs). Azimuth
 //! uses the atan2 form of Meeus (13.5), which stays finite at the poles where the spreadsheet's
 //! acos form divides by cos(latitude) = 0.
 //!
