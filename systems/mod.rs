@@ -30,7 +30,7 @@ pub use sample::{ShadowRays, ShadowTarget, sample_direct_lighting};
 pub use shadows::trace_shadow_rays;
 pub use sync_lights::{
     remove_lights, sync_area_lights, sync_distant_lights, sync_goniometric_lights, sync_image_infinite_lights,
-    sync_point_lights, sync_projection_lights, sync_spot_lights, sync_uniform_infinite_lights,
+    sync_point_lights, sync_projection_lights, sync_spot_lights, sync_sun_sky_lights, sync_uniform_infinite_lights,
 };
 
 /// The light system's sets, in order.
@@ -160,6 +160,7 @@ fn add_systems<P: Placement>(schedule: &mut Schedule) {
                 sync_goniometric_lights::<P>,
                 sync_uniform_infinite_lights,
                 sync_image_infinite_lights::<P>,
+                sync_sun_sky_lights,
             ),
         )
             .chain()

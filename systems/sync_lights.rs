@@ -7,7 +7,7 @@ use crate::light::area::sphere_from_point_light;
 use crate::light::table::AreaRow;
 use crate::light::{
     AreaLight, DistantLight, GoniometricLight, ImageInfiniteLight, LightError, LightTable, PointLight, ProjectionLight,
-    SpotLight, UniformInfiniteLight,
+    SpotLight, SunSkyLight, UniformInfiniteLight,
 };
 use crate::shading::{RunReport, SceneBounds};
 
@@ -198,6 +198,33 @@ pub fn sync_image_infinite_lights<P: Placement>(
     }
 }
 
+/// Upserts sun-and-sky lights: a changed light rebuilds its sky table into the buffers its row
+/// held; a change of scene bounds alone only rescales the power (no rebuild).
+pub fn sync_sun_sky_lights(
+    query: Query<(Entity, Ref<SunSkyLight>)>,
+    bounds: Res<SceneBounds>,
+    mut table: ResMut<LightTable>,
+    mut report: ResMut<RunReport>,
+) {
+    for (entity, light) in &query {
+        let row = if light.is_changed() {
+            let buffers = table.take_sun_sky_buffers(entity);
+            light.resolve_reusing(bounds.sphere, buffers)
+        } else if bounds.is_changed() {
+            match table.sun_sky_of(entity) {
+                Some(r) => Ok(r.with_scene(bounds.sphere)),
+                None => light.resolve(bounds.sphere),
+            }
+        } else {
+            continue;
+        };
+        match row {
+            Ok(row) => table.upsert_sun_sky(entity, row, true),
+            Err(e) => reject(&mut table, &mut report, entity, e),
+        }
+    }
+}
+
 /// Removes the rows of lights whose component was removed or whose entity was despawned.
 pub fn remove_lights(
     mut points: RemovedComponents<PointLight>,
@@ -208,6 +235,7 @@ pub fn remove_lights(
     mut goniometric: RemovedComponents<GoniometricLight>,
     mut uniform: RemovedComponents<UniformInfiniteLight>,
     mut image: RemovedComponents<ImageInfiniteLight>,
+    mut sun_sky: RemovedComponents<SunSkyLight>,
     mut table: ResMut<LightTable>,
 ) {
     let removed = points
@@ -218,7 +246,8 @@ pub fn remove_lights(
         .chain(projection.read())
         .chain(goniometric.read())
         .chain(uniform.read())
-        .chain(image.read());
+        .chain(image.read())
+        .chain(sun_sky.read());
     for entity in removed {
         table.remove(entity);
     }

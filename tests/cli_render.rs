@@ -52,3 +52,52 @@ fn light_sampler_defaults_to_the_light_bvh() {
     let line = help.lines().skip_while(|l| !l.contains("--light-sampler")).take(3).collect::<Vec<_>>().join("\n");
     assert!(line.contains("[default: bvh]"), "{help}");
 }
+
+/// `--sky`: a real glTF scene under a physical sun and sky, in both colour modes; night is black
+/// and bad specs are clear errors.
+#[test]
+fn sky_lights_a_gltf_scene_through_the_cli() {
+    let dir = std::env::temp_dir().join(format!("kelvin-cli-sky-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf/bench/env_objects.glb");
+    assert!(scene.exists(), "missing test data {}", scene.display());
+    let render = |name: &str, sky: &str, color: &str| {
+        let out = dir.join(name);
+        let output = Command::new(env!("CARGO_BIN_EXE_kelvin"))
+            .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--size", "32x24", "--spp", "4"])
+            .args(["--sky", sky, "--color", color])
+            .output()
+            .expect("kelvin runs");
+        (output, out)
+    };
+    let mean_luminance = |path: &std::path::Path| {
+        let img = kelvin::scene::image::load_image(path).unwrap().image;
+        img.pixels.iter().map(|p| kelvin::scene::image::LUMINANCE_WEIGHTS.dot(*p) as f64).sum::<f64>()
+            / img.pixels.len() as f64
+    };
+    let mut day = [0.0; 2];
+    for (k, color) in ["rgb", "spectral"].into_iter().enumerate() {
+        let (output, out) = render(&format!("day_{color}.exr"), "48.86,2.35,2024-06-21T10:00,3", color);
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        day[k] = mean_luminance(&out);
+        // Daylight: the scene's surfaces and the visible sky are thousands of nit.
+        assert!(day[k] > 500.0 && day[k].is_finite(), "{color}: mean luminance {}", day[k]);
+    }
+    assert!((day[0] / day[1] - 1.0).abs() < 0.15, "RGB {} vs spectral {}", day[0], day[1]);
+    let (output, night) = render("night.exr", "48.86,2.35,2024-06-21T23:30", "rgb");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(mean_luminance(&night) < 1e-3 * day[0], "night is {}", mean_luminance(&night));
+    for (bad, says) in [
+        ("91,0,2024-06-21T12:00", "latitude"),
+        ("48,2,2024-06-21", "date-time"),
+        ("48,2,2024-06-31T12:00", "day 31"),
+        ("48,2,2024-06-21T12:00,11", "turbidity"),
+        ("48,two,2024-06-21T12:00", "longitude"),
+        ("nan,2,2024-06-21T12:00", "latitude"),
+    ] {
+        let (output, _) = render("bad.exr", bad, "rgb");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success() && stderr.contains(says) && !stderr.contains("panicked"), "{bad}: {stderr}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

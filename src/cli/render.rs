@@ -1,11 +1,13 @@
 //! `kelvin render [SCENE] [-o out.exr] [--spp N] [--time SECONDS] [--size WxH] [--env map [--env-intensity X]]
-//! [--integrator path|direct] [--max-depth N] [--roulette-depth N] [--light-sampler uniform|power|bvh|ris [--candidates M]]
-//! [--color rgb|spectral] [--seed S] [--threads T] [--report]`.
+//! [--sky LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY] [--sky-intensity X]] [--integrator path|direct] [--max-depth N]
+//! [--roulette-depth N] [--light-sampler uniform|power|bvh|ris [--candidates M]] [--color rgb|spectral] [--seed S]
+//! [--threads T] [--report]`.
 
 use std::path::{Path, PathBuf};
 
 use bevy_ecs::prelude::*;
 use indicatif::{ProgressBar, ProgressStyle};
+use kelvin::light::SunSkyLight;
 use kelvin::render::camera::CameraModel;
 use kelvin::render::film_io::{write_exr, write_png};
 use kelvin::render::path::PathDepth;
@@ -57,6 +59,14 @@ pub struct RenderArgs {
     /// Luminance (nit) of an environment texel of value 1.
     #[arg(long, default_value_t = 1.0)]
     env_intensity: f32,
+    /// A physical sun and sky (Hosek-Wilkie) for a place and a UTC time: latitude (degrees north),
+    /// longitude (degrees east), UTC date-time, optional turbidity 1-10 (default 3), e.g.
+    /// 48.86,2.35,2024-06-21T10:00 or 48.86,2.35,2024-06-21T10:00,5. +Y is up, -Z north.
+    #[arg(long, value_name = "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]")]
+    sky: Option<String>,
+    /// Multiplies the sky's physical radiance (1 = real daylight, ~100 klx in full sun).
+    #[arg(long, default_value_t = 1.0)]
+    sky_intensity: f32,
     /// How light reaches the camera: paths of up to --max-depth bounces, every bounce through the
     /// light system, or direct lighting (light and BSDF samples at the surface the camera sees).
     #[arg(long, value_enum, default_value = "path")]
@@ -127,8 +137,18 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     }
 }
 
-/// Builds the world: settings, the scene (file or default) and the optional environment light.
+/// Builds the world: settings, the scene (file or default) and the optional environment light and
+/// sun and sky.
 fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
+    // Checked before the scene loads, so a typo fails at once.
+    let sky = match &args.sky {
+        Some(spec) => {
+            let light = SunSkyLight { scale: args.sky_intensity, ..SunSkyLight::parse(spec)? };
+            light.validate()?;
+            Some(light)
+        }
+        None => None,
+    };
     let mut world = World::new();
     let mut schedule = Schedule::default();
     world.insert_resource(Settings {
@@ -172,6 +192,9 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
         for w in kelvin::render::scene_file::spawn_env_map(&mut world, path, args.env_intensity)? {
             eprintln!("warning: {w}");
         }
+    }
+    if let Some(light) = sky {
+        world.spawn(light);
     }
     Ok((world, schedule))
 }

@@ -19,6 +19,7 @@ impl LightTable {
                 self.image_infinite.items[i].sample_li_mis(ctx, u, query)
             }
             LightKind::ImageInfinite => self.image_infinite.items[i].sample_li(ctx, u, query),
+            LightKind::SunSky => self.sun_sky.items[i].sample_li(ctx, u, query),
             LightKind::Projection => self.projection.items[i].sample_li(ctx, query),
             LightKind::Goniometric => self.goniometric.items[i].sample_li(ctx, query),
             LightKind::Area => self.area.items[i].light.sample_li(ctx, u, query),
@@ -38,7 +39,8 @@ impl LightTable {
             | LightKind::Goniometric
             | LightKind::Distant
             | LightKind::UniformInfinite
-            | LightKind::ImageInfinite => self.sample_li(id, ctx, u, query),
+            | LightKind::ImageInfinite
+            | LightKind::SunSky => self.sample_li(id, ctx, u, query),
         }
     }
 
@@ -51,6 +53,7 @@ impl LightTable {
             LightKind::UniformInfinite => self.uniform_infinite.items[i].pdf_li(ctx, wi),
             LightKind::ImageInfinite if self.mis_compensation => self.image_infinite.items[i].pdf_li_mis(wi),
             LightKind::ImageInfinite => self.image_infinite.items[i].pdf_li(wi),
+            LightKind::SunSky => self.sun_sky.items[i].pdf_li(wi),
             LightKind::Area => self.area.items[i].light.pdf_li(ctx, wi),
         }
     }
@@ -65,7 +68,8 @@ impl LightTable {
             | LightKind::Projection
             | LightKind::Goniometric
             | LightKind::UniformInfinite
-            | LightKind::ImageInfinite) => kind.flags(),
+            | LightKind::ImageInfinite
+            | LightKind::SunSky) => kind.flags(),
         }
     }
 
@@ -78,6 +82,7 @@ impl LightTable {
             LightKind::Distant => self.distant.items[i].phi(),
             LightKind::UniformInfinite => self.uniform_infinite.items[i].phi(),
             LightKind::ImageInfinite => self.image_infinite.items[i].phi(),
+            LightKind::SunSky => self.sun_sky.items[i].phi(),
             LightKind::Projection => self.projection.items[i].phi(),
             LightKind::Goniometric => self.goniometric.items[i].phi(),
             LightKind::Area => self.area.items[i].light.phi(),
@@ -111,6 +116,7 @@ impl LightTable {
                 (e.rgb.y, e.radiometric)
             }
             LightKind::ImageInfinite => return self.image_infinite.items[i].luminous_phi().max(0.0),
+            LightKind::SunSky => return self.sun_sky.items[i].luminous_phi().max(0.0),
         };
         if radiometric > 0.0 { (self.phi(id) * rgb_y / radiometric).max(0.0) } else { 0.0 }
     }
@@ -123,7 +129,7 @@ impl LightTable {
             LightKind::Point => Some(self.points.get(i).bounds()),
             LightKind::Spot => Some(self.spots.get(i).bounds()),
             LightKind::Distant => None,
-            LightKind::UniformInfinite | LightKind::ImageInfinite => None,
+            LightKind::UniformInfinite | LightKind::ImageInfinite | LightKind::SunSky => None,
             LightKind::Projection => Some(self.projection.items[i].bounds()),
             LightKind::Goniometric => Some(self.goniometric.items[i].bounds()),
             LightKind::Area => Some(self.area.items[i].light.bounds()),
@@ -158,7 +164,7 @@ impl LightTable {
             LightKind::Projection => prefetch(&self.projection.items, i),
             LightKind::Goniometric => prefetch(&self.goniometric.items, i),
             LightKind::Area => prefetch(&self.area.items, i),
-            LightKind::Distant | LightKind::UniformInfinite | LightKind::ImageInfinite => {}
+            LightKind::Distant | LightKind::UniformInfinite | LightKind::ImageInfinite | LightKind::SunSky => {}
         }
     }
 
@@ -171,6 +177,7 @@ impl LightTable {
             LightKind::Distant => self.distant.casts_shadows[i],
             LightKind::UniformInfinite => self.uniform_infinite.casts_shadows[i],
             LightKind::ImageInfinite => self.image_infinite.casts_shadows[i],
+            LightKind::SunSky => self.sun_sky.casts_shadows[i],
             LightKind::Projection => self.projection.casts_shadows[i],
             LightKind::Goniometric => self.goniometric.casts_shadows[i],
             LightKind::Area => self.area.casts_shadows[i],
@@ -200,6 +207,7 @@ impl LightTable {
             }
             LightKind::Distant
             | LightKind::UniformInfinite
+            | LightKind::SunSky
             | LightKind::Point
             | LightKind::Spot
             | LightKind::Area
@@ -218,6 +226,7 @@ impl LightTable {
             LightKind::Distant => self.distant.items[id.row as usize].le(wi, query),
             LightKind::UniformInfinite => self.uniform_infinite.items[id.row as usize].le(wi, query),
             LightKind::ImageInfinite => self.image_infinite.items[id.row as usize].le(wi, query),
+            LightKind::SunSky => self.sun_sky.items[id.row as usize].le(wi, query),
             LightKind::Point | LightKind::Spot | LightKind::Area | LightKind::Projection | LightKind::Goniometric => {
                 Default::default()
             }

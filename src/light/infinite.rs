@@ -4,11 +4,14 @@
 //!   ambient term that still casts shadows).
 //! - [`ImageInfiniteLight`]: radiance from a lat-long (equirectangular) environment map, sampled
 //!   by its luminance with the tables in [`tables`].
+//! - [`SunSkyLight`]: a physical sun and sky (Hosek-Wilkie), the sky sampled from a generated
+//!   table, the sun on its cone ([`sunsky`]).
 //!
 //! Both are preprocessed with the scene's bounding sphere: sample points are placed beyond it and
 //! power is the flux through its cross-section, phi = pi R^2 * integral of L over the sphere.
 
 mod image;
+pub mod sunsky;
 pub mod tables;
 
 use std::f32::consts::PI;
@@ -24,6 +27,7 @@ use crate::sampling::{
 use crate::spectrum::{SampledSpectrum, Spectrum};
 
 pub use image::{ImageInfiniteLight, ResolvedImageInfinite};
+pub use sunsky::{ResolvedSunSky, SunPosition, SunSkyLight};
 pub use tables::{EnvLookup, EnvMapTables, EnvTableOptions};
 
 /// Default sky luminance, nit: 10 000 / pi, so a horizontal surface under the whole sky receives

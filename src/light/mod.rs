@@ -25,8 +25,8 @@ pub use distant::{DistantLight, ResolvedDistant};
 pub use emitter::{Amount, Emitter, LightError, Quantity};
 pub use goniometric::{GonioProfile, GoniometricLight, ResolvedGoniometric};
 pub use infinite::{
-    EnvLookup, EnvMapTables, EnvTableOptions, ImageInfiniteLight, ResolvedImageInfinite, ResolvedUniformInfinite,
-    UniformInfiniteLight,
+    EnvLookup, EnvMapTables, EnvTableOptions, ImageInfiniteLight, ResolvedImageInfinite, ResolvedSunSky,
+    ResolvedUniformInfinite, SunPosition, SunSkyLight, UniformInfiniteLight,
 };
 pub use point::{PointLight, ResolvedPoint};
 pub use projection::{ProjectionLight, ResolvedProjection};
@@ -146,6 +146,8 @@ light_kinds! {
     UniformInfinite,
     /// [`ImageInfiniteLight`].
     ImageInfinite,
+    /// [`SunSkyLight`].
+    SunSky,
 }
 
 /// Properties of a light's emission, as in the chapter's `LightType`.
@@ -190,7 +192,7 @@ impl LightKind {
             Self::Point | Self::Spot | Self::Projection | Self::Goniometric => LightFlags::DELTA_POSITION,
             Self::Distant => LightFlags::DELTA_DIRECTION,
             Self::Area => LightFlags::AREA,
-            Self::UniformInfinite | Self::ImageInfinite => LightFlags::INFINITE,
+            Self::UniformInfinite | Self::ImageInfinite | Self::SunSky => LightFlags::INFINITE,
         }
     }
 }

@@ -8,7 +8,7 @@ use bevy_ecs::resource::Resource;
 
 use super::{
     LightKind, ResolvedArea, ResolvedDistant, ResolvedGoniometric, ResolvedImageInfinite, ResolvedProjection,
-    ResolvedUniformInfinite, point::PointColumns, spot::SpotColumns,
+    ResolvedSunSky, ResolvedUniformInfinite, point::PointColumns, spot::SpotColumns,
 };
 
 /// A light: its kind and its row in that kind's block. Rows move when lights are removed, so a
@@ -89,6 +89,7 @@ pub struct LightTable {
     pub distant: Rows<ResolvedDistant>,
     pub uniform_infinite: Rows<ResolvedUniformInfinite>,
     pub image_infinite: Rows<ResolvedImageInfinite>,
+    pub sun_sky: Rows<ResolvedSunSky>,
     /// Image lights sample their MIS-compensated tables (valid only when the caller combines light
     /// samples with BSDF samples by MIS); set from `Settings::mis` by the sampling system.
     pub mis_compensation: bool,
@@ -149,6 +150,10 @@ macro_rules! for_block {
             }
             LightKind::ImageInfinite => {
                 let $b = $($borrow)+ $table.image_infinite;
+                $body
+            }
+            LightKind::SunSky => {
+                let $b = $($borrow)+ $table.sun_sky;
                 $body
             }
         }
@@ -280,6 +285,27 @@ impl LightTable {
     /// See [`Self::upsert_point`].
     pub fn upsert_image_infinite(&mut self, entity: Entity, row: ResolvedImageInfinite, power_changed: bool) {
         self.upsert(entity, LightKind::ImageInfinite, power_changed, |t| &mut t.image_infinite, row, true);
+    }
+
+    /// See [`Self::upsert_point`].
+    pub fn upsert_sun_sky(&mut self, entity: Entity, row: ResolvedSunSky, power_changed: bool) {
+        self.upsert(entity, LightKind::SunSky, power_changed, |t| &mut t.sun_sky, row, true);
+    }
+
+    /// The sun-and-sky row of `entity`, if it has one.
+    pub fn sun_sky_of(&self, entity: Entity) -> Option<&ResolvedSunSky> {
+        let id = self.rows_of(entity).iter().find(|id| id.kind == LightKind::SunSky)?;
+        self.sun_sky.items.get(id.row as usize)
+    }
+
+    /// Takes the sky buffers out of `entity`'s sun-and-sky row (leaving it empty until its next
+    /// upsert), so a rebuild can reuse them; fresh buffers if it has none.
+    pub fn take_sun_sky_buffers(&mut self, entity: Entity) -> super::infinite::sunsky::SkyBuffers {
+        let Some(id) = self.rows_of(entity).iter().find(|id| id.kind == LightKind::SunSky).copied() else {
+            return Default::default();
+        };
+        let row = &mut self.sun_sky.items[id.row as usize];
+        std::sync::Arc::try_unwrap(std::mem::take(&mut row.buffers)).unwrap_or_default()
     }
 
     fn upsert<B: Block>(

@@ -305,7 +305,8 @@ pub fn move_light(table: &mut LightTable, id: LightId, delta: Vec3) -> bool {
         | LightKind::Goniometric
         | LightKind::Distant
         | LightKind::UniformInfinite
-        | LightKind::ImageInfinite => return false,
+        | LightKind::ImageInfinite
+        | LightKind::SunSky => return false,
     }
     true
 }

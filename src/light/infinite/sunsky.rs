@@ -1,0 +1,493 @@
+//! Sun and sky: a physical daylight (Hosek and Wilkie 2012, 2013; see [`hosek`]) with the sun
+//! placed by direction or by place and UTC time (NOAA; see [`solar`]).
+//!
+//! Design: one light, one `LightTable` row of kind `SunSky`, holding two sampling techniques
+//! combined as a one-sample mixture (Veach 1997, section 9.2.4): the sky is sampled like an image
+//! light, from a lat-long table of the model's luminance (the env-map tables, rebuilt into
+//! reused buffers when the light changes), and the sun on its own cone (uniform in the disc's
+//! solid angle, as pbrt's and Mitsuba's cone sampling). Sample_Li picks the sun with probability
+//! `p_sun` (its share of the luminous power) and `pdf_li` is the mixture density
+//! p_sun pdf_sun + (1 - p_sun) pdf_sky, so BSDF-sampled rays that hit the sun or the sky get the
+//! MIS weight of the combined strategy. One row (rather than an image row plus a disc row) keeps
+//! one entity to one row, as the table's upsert expects, and lets the sky be evaluated from the
+//! spectral model in spectral mode, which an image row cannot.
+//!
+//! Radiance is the model's own evaluation (not the table's texels): linear sRGB from the RGB
+//! tables times 683 (nit) in RGB mode, the spectral tables in spectral mode; nothing comes from
+//! below the horizon (+Y up), and with the sun below it (night; twilight is outside the model)
+//! the light is black. Frame: +Y up, -Z north, +X east.
+
+mod hosek;
+pub mod solar;
+
+use std::f32::consts::PI;
+use std::sync::Arc;
+
+use bevy_ecs::component::Component;
+use glam::{DVec3, Vec2, Vec3};
+use rayon::prelude::*;
+
+use super::image::texel_solid_angle_integral;
+use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions};
+use super::{ColorQuery, LiSample, LightError, LightFlags, LightSampleContext, SceneSphere, far_distance};
+use crate::light::distant::SUN_ANGULAR_DIAMETER;
+use crate::sampling::{Frame, sample_uniform_cone_sin2};
+use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
+use crate::spectrum::SampledSpectrum;
+use crate::spectrum::cie::CIE_1931;
+use crate::spectrum::color::XYZ_TO_SRGB;
+use crate::spectrum::photometry::K_M;
+
+pub use hosek::{ChannelConfig, RgbRow, SkyModel, SunModel, TURBIDITY_RANGE, WAVELENGTHS_NM};
+pub use solar::{SolarPosition, UtcDateTime, direction_from_angles, solar_position};
+
+/// Default turbidity: a clear sky (Hosek and Wilkie's tables span 1 to 10).
+pub const DEFAULT_TURBIDITY: f32 = 3.0;
+/// Default ground albedo (grass and soil, ~0.3; Mitsuba's default too).
+pub const DEFAULT_GROUND_ALBEDO: f32 = 0.3;
+/// Default width of the sky's sampling table, texels (height: half of it, rounded to even so the
+/// horizon falls on a row edge): 0.7 degree texels.
+pub const DEFAULT_SKY_TABLE_WIDTH: usize = 512;
+/// Widths the sky table accepts.
+pub const SKY_TABLE_WIDTHS: (usize, usize) = (8, 8192);
+
+/// Where the sun is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SunPosition {
+    /// Toward the sun, world frame (+Y up); need not be normalised.
+    Direction(Vec3),
+    /// From latitude (north positive) and longitude (east positive), degrees, and a UTC instant,
+    /// by the NOAA solar position equations at the apparent (refracted) elevation.
+    Location { latitude_deg: f64, longitude_deg: f64, time: UtcDateTime },
+}
+
+/// A physical sun and sky around the scene (world frame: +Y up, -Z north, +X east; the entity's
+/// transform is not used).
+#[derive(Component, Clone, Debug, PartialEq)]
+pub struct SunSkyLight {
+    /// Defaults to 45 degrees above the southern horizon.
+    pub sun: SunPosition,
+    /// Atmospheric turbidity, in [1, 10]. Defaults to [`DEFAULT_TURBIDITY`].
+    pub turbidity: f32,
+    /// Ground albedo seen by the sky model, in [0, 1]. Defaults to [`DEFAULT_GROUND_ALBEDO`].
+    pub ground_albedo: f32,
+    /// Apparent diameter of the sun's disc, radians in (0, 0.5). Defaults to
+    /// [`SUN_ANGULAR_DIAMETER`]; another size keeps the sun's illuminance (softer shadows, same
+    /// exposure) by scaling its radiance by the solid-angle ratio.
+    pub sun_angular_diameter: f32,
+    /// Multiplies the model's absolute radiance (nit in RGB mode, W/(m^2 sr nm) in spectral
+    /// mode), sky and sun alike. Defaults to 1.
+    pub scale: f32,
+    /// Width of the sky's sampling table, in [`SKY_TABLE_WIDTHS`]. Defaults to
+    /// [`DEFAULT_SKY_TABLE_WIDTH`].
+    pub table_width: usize,
+}
+
+impl Default for SunSkyLight {
+    fn default() -> Self {
+        Self {
+            sun: SunPosition::Direction(direction_from_angles(45.0, 180.0)),
+            turbidity: DEFAULT_TURBIDITY,
+            ground_albedo: DEFAULT_GROUND_ALBEDO,
+            sun_angular_diameter: SUN_ANGULAR_DIAMETER,
+            scale: 1.0,
+            table_width: DEFAULT_SKY_TABLE_WIDTH,
+        }
+    }
+}
+
+/// The generated sky image and its sampling tables, kept across rebuilds so a moving sun reuses
+/// their buffers.
+#[derive(Clone, Debug)]
+pub struct SkyBuffers {
+    /// Lat-long luminance image of the sky (nit, before `scale`), row 0 at the zenith.
+    pub image: RgbImage,
+    /// Tables of `image`; None until first built.
+    pub tables: Option<EnvMapTables>,
+    /// Per image column, (cos, sin) of its azimuth: scratch for the image fill.
+    pub columns: Vec<Vec2>,
+}
+
+impl Default for SkyBuffers {
+    fn default() -> Self {
+        Self { image: RgbImage { width: 1, height: 1, pixels: vec![Vec3::ZERO] }, tables: None, columns: Vec::new() }
+    }
+}
+
+fn invalid(msg: String) -> LightError {
+    LightError::Invalid { light: "SunSkyLight", msg }
+}
+
+impl SunSkyLight {
+    /// A sky at the place and UTC time given, with defaults for the rest.
+    pub fn at(latitude_deg: f64, longitude_deg: f64, time: UtcDateTime) -> Self {
+        Self { sun: SunPosition::Location { latitude_deg, longitude_deg, time }, ..Default::default() }
+    }
+
+    /// Parses `LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]` (degrees north and east, a UTC date-time,
+    /// optionally seconds `:SS`), the form of `kelvin render --sky`, and checks the result.
+    pub fn parse(spec: &str) -> Result<Self, LightError> {
+        let form = "expected LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY] (degrees, UTC)";
+        let parts: Vec<&str> = spec.split(',').map(str::trim).collect();
+        let number = |name: &str, v: &str| -> Result<f64, LightError> {
+            v.parse::<f64>().map_err(|_| invalid(format!("'{spec}': {name} '{v}' is not a number; {form}")))
+        };
+        let (lat, lon, time, turbidity) = match parts[..] {
+            [lat, lon, time] => (lat, lon, time, None),
+            [lat, lon, time, t] => (lat, lon, time, Some(t)),
+            _ => return Err(invalid(format!("'{spec}': {form}"))),
+        };
+        let mut light = Self::at(number("latitude", lat)?, number("longitude", lon)?, UtcDateTime::parse(time)?);
+        if let Some(t) = turbidity {
+            light.turbidity = number("turbidity", t)? as f32;
+        }
+        light.validate()?;
+        light.sun_direction()?;
+        Ok(light)
+    }
+
+    /// The unit direction toward the sun (world frame).
+    pub fn sun_direction(&self) -> Result<Vec3, LightError> {
+        match self.sun {
+            SunPosition::Direction(d) => {
+                let n = d.normalize_or_zero();
+                if !n.is_finite() || n == Vec3::ZERO {
+                    return Err(invalid(format!("sun direction {d} must be finite and nonzero")));
+                }
+                Ok(n)
+            }
+            SunPosition::Location { latitude_deg, longitude_deg, time } => {
+                Ok(solar_position(latitude_deg, longitude_deg, &time)?.direction())
+            }
+        }
+    }
+
+    /// Checks every field is in range (what [`Self::resolve`] checks first).
+    pub fn validate(&self) -> Result<(), LightError> {
+        let (t, a, d) = (self.turbidity, self.ground_albedo, self.sun_angular_diameter);
+        if !(TURBIDITY_RANGE.0..=TURBIDITY_RANGE.1).contains(&t) {
+            return Err(invalid(format!("turbidity {t} must be in [1, 10], the model's range")));
+        }
+        if !(0.0..=1.0).contains(&a) {
+            return Err(invalid(format!("ground_albedo {a} must be in [0, 1]")));
+        }
+        if !(d > 0.0 && d < 0.5) {
+            return Err(invalid(format!("sun_angular_diameter {d} must be in (0, 0.5) radians")));
+        }
+        if !(self.scale.is_finite() && self.scale >= 0.0) {
+            return Err(invalid(format!("scale {} must be finite and >= 0", self.scale)));
+        }
+        let (lo, hi) = SKY_TABLE_WIDTHS;
+        if !(lo..=hi).contains(&self.table_width) {
+            return Err(invalid(format!("table_width {} must be in {lo}..={hi}", self.table_width)));
+        }
+        Ok(())
+    }
+
+    /// World-space form with fresh buffers; `scene` is the scene's bounding sphere.
+    pub fn resolve(&self, scene: SceneSphere) -> Result<ResolvedSunSky, LightError> {
+        self.resolve_reusing(scene, SkyBuffers::default())
+    }
+
+    /// As [`Self::resolve`], building the sky's image and tables into `buffers` (from an earlier
+    /// resolve: [`ResolvedSunSky::into_buffers`]), so a changing sky allocates nothing.
+    pub fn resolve_reusing(&self, scene: SceneSphere, mut buffers: SkyBuffers) -> Result<ResolvedSunSky, LightError> {
+        self.validate()?;
+        let sun_dir = self.sun_direction()?;
+        let night = !(sun_dir.y > 0.0);
+        let elevation = sun_dir.y.clamp(-1.0, 1.0).asin();
+        let sky = (!night).then(|| SkyModel::new(elevation, self.turbidity, self.ground_albedo));
+        let sun = (!night)
+            .then(|| SunDisc::new(SunModel::new(elevation, self.turbidity), sun_dir, self.sun_angular_diameter));
+        let (mut sky_lum, mut sky_rad) = (0.0, 0.0);
+        if let Some(sky) = &sky {
+            fill_sky_image(&mut buffers.image, &mut buffers.columns, self.table_width, sky, sun_dir);
+            let options = EnvTableOptions { compensate: false, max_width: None, lookup: EnvLookup::Nearest };
+            match &mut buffers.tables {
+                Some(t) => t.rebuild(&buffers.image, options),
+                None => buffers.tables = Some(EnvMapTables::build_with(&buffers.image, options)),
+            }
+            sky_lum = LUMINANCE_WEIGHTS.as_dvec3().dot(texel_solid_angle_integral(&buffers.image, EnvLookup::Nearest));
+            sky_rad = sky_lum / sky_efficacy(sky, sun_dir);
+        }
+        let s = self.scale as f64;
+        let (sun_lum, sun_rad) = sun.as_ref().map_or((0.0, 0.0), |d| (d.illuminance, d.irradiance));
+        let (sky_lum, sky_rad, sun_lum, sun_rad) = (sky_lum * s, sky_rad * s, sun_lum * s, sun_rad * s);
+        let total = sky_lum + sun_lum;
+        Ok(ResolvedSunSky {
+            sun_dir,
+            sky,
+            sun,
+            buffers: Arc::new(buffers),
+            scale: self.scale,
+            p_sun: if total > 0.0 { (sun_lum / total) as f32 } else { 0.0 },
+            scene,
+            luminous_integral: total as f32,
+            radiometric_integral: (sky_rad + sun_rad) as f32,
+        })
+    }
+}
+
+/// Fills `image` (resized to `width` x its even half, buffers reused) with the sky's luminance
+/// at texel centres, in parallel over rows; the lower half (below the horizon) is black. The
+/// directions are those of [`crate::scene::image::lat_long_direction`], with each row's zenith-angle factors and each
+/// column's sin/cos of phi computed once (`columns`, reused).
+fn fill_sky_image(image: &mut RgbImage, columns: &mut Vec<Vec2>, width: usize, sky: &SkyModel, sun: Vec3) {
+    let height = width.div_ceil(4) * 2;
+    (image.width, image.height) = (width, height);
+    image.pixels.resize(width * height, Vec3::ZERO);
+    columns.clear();
+    columns.extend((0..width).map(|x| {
+        let (s, c) = (std::f32::consts::TAU * ((x as f32 + 0.5) / width as f32 - 0.5)).sin_cos();
+        Vec2::new(c, s)
+    }));
+    let columns = &columns[..];
+    image.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+        if 2 * y >= height {
+            row.fill(Vec3::ZERO);
+            return;
+        }
+        let (sin_t, cos_t) = (PI * (y as f32 + 0.5) / height as f32).sin_cos();
+        let factors = sky.rgb_row(cos_t);
+        for (px, cs) in row.iter_mut().zip(columns) {
+            let w = Vec3::new(sin_t * cs.x, cos_t, sin_t * cs.y);
+            *px = sky.rgb_nits_in_row(&factors, w, sun);
+        }
+    });
+}
+
+/// Luminous efficacy of the sky's zenith spectrum, lm/W: converts the table's luminous integral
+/// to watts (the samplers weigh by luminous power, so this only feeds `phi`).
+fn sky_efficacy(sky: &SkyModel, sun: Vec3) -> f64 {
+    let (mut y, mut e) = (0.0, 0.0);
+    for nm in 360..=830usize {
+        let l = sky.spectral(nm as f32, Vec3::Y, sun) as f64;
+        y += l * CIE_1931.at_nm(nm)[1];
+        e += l;
+    }
+    if e > 0.0 { K_M * y / e } else { K_M }
+}
+
+/// The sun's disc: Hosek-Wilkie radiance with limb darkening, sampled uniformly in its cone.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SunDisc {
+    pub model: SunModel,
+    /// Unit direction toward the disc's centre.
+    pub dir: Vec3,
+    /// sin^2 and 1 - cos of the disc's angular radius.
+    pub sin2_radius: f32,
+    pub one_minus_cos: f32,
+    /// Radiance factor keeping the illuminance of a sun of [`SUN_ANGULAR_DIAMETER`].
+    pub size_factor: f32,
+    /// Photometric linear sRGB radiance (nit) as a polynomial in the limb cosine mu:
+    /// L(mu) = sum_k rgb_limb[k] mu^k (size factor included, `scale` not).
+    pub rgb_limb: [Vec3; 6],
+    /// Normal illuminance (lx) and irradiance (W/m^2) of the disc, before `scale`.
+    pub illuminance: f64,
+    pub irradiance: f64,
+}
+
+impl SunDisc {
+    fn new(model: SunModel, dir: Vec3, diameter: f32) -> Self {
+        let r = 0.5 * diameter as f64;
+        let omega = |r: f64| 4.0 * PI as f64 * (0.5 * r).sin().powi(2);
+        let size_factor = omega(0.5 * SUN_ANGULAR_DIAMETER as f64) / omega(r);
+        // Per power of mu: the integral of centre(lambda) c_k(lambda) cmf(lambda) over 360-830 nm.
+        let mut xyz = [DVec3::ZERO; 6];
+        let mut watts = [0.0f64; 6];
+        for nm in 360..=830usize {
+            let cmf = DVec3::from_array(CIE_1931.at_nm(nm));
+            for k in 0..6 {
+                let v = limb_term(&model, nm as f32, k);
+                xyz[k] += cmf * v;
+                watts[k] += v;
+            }
+        }
+        let rgb_limb = xyz.map(|c| (XYZ_TO_SRGB * c * K_M * size_factor).as_vec3());
+        // Over the disc, mu^k averages to 2 / (k + 2) (small-disc limit: area element 2 mu dmu).
+        let mean = |k: usize| 2.0 / (k as f64 + 2.0);
+        let solid_angle = omega(r);
+        let illuminance = (0..6).map(|k| xyz[k].y * K_M * mean(k)).sum::<f64>() * solid_angle * size_factor;
+        let irradiance = (0..6).map(|k| watts[k] * mean(k)).sum::<f64>() * solid_angle * size_factor;
+        Self {
+            model,
+            dir,
+            sin2_radius: r.sin().powi(2) as f32,
+            one_minus_cos: (2.0 * (0.5 * r).sin().powi(2)) as f32,
+            size_factor: size_factor as f32,
+            rgb_limb,
+            illuminance,
+            irradiance,
+        }
+    }
+
+    /// Solid angle of the disc, sr.
+    pub fn solid_angle(&self) -> f32 {
+        2.0 * PI * self.one_minus_cos
+    }
+
+    /// sin^2 of the angle between unit `wi` and the disc's centre, None outside the disc (or
+    /// behind). f64 cross product as [`crate::light::ResolvedDistant`]; the 1e-4 margin covers the
+    /// f32 rounding of sampled directions at the rim.
+    fn sin2_in_disc(&self, wi: Vec3) -> Option<f64> {
+        let (w, d) = (wi.as_dvec3().normalize(), self.dir.as_dvec3());
+        let s2 = w.cross(d).length_squared();
+        (w.dot(d) > 0.0 && s2 <= self.sin2_radius as f64 * (1.0 + 1e-4)).then_some(s2)
+    }
+
+    /// The limb cosine at sin^2 `s2` from the centre.
+    fn mu(&self, s2: f64) -> f32 {
+        (1.0 - s2 / self.sin2_radius as f64).max(0.0).sqrt() as f32
+    }
+
+    fn sample(&self, u: Vec2) -> Vec3 {
+        Frame::from_z(self.dir).from_local(sample_uniform_cone_sin2(u, self.sin2_radius)).normalize()
+    }
+
+    fn pdf(&self, wi: Vec3) -> f32 {
+        if self.sin2_in_disc(wi).is_some() { 1.0 / self.solid_angle() } else { 0.0 }
+    }
+
+    /// Radiance toward `wi` (zero outside the disc), before `scale`.
+    fn le(&self, wi: Vec3, query: ColorQuery) -> Option<SampledSpectrum> {
+        let mu = self.mu(self.sin2_in_disc(wi)?);
+        Some(match query {
+            ColorQuery::Rgb => {
+                // A low sun is redder than sRGB's gamut: its negative blue is clipped.
+                let c = self.rgb_limb.iter().rev().fold(Vec3::ZERO, |acc, &c| acc * mu + c).max(Vec3::ZERO);
+                SampledSpectrum([c.x, c.y, c.z, 0.0])
+            }
+            ColorQuery::Spectral(w) => SampledSpectrum(w.lambda.map(|l| self.model.spectral(l, mu) * self.size_factor)),
+        })
+    }
+}
+
+/// centre(lambda) times the mu^k coefficient of limb darkening at `lambda`: the k-th term of
+/// [`SunModel::spectral`].
+fn limb_term(model: &SunModel, lambda: f32, k: usize) -> f64 {
+    let (i, f) = hosek::wavelength_cell(lambda);
+    let lerp = |a: f32, b: f32| (a + f * (b - a)) as f64;
+    lerp(model.radiance[i], model.radiance[i + 1]) * lerp(model.limb[i][k], model.limb[i + 1][k])
+}
+
+/// A sun-and-sky light, ready to sample (see the module docs for the design).
+#[derive(Clone)]
+pub struct ResolvedSunSky {
+    /// Unit direction toward the sun.
+    pub sun_dir: Vec3,
+    /// The sky model; None with the sun below the horizon.
+    pub sky: Option<SkyModel>,
+    /// The sun's disc; None with the sun below the horizon.
+    pub sun: Option<SunDisc>,
+    /// The sky's image and sampling tables.
+    pub buffers: Arc<SkyBuffers>,
+    pub scale: f32,
+    /// Probability that Sample_Li samples the sun rather than the sky.
+    pub p_sun: f32,
+    pub scene: SceneSphere,
+    /// Integral of luminance over the sphere, nit sr (= lx), and of radiance, W/m^2.
+    luminous_integral: f32,
+    radiometric_integral: f32,
+}
+
+impl std::fmt::Debug for ResolvedSunSky {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ResolvedSunSky")
+            .field("sun_dir", &self.sun_dir)
+            .field("night", &self.sky.is_none())
+            .field("tables", &self.buffers.tables)
+            .field("p_sun", &self.p_sun)
+            .field("scale", &self.scale)
+            .field("scene", &self.scene)
+            .finish()
+    }
+}
+
+impl ResolvedSunSky {
+    /// Infinite: seen by escaping rays, never a delta.
+    pub fn flags(&self) -> LightFlags {
+        LightFlags::INFINITE
+    }
+
+    /// True with the sun below the horizon: the light is black.
+    pub fn is_night(&self) -> bool {
+        self.sky.is_none()
+    }
+
+    /// The same light for another scene sphere (power scales with its cross-section; nothing is
+    /// rebuilt).
+    pub fn with_scene(&self, scene: SceneSphere) -> Self {
+        Self { scene, ..self.clone() }
+    }
+
+    /// The buffers, for [`SunSkyLight::resolve_reusing`]; fresh ones if another owner holds them.
+    pub fn into_buffers(self) -> SkyBuffers {
+        Arc::try_unwrap(self.buffers).unwrap_or_default()
+    }
+
+    fn tables(&self) -> Option<&EnvMapTables> {
+        self.buffers.tables.as_ref().filter(|_| self.sky.is_some())
+    }
+
+    /// A direction toward the sun (probability `p_sun`) or the sky; None at night or when the
+    /// direction carries no light (a part of the disc below the horizon).
+    pub fn sample_li(&self, ctx: &LightSampleContext, u: Vec2, query: ColorQuery) -> Option<LiSample> {
+        let wi = match &self.sun {
+            Some(sun) if u.x < self.p_sun => sun.sample(Vec2::new(u.x / self.p_sun, u.y)),
+            _ => {
+                let ux = if self.p_sun > 0.0 { (u.x - self.p_sun) / (1.0 - self.p_sun) } else { u.x };
+                self.tables()?.sample_direction(Vec2::new(ux.clamp(0.0, 1.0 - f32::EPSILON / 2.0), u.y), false)?.0
+            }
+        };
+        // Density and radiance at `wi` itself, so pdf == pdf_li(wi) and radiance == le(wi).
+        let pdf = self.pdf_li(wi);
+        let radiance = self.le(wi, query);
+        if !(pdf > 0.0) || radiance.0.iter().all(|&v| v == 0.0) {
+            return None;
+        }
+        let p_light = ctx.p + wi * far_distance(self.scene, ctx.p);
+        Some(LiSample { radiance, wi, pdf, p_light, n_light: Vec3::ZERO })
+    }
+
+    /// Solid-angle density of [`Self::sample_li`] choosing unit `wi`: the mixture of the sun's
+    /// cone and the sky table.
+    pub fn pdf_li(&self, wi: Vec3) -> f32 {
+        let sky = self.tables().map_or(0.0, |t| t.pdf_direction(wi, false));
+        let sun = self.sun.as_ref().map_or(0.0, |s| s.pdf(wi));
+        self.p_sun * sun + (1.0 - self.p_sun) * sky
+    }
+
+    /// Radiance along an escaping ray of direction `wi` (unit): sky plus sun disc.
+    pub fn le(&self, wi: Vec3, query: ColorQuery) -> SampledSpectrum {
+        let Some(sky) = &self.sky else { return SampledSpectrum::default() };
+        if !(wi.y > 0.0) {
+            return SampledSpectrum::default();
+        }
+        let mut l = match query {
+            ColorQuery::Rgb => {
+                let c = sky.rgb_nits(wi, self.sun_dir);
+                SampledSpectrum([c.x, c.y, c.z, 0.0])
+            }
+            ColorQuery::Spectral(w) => SampledSpectrum(w.lambda.map(|lambda| sky.spectral(lambda, wi, self.sun_dir))),
+        };
+        if let Some(sun) = self.sun.as_ref().and_then(|s| s.le(wi, query)) {
+            l = l.add(sun);
+        }
+        l.scale(self.scale)
+    }
+
+    /// Power through the scene's bounding disc, W: pi R^2 times the integral of radiance.
+    pub fn phi(&self) -> f32 {
+        PI * self.scene.radius * self.scene.radius * self.radiometric_integral
+    }
+
+    /// Luminous power through the scene's bounding disc, lm.
+    pub fn luminous_phi(&self) -> f32 {
+        PI * self.scene.radius * self.scene.radius * self.luminous_integral
+    }
+
+    /// Illuminance of the sun's disc on a surface facing it, lx (with `scale`); 0 at night.
+    pub fn sun_illuminance(&self) -> f32 {
+        self.sun.as_ref().map_or(0.0, |s| (s.illuminance * self.scale as f64) as f32)
+    }
+}
