@@ -18,7 +18,7 @@ fn world_with(spawn: fn(&mut World)) -> (World, Schedule) {
 }
 
 fn bench_render(c: &mut Criterion) {
-    let opts = RenderOptions { width: 128, height: 128, spp: 64, strategy: Strategy::Mis };
+    let opts = RenderOptions { width: 128, height: 128, spp: 64, strategy: Strategy::Mis, crop: None };
     let mut group = c.benchmark_group("render_128x128_64spp");
     group.sample_size(10).throughput(Throughput::Elements(128 * 128 * 64));
     for (name, spawn) in [

@@ -19,7 +19,7 @@ fn main() {
     } else {
         kelvin::scenes::bench_scenes::spawn_point_over_plane(&mut world);
     }
-    let opts = RenderOptions { width: 128, height: 128, spp: 64, strategy: Strategy::Mis };
+    let opts = RenderOptions { width: 128, height: 128, spp: 64, strategy: Strategy::Mis, crop: None };
     for _ in 0..repeats {
         let (_, stats) = render(&mut world, &mut schedule, &opts, |_| {});
         let p = stats.passes;

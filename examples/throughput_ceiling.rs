@@ -107,7 +107,13 @@ fn main() {
     let (mut world, mut schedule) = (World::new(), Schedule::default());
     kelvin::systems::LightingPlugin::build(&mut world, &mut schedule);
     kelvin::scenes::bench_scenes::spawn_point_over_plane(&mut world);
-    let opts = RenderOptions { width: WIDTH as u32, height: HEIGHT as u32, spp: SPP as u32, strategy: Strategy::Mis };
+    let opts = RenderOptions {
+        width: WIDTH as u32,
+        height: HEIGHT as u32,
+        spp: SPP as u32,
+        strategy: Strategy::Mis,
+        crop: None,
+    };
     let mut best = f64::INFINITY;
     let mut pixels = Vec::new();
     for _ in 0..repeats {

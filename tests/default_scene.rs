@@ -18,7 +18,7 @@ fn default_scene_has_area_spot_blackbody_point_and_sky_lights_and_renders() {
     let (film, stats) = render(
         &mut world,
         &mut schedule,
-        &RenderOptions { width: 24, height: 24, spp: 2, strategy: Strategy::Mis },
+        &RenderOptions { width: 24, height: 24, spp: 2, strategy: Strategy::Mis, crop: None },
         |_| {},
     );
     assert!(stats.report.warnings.is_empty(), "{}", stats.report);
@@ -62,7 +62,7 @@ fn render_report_keeps_every_warning_and_sums_counts_over_batches() {
     kelvin::scenes::default_scene::spawn_default_scene(&mut world);
     world.spawn((PointLight::candela(-5.0), Transform::from_translation(Vec3::Y)));
     // 96 x 96 x 4 = 36864 camera samples: three batches, after the update that syncs the scene.
-    let opts = RenderOptions { width: 96, height: 96, spp: 4, strategy: Strategy::Mis };
+    let opts = RenderOptions { width: 96, height: 96, spp: 4, strategy: Strategy::Mis, crop: None };
     let (_, stats) = render(&mut world, &mut schedule, &opts, |_| {});
     let report = &stats.report;
     assert_eq!(report.updates, 4, "{report}");

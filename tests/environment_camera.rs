@@ -21,7 +21,7 @@ fn environment_map_of_sky_over_floor_relights_a_point_with_pi_l() {
     world.spawn(UniformInfiniteLight::nits(l));
     let floor = Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z);
     world.spawn((Rectangle { half_size: Vec2::splat(1e4) }, floor, Material::lambertian(Vec3::splat(rho))));
-    let opts = RenderOptions { width: 64, height: 32, spp: 64, strategy: Strategy::Mis };
+    let opts = RenderOptions { width: 64, height: 32, spp: 64, strategy: Strategy::Mis, crop: None };
     let (map, _) = render_environment(&mut world, &mut schedule, Vec3::Y, &opts);
     let y = |p: Vec3| 0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z;
     // Rows fully above the horizon see the sky; rows fully below see the lit floor (rho L).

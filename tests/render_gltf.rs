@@ -155,7 +155,7 @@ fn every_real_gltf_scene_has_exactly_its_lights_in_the_table() {
 fn every_real_gltf_scene_renders_lit() {
     for e in SCENES {
         let Loaded { mut world, mut schedule, report } = load(e.file);
-        let opts = RenderOptions { width: 24, height: 16, spp: 2, strategy: Strategy::Mis };
+        let opts = RenderOptions { width: 24, height: 16, spp: 2, strategy: Strategy::Mis, crop: None };
         let (film, stats) = render(&mut world, &mut schedule, &opts, |_| {});
         let pixels = film.pixels();
         assert!(
@@ -189,7 +189,7 @@ fn every_real_gltf_scene_renders_lit() {
 #[test]
 fn kajiya_emissive_triangle_pixels_see_its_radiance() {
     let Loaded { mut world, mut schedule, .. } = load("kajiya/emissive_triangle/triangle.glb");
-    let opts = RenderOptions { width: 24, height: 16, spp: 2, strategy: Strategy::Mis };
+    let opts = RenderOptions { width: 24, height: 16, spp: 2, strategy: Strategy::Mis, crop: None };
     let (film, _) = render(&mut world, &mut schedule, &opts, |_| {});
     let max = film.pixels().iter().map(|p| lum_rgb(*p)).fold(0.0, f64::max);
     eprintln!("triangle.glb: brightest pixel Y {max:.6} (expected 1)");

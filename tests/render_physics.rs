@@ -28,7 +28,7 @@ fn floor_scene(mode: ColorMode, rho: f32) -> (World, Schedule) {
 }
 
 fn centre_luminance(world: &mut World, schedule: &mut Schedule, spp: u32) -> f32 {
-    let opts = RenderOptions { width: 5, height: 5, spp, strategy: Strategy::Mis };
+    let opts = RenderOptions { width: 5, height: 5, spp, strategy: Strategy::Mis, crop: None };
     let (film, _) = render(world, schedule, &opts, |_| {});
     luminance(film.pixel(2, 2))
 }
@@ -55,7 +55,7 @@ fn point_light_over_lambertian_floor_gives_rho_over_pi_i_over_h2() {
 fn shadow_rays_leaving_a_floor_are_not_blocked_by_it_and_a_ball_aside_changes_nothing() {
     let (mut world, mut schedule) = floor_scene(ColorMode::Rgb, 0.5);
     world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.0, 2.0, 0.0))));
-    let opts = RenderOptions { width: 5, height: 5, spp: 4, strategy: Strategy::Mis };
+    let opts = RenderOptions { width: 5, height: 5, spp: 4, strategy: Strategy::Mis, crop: None };
     let (alone, stats) = render(&mut world, &mut schedule, &opts, |_| {});
     assert_eq!(stats.shadow_rays, stats.camera_samples);
     assert!(alone.pixel(2, 2).max_element() > 0.0, "the floor shadowed itself");
@@ -91,7 +91,7 @@ fn centre_stats(
     size: u32,
     strategy: Strategy,
 ) -> (f64, f64) {
-    let opts = RenderOptions { width: size, height: size, spp, strategy };
+    let opts = RenderOptions { width: size, height: size, spp, strategy, crop: None };
     let values: Vec<f64> = (0..renders)
         .map(|seed| {
             world.resource_mut::<Settings>().seed = seed;
@@ -151,7 +151,7 @@ fn point_light_answer_is_the_same_under_strategy_precision_and_offset_knobs() {
             let mut s = world.resource_mut::<Settings>();
             (s.light_precision, s.shadow_offset) = (precision, offset);
         }
-        let opts = RenderOptions { width: 5, height: 5, spp: 1, strategy };
+        let opts = RenderOptions { width: 5, height: 5, spp: 1, strategy, crop: None };
         let (film, _) = render(&mut world, &mut schedule, &opts, |_| {});
         let got = luminance(film.pixel(2, 2));
         assert!((got / want - 1.0).abs() < 1e-3, "{strategy:?} {precision:?} {offset:?}: {got} vs {want}");

@@ -94,7 +94,7 @@ fn color_checker_patches_render_albedo_times_white_luminance() {
     let (film, _) = render(
         &mut world,
         &mut schedule,
-        &RenderOptions { width: w, height: h, spp: 1, strategy: Strategy::Mis },
+        &RenderOptions { width: w, height: h, spp: 1, strategy: Strategy::Mis, crop: None },
         |_| {},
     );
     let means = patch_means(&film.pixels(), &checker, w, h);

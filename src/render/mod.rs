@@ -8,3 +8,4 @@ pub mod material;
 pub mod renderer;
 pub mod scene_file;
 mod shade_lanes;
+pub mod tiles;

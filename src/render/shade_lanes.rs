@@ -203,7 +203,7 @@ mod tests {
         world.spawn((DistantLight::default(), Transform::default().looking_to(Vec3::Y, Vec3::Z)));
         let eye = Vec3::new(0.0, 1.5, 5.0);
         world.spawn((Camera { yfov: 1.2 }, Transform::from_translation(eye).looking_to(-eye, Vec3::Y)));
-        let opts = RenderOptions { width: 24, height: 16, spp: 4, strategy };
+        let opts = RenderOptions { width: 24, height: 16, spp: 4, strategy, crop: None };
         render(&mut world, &mut schedule, &opts, |_| {}).0.pixels()
     }
 

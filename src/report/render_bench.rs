@@ -140,7 +140,7 @@ impl SuiteScene {
 
 /// The render options of the suite: MIS, `width` x `height`, `spp`.
 pub fn suite_options(width: u32, height: u32, spp: u32) -> RenderOptions {
-    RenderOptions { width, height, spp: spp.max(1), strategy: Strategy::Mis }
+    RenderOptions { width, height, spp: spp.max(1), strategy: Strategy::Mis, crop: None }
 }
 
 /// What to run.

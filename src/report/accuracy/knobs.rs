@@ -41,7 +41,7 @@ impl Config {
 
     /// The render options of this configuration.
     pub fn render_options(&self, width: u32, height: u32) -> RenderOptions {
-        RenderOptions { width, height, spp: self.spp, strategy: self.strategy }
+        RenderOptions { width, height, spp: self.spp, strategy: self.strategy, crop: None }
     }
 
     /// Writes the light-system settings (with `seed`) and the env-table width into `world`. The
