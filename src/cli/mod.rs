@@ -1,6 +1,8 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
+mod batch;
 mod bench;
 mod ies;
+mod manifest;
 mod merge;
 mod render;
 mod report;
@@ -24,6 +26,8 @@ enum Command {
     Ies(ies::IesArgs),
     /// Render a glTF scene (or the embedded default scene) with direct lighting.
     Render(render::RenderArgs),
+    /// Render a manifest's jobs (JSON); finished outputs are skipped, so a rerun resumes.
+    Batch(batch::BatchArgs),
     /// Join tiles rendered with `render --crop` into the full image, checking they cover it once.
     Merge(merge::MergeArgs),
     /// Reports: `report accuracy` prices each accuracy knob in render time.
@@ -42,6 +46,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Ies(args) => ies::run(args),
         Command::Render(args) => render::run(args),
         Command::Merge(args) => merge::run(args),
+        Command::Batch(args) => batch::run(args),
         Command::Report(args) => report::run(args),
         Command::Bench(args) => bench::run(args),
     }

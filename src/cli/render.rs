@@ -83,6 +83,13 @@ pub struct RenderArgs {
     report: bool,
 }
 
+impl RenderArgs {
+    /// The full image's size.
+    pub(super) fn size(&self) -> (u32, u32) {
+        self.size
+    }
+}
+
 fn parse_point(s: &str) -> Result<glam::Vec3, String> {
     let v: Vec<f32> = s.split(',').filter_map(|c| c.trim().parse().ok()).collect();
     match v[..] {
