@@ -21,6 +21,7 @@ import argparse
 import json
 import math
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -53,8 +54,9 @@ class TileFailed(Exception):
 
 @ray.remote
 def render_tile(kelvin, args, crop, threads, timeout):
-    """Runs `kelvin render ARGS --crop ...` in a temporary folder; returns (EXR bytes, node, seconds)."""
-    start = time.monotonic()
+    """Runs `kelvin render ARGS --crop ...` in a temporary folder; returns (EXR bytes, node, seconds,
+    kelvin's CPU seconds)."""
+    start, cpu = time.monotonic(), cpu_seconds()
     node = ray.get_runtime_context().get_node_id()
     crop_arg = ",".join(map(str, crop))
     with tempfile.TemporaryDirectory(prefix="kelvin-tile-") as tmp:
@@ -70,7 +72,13 @@ def render_tile(kelvin, args, crop, threads, timeout):
             lines = [l for l in run.stderr.splitlines() if l.strip()]
             raise TileFailed(f"tile {crop_arg}: {lines[-1] if lines else 'kelvin render failed'}")
         with open(out, "rb") as f:
-            return f.read(), node, time.monotonic() - start
+            return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
+
+
+def cpu_seconds():
+    """User and system CPU seconds of this process's finished children (a worker runs one task at a time)."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def plan(kelvin, manifest):
@@ -139,14 +147,20 @@ def run(opts):
             i, t = pending.pop(ref)
             done += 1
             try:
-                data, node, secs = ray.get(ref)
+                data, node, secs, cpu = ray.get(ref)
             except Exception as err:  # a task's failure is that job's, not the run's
                 if i not in status:
                     status[i] = ("FAILED", f"job {i} ({jobs[i]['name']}): {cause(err)}")
+                    # The job's other tiles are of no use now.
+                    for other, (j, _) in list(pending.items()):
+                        if j == i:
+                            ray.cancel(other)
+                            del pending[other]
+                            done += 1
                 continue
             tiles[i][t] = data
-            stats = per_node.setdefault(node, [0, 0.0])
-            stats[0], stats[1] = stats[0] + 1, stats[1] + secs
+            stats = per_node.setdefault(node, [0, 0.0, 0.0])
+            stats[0], stats[1], stats[2] = stats[0] + 1, stats[1] + secs, stats[2] + cpu
             name = jobs[i]["name"]
             have = sum(d is not None for d in tiles[i])
             print(f"[{time.monotonic() - start:6.1f} s] tiles {done}/{total}: {name} {have}/{len(tiles[i])}", flush=True)
@@ -162,14 +176,14 @@ def run(opts):
     counts = {s: sum(1 for v in status.values() if v[0] == s) for s in ("rendered", "skipped", "FAILED")}
     print(f"{len(jobs)} jobs: {counts['rendered']} rendered, {counts['skipped']} skipped, {counts['FAILED']} failed")
     print(f"{total} tiles in {wall:.2f} s")
-    for node, (n, secs) in sorted(per_node.items()):
-        print(f"node {node[:12]}: {n} tiles, {secs:.2f} s in tasks, {n / wall:.2f} tiles/s")
+    for node, (n, secs, cpu) in sorted(per_node.items()):
+        print(f"node {node[:12]}: {n} tiles, {secs:.2f} s in tasks ({cpu:.2f} CPU s), {n / wall:.2f} tiles/s")
     if opts.summary:
         summary = {
             "wall_seconds": wall,
             "tiles": total,
             "jobs": {str(k): {"status": v[0], "detail": v[1]} for k, v in status.items()},
-            "nodes": {k: {"tiles": v[0], "task_seconds": v[1]} for k, v in per_node.items()},
+            "nodes": {k: {"tiles": v[0], "task_seconds": v[1], "cpu_seconds": v[2]} for k, v in per_node.items()},
         }
         with open(opts.summary, "w") as f:
             json.dump(summary, f, indent=2)
