@@ -78,7 +78,8 @@ pub fn write_exr_tile(
 /// image's size. An EXR of a whole image reads as a tile that covers it.
 pub fn read_exr_tile(path: &Path) -> Result<Tile, ImageIoError> {
     let what = path.display().to_string();
-    let (image, (w, h, pixels)) = read_exr_image(path)?;
+    let (image, pixels) = read_exr_image(path)?;
+    let (w, h) = (image.layer_data.size.width(), image.layer_data.size.height());
     let display = image.attributes.display_window;
     let position = image.layer_data.attributes.layer_position;
     let bad = |msg: String| ImageIoError::Io { what: what.clone(), msg };
@@ -97,15 +98,16 @@ pub fn read_exr_tile(path: &Path) -> Result<Tile, ImageIoError> {
 /// Reads an OpenEXR written by [`write_exr`] back exactly (negative values included, unlike the
 /// validating loader for light maps in `scene::image`): width, height and the row-major pixels.
 pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<Vec3>), ImageIoError> {
-    let (_, image) = read_exr_image(path)?;
-    Ok(image)
+    let (image, pixels) = read_exr_image(path)?;
+    let size = image.layer_data.size;
+    Ok((size.width(), size.height(), pixels))
 }
 
 type ExrRgb =
     exr::image::Image<exr::image::Layer<exr::image::SpecificChannels<(usize, Vec<Vec3>), exr::prelude::RgbChannels>>>;
 
-/// The first RGB layer of an EXR, with its attributes, and its width, height and pixels.
-fn read_exr_image(path: &Path) -> Result<(ExrRgb, (usize, usize, Vec<Vec3>)), ImageIoError> {
+/// The first RGB layer of an EXR, with its attributes (and size), and its row-major pixels.
+fn read_exr_image(path: &Path) -> Result<(ExrRgb, Vec<Vec3>), ImageIoError> {
     use exr::prelude::{ReadChannels, ReadLayers};
     let what = path.display().to_string();
     let mut image = exr::prelude::read()
@@ -122,9 +124,8 @@ fn read_exr_image(path: &Path) -> Result<(ExrRgb, (usize, usize, Vec<Vec3>)), Im
         .non_parallel()
         .from_file(path)
         .map_err(|e| ImageIoError::Io { what: what.clone(), msg: e.to_string() })?;
-    let size = image.layer_data.size;
     let pixels = std::mem::take(&mut image.layer_data.channel_data.pixels.1);
-    Ok((image, (size.width(), size.height(), pixels)))
+    Ok((image, pixels))
 }
 
 /// Writes a tone-mapped 8-bit sRGB PNG; `exposure` is in stops (0 = unchanged). See the module docs.
