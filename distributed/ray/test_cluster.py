@@ -16,6 +16,7 @@ check fails, by ending the processes that folder names (and their children): not
 import argparse
 import json
 import os
+import secrets
 import shutil
 import signal
 import socket
@@ -74,6 +75,9 @@ class Cluster:
         self.address = f"127.0.0.1:{self.port}"
         # Tasks' temporary files (a killed task's included) stay inside the work folder.
         self.env = dict(os.environ, RAY_USAGE_STATS_ENABLED="0", TMPDIR=os.path.join(work, "tmp"))
+        # A token of its own, for its nodes and drivers only: the GCS listens on the machine's address, and a
+        # token file that another Ray left in ~/.ray must not decide whether this cluster checks tokens.
+        self.env.update(RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=secrets.token_hex(32))
         os.makedirs(self.env["TMPDIR"], exist_ok=True)
 
     def start(self):
@@ -164,10 +168,10 @@ def main():
     cluster = Cluster(ray_bin, work)
     try:
         good = [
-            {"name": "room", "output": "out/room.exr", "size": "96x72", "spp": 32},
+            {"name": "room", "output": "out/room.exr", "size": "96x72", "spp": 128},
             {"name": "box-spectral", "scene": os.path.join(REPO, "tests/data/gltf/bevy/CornellBox.glb"),
-             "output": "out/box.exr", "size": "80x80", "spp": 32, "settings": {"color": "spectral", "seed": 3}},
-            {"name": "room-env-camera", "output": "out/env.exr", "size": "96x48", "spp": 32,
+             "output": "out/box.exr", "size": "80x80", "spp": 128, "settings": {"color": "spectral", "seed": 3}},
+            {"name": "room-env-camera", "output": "out/env.exr", "size": "96x48", "spp": 128,
              "camera": {"environment_at": [0, 1, 0]}, "settings": {"light_sampler": "power"}},
         ]
         bad = [
