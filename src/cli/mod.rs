@@ -1,6 +1,9 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
+mod batch;
 mod bench;
 mod ies;
+mod manifest;
+mod merge;
 mod render;
 mod report;
 mod spectrum;
@@ -23,6 +26,10 @@ enum Command {
     Ies(ies::IesArgs),
     /// Render a glTF scene (or the embedded default scene): path traced, or direct lighting.
     Render(render::RenderArgs),
+    /// Render a manifest's jobs (JSON); finished outputs are skipped, so a rerun resumes.
+    Batch(batch::BatchArgs),
+    /// Join tiles rendered with `render --crop` into the full image, checking they cover it once.
+    Merge(merge::MergeArgs),
     /// Reports: `report accuracy` prices each accuracy knob in render time.
     Report(report::ReportArgs),
     /// Benchmarks: `bench lights` (many-lights table and plots), `bench render` (the render suite).
@@ -38,6 +45,8 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Spectrum(args) => spectrum::run(args),
         Command::Ies(args) => ies::run(args),
         Command::Render(args) => render::run(args),
+        Command::Merge(args) => merge::run(args),
+        Command::Batch(args) => batch::run(args),
         Command::Report(args) => report::run(args),
         Command::Bench(args) => bench::run(args),
     }

@@ -1,7 +1,7 @@
 //! `kelvin render [SCENE] [-o out.exr] [--spp N] [--time SECONDS] [--size WxH] [--env map [--env-intensity X]]
 //! [--sky LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY] [--sky-intensity X]] [--integrator path|direct] [--max-depth N]
 //! [--roulette-depth N] [--light-sampler uniform|power|bvh|ris [--candidates M]] [--color rgb|spectral] [--seed S]
-//! [--threads T] [--report]`.
+//! [--threads T] [--report] [--crop X0,Y0,X1,Y1]`.
 
 use std::path::{Path, PathBuf};
 
@@ -9,9 +9,10 @@ use bevy_ecs::prelude::*;
 use indicatif::{ProgressBar, ProgressStyle};
 use kelvin::light::SunSkyLight;
 use kelvin::render::camera::CameraModel;
-use kelvin::render::film_io::{write_exr, write_png};
+use kelvin::render::film_io::{write_exr, write_exr_tile, write_png};
 use kelvin::render::path::PathDepth;
-use kelvin::render::renderer::{Integrator, RenderOptions, Strategy, render_with};
+use kelvin::render::renderer::{Integrator, RenderOptions, RenderStats, Strategy, render_with};
+use kelvin::render::tiles::Crop;
 use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, Settings};
 use kelvin::systems::LightingPlugin;
 
@@ -106,11 +107,22 @@ pub struct RenderArgs {
     /// instead of the scene's camera; the EXR can light another scene with --env.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_point)]
     environment_at: Option<glam::Vec3>,
+    /// Render only this tile of the image (pixels X0..X1 by Y0..Y1, ends exclusive), bit for bit as
+    /// in the full render, into an EXR that records its place (`kelvin merge` joins tiles).
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_crop)]
+    crop: Option<Crop>,
     /// Print the light system's run report over the whole render (which systems ran in how many
     /// of its updates, with counts summed over the batches, why others were skipped, and every
     /// warning), and the time of each pass.
     #[arg(long)]
     report: bool,
+}
+
+impl RenderArgs {
+    /// The full image's size.
+    pub(super) fn size(&self) -> (u32, u32) {
+        self.size
+    }
 }
 
 fn parse_point(s: &str) -> Result<glam::Vec3, String> {
@@ -128,7 +140,11 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     }
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+fn parse_crop(s: &str) -> Result<Crop, String> {
+    s.parse().map_err(|e: kelvin::render::tiles::TileError| e.to_string())
+}
+
+pub(super) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT, e.g. 512x512"))?;
     let parse = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
     match (parse(w), parse(h)) {
@@ -200,7 +216,7 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
 }
 
 /// Exposure (stops) that maps the log-average luminance to 18% grey.
-fn auto_exposure(rgb: &[glam::Vec3]) -> f32 {
+pub(super) fn auto_exposure(rgb: &[glam::Vec3]) -> f32 {
     let ys: Vec<f64> =
         rgb.iter().map(|c| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64).filter(|y| *y > 0.0).collect();
     if ys.is_empty() {
@@ -210,13 +226,15 @@ fn auto_exposure(rgb: &[glam::Vec3]) -> f32 {
     (0.18f64 / log_mean.exp()).log2() as f32
 }
 
-fn write_outputs(path: &Path, w: u32, h: u32, rgb: &[glam::Vec3], exposure: f32) -> Result<(), CliError> {
+/// Writes the image, and beside an .exr a .png preview first (so that an .exr that exists is a
+/// finished render's, preview included: `kelvin batch` skips it).
+pub(super) fn write_outputs(path: &Path, w: u32, h: u32, rgb: &[glam::Vec3], exposure: f32) -> Result<(), CliError> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "exr" => {
-            write_exr(path, w as usize, h as usize, rgb)?;
             let preview = path.with_extension("png");
             write_png(&preview, w as usize, h as usize, rgb, exposure)?;
+            write_exr(path, w as usize, h as usize, rgb)?;
             eprintln!("wrote {} and {}", path.display(), preview.display());
         }
         "png" => {
@@ -228,12 +246,18 @@ fn write_outputs(path: &Path, w: u32, h: u32, rgb: &[glam::Vec3], exposure: f32)
     Ok(())
 }
 
-pub fn run(args: RenderArgs) -> Result<(), CliError> {
-    if let Some(t) = args.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global()?;
-    }
-    let (mut world, mut schedule) = build_world(&args)?;
+/// Renders as `args` say and writes the outputs; `progress` gets the finished fraction.
+pub(super) fn render_to_files(args: &RenderArgs, progress: impl FnMut(f32) + Send) -> Result<RenderStats, CliError> {
     let (width, height) = args.size;
+    if let Some(crop) = args.crop {
+        crop.check(width, height)?;
+        let ext = args.output.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+        if ext.as_deref() != Some("exr") {
+            let out = args.output.display();
+            return Err(format!("{out}: a --crop tile is written as .exr, which records its place in the image").into());
+        }
+    }
+    let (mut world, mut schedule) = build_world(args)?;
     let opts = RenderOptions {
         width,
         height,
@@ -246,21 +270,47 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             IntegratorArg::Direct => Integrator::Direct,
         },
         time_budget: args.time.map(std::time::Duration::from_secs_f64),
+        crop: args.crop,
     };
-    let bar = ProgressBar::new(1000);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta}").expect("valid template"),
-    );
     let camera = args.environment_at.map(|origin| CameraModel::LatLong { origin, width, height });
-    let (film, stats) =
-        render_with(&mut world, &mut schedule, &opts, camera, |f| bar.set_position((f * 1000.0) as u64));
-    bar.finish_and_clear();
+    let (film, stats) = render_with(&mut world, &mut schedule, &opts, camera, progress);
     if args.report {
         eprint!("{}", stats.report);
     }
     let rgb = film.pixels();
-    let exposure = args.exposure.unwrap_or_else(|| auto_exposure(&rgb));
-    write_outputs(&args.output, width, height, &rgb, exposure)?;
+    match args.crop {
+        // No preview: a tile's automatic exposure is not the image's (`kelvin merge` writes that).
+        Some(crop) => {
+            write_exr_tile(&args.output, crop, width, height, &rgb)?;
+            eprintln!("wrote {} (tile {crop} of {width}x{height})", args.output.display());
+        }
+        None => {
+            let exposure = args.exposure.unwrap_or_else(|| auto_exposure(&rgb));
+            write_outputs(&args.output, width, height, &rgb, exposure)?;
+        }
+    }
+    Ok(stats)
+}
+
+/// A progress bar of 1000 steps.
+pub(super) fn progress_bar() -> ProgressBar {
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template("{msg}{bar:40} {percent:>3}% {elapsed_precise} eta {eta}")
+            .expect("valid template"),
+    );
+    bar
+}
+
+pub fn run(args: RenderArgs) -> Result<(), CliError> {
+    if let Some(t) = args.threads {
+        rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global()?;
+    }
+    let bar = progress_bar();
+    let stats = render_to_files(&args, |f| bar.set_position((f * 1000.0) as u64));
+    bar.finish_and_clear();
+    let stats = stats?;
+    let (width, height) = args.crop.map_or(args.size, |c| (c.width(), c.height()));
     let secs = stats.seconds.max(1e-9);
     println!(
         "rendered {width}x{height} at {} spp in {:.3} s: {:.2} M samples/s, {:.2} M shadow rays/s, {:.2} M BSDF rays/s",

@@ -81,12 +81,15 @@ impl CameraColumns {
 }
 
 /// Which samples a batch holds and how they map to pixels: sample index k is sample
-/// `first_sample + k % spp` of pixel k / spp, so a pixel's samples are adjacent.
+/// `first_sample + k % spp` of pixel k / spp of `region` (row-major), so a pixel's samples are
+/// adjacent. Rays and random streams take the pixel's place in the full image, whose rows are
+/// `full_width` long.
 #[derive(Clone, Copy)]
 pub(super) struct SampleRange {
     pub(super) first: usize,
     pub(super) len: usize,
-    pub(super) width: u32,
+    pub(super) region: super::tiles::Crop,
+    pub(super) full_width: u32,
     pub(super) spp: u32,
     pub(super) seed: u64,
     /// Samples of each pixel that earlier passes took.
@@ -260,10 +263,15 @@ fn for_each_chunk(
 /// [`trace_camera_rays`] for one chunk whose first sample has index `first`.
 #[inline(always)]
 fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &CameraModel, range: SampleRange) {
-    let SampleRange { width, spp, seed, .. } = range;
-    // Counters walk the pixels and samples: one division per chunk, not per sample.
-    let (mut next_pixel, mut next_sample) = ((first / spp as usize) as u32, (first % spp as usize) as u32);
-    let (mut next_x, mut next_y) = (next_pixel % width, next_pixel / width);
+    let SampleRange { region, full_width, spp, seed, .. } = range;
+    // Counters walk the pixels (in full-image coordinates) and samples: one division per chunk,
+    // not per sample.
+    let (tile_pixel, mut next_sample) = ((first / spp as usize) as u32, (first % spp as usize) as u32);
+    let (width, x0) = (region.width(), region.x0);
+    let (mut next_x, mut next_y) = (x0 + tile_pixel % width, region.y0 + tile_pixel / width);
+    let mut next_pixel = next_y * full_width + next_x;
+    // The step from a row's last pixel to the next row's first.
+    let row_step = full_width - width;
     let len = chunk.pixel.len();
     let origin = camera.origin();
     let origins = [[origin.x; LANES], [origin.y; LANES], [origin.z; LANES]];
@@ -284,8 +292,8 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
             next_sample += LANES as u32;
             if next_sample == spp {
                 (next_pixel, next_sample, next_x) = (next_pixel + 1, 0, next_x + 1);
-                if next_x == width {
-                    (next_x, next_y) = (0, next_y + 1);
+                if next_x == region.x1 {
+                    (next_x, next_y, next_pixel) = (x0, next_y + 1, next_pixel + row_step);
                 }
             }
         } else {
@@ -294,8 +302,8 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
                 next_sample += 1;
                 if next_sample == spp {
                     (next_pixel, next_sample, next_x) = (next_pixel + 1, 0, next_x + 1);
-                    if next_x == width {
-                        (next_x, next_y) = (0, next_y + 1);
+                    if next_x == region.x1 {
+                        (next_x, next_y, next_pixel) = (x0, next_y + 1, next_pixel + row_step);
                     }
                 }
             }

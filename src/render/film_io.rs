@@ -8,13 +8,18 @@
 //!   "Photographic Tone Reproduction for Digital Images", eq. 3: L_d = L / (1 + L), applied as a common scale to
 //!   R, G and B so hue is kept), channels clipped to [0, 1], then the sRGB transfer function (IEC 61966-2-1).
 //!
-//! Files are encoded in memory and written in one call, so an encoding error leaves no partial file.
+//! Files are encoded in memory, written to a temporary file beside the target and renamed onto it, so
+//! an error (or a killed process) never leaves a partial file under the target's name.
+//!
+//! A tile of a larger image (`kelvin render --crop`) is an EXR whose display window is the full
+//! image and whose data window is the tile ([`write_exr_tile`], [`read_exr_tile`]).
 
 use std::io::Cursor;
 use std::path::Path;
 
 use glam::Vec3;
 
+use super::tiles::{Crop, Tile};
 use crate::scene::image::LUMINANCE_WEIGHTS;
 use crate::spectrum::color::srgb_encode;
 
@@ -40,7 +45,7 @@ pub enum ImageIoError {
 pub fn write_exr(path: &Path, width: usize, height: usize, rgb: &[Vec3]) -> Result<(), ImageIoError> {
     let what = path.display().to_string();
     check_dimensions(&what, width, height, rgb, usize::MAX)?;
-    let bytes = encode_exr(width, height, rgb).map_err(|msg| ImageIoError::Encode {
+    let bytes = encode_exr(width, height, rgb, None).map_err(|msg| ImageIoError::Encode {
         what: what.clone(),
         format: "OpenEXR",
         msg,
@@ -48,12 +53,64 @@ pub fn write_exr(path: &Path, width: usize, height: usize, rgb: &[Vec3]) -> Resu
     write_file(path, &what, &bytes)
 }
 
+/// Writes a tile of a `full_width` x `full_height` image: the pixels of `crop` (row-major, its
+/// size) as an EXR whose data window is `crop` and whose display window is the full image.
+pub fn write_exr_tile(
+    path: &Path,
+    crop: Crop,
+    full_width: u32,
+    full_height: u32,
+    rgb: &[Vec3],
+) -> Result<(), ImageIoError> {
+    let what = path.display().to_string();
+    let (width, height) = (crop.width() as usize, crop.height() as usize);
+    check_dimensions(&what, width, height, rgb, i32::MAX as usize)?;
+    if crop.check(full_width, full_height).is_err() {
+        let msg = format!("tile {crop} is not inside the {full_width}x{full_height} image");
+        return Err(ImageIoError::Encode { what, format: "OpenEXR", msg });
+    }
+    let bytes = encode_exr(width, height, rgb, Some((crop, full_width, full_height)))
+        .map_err(|msg| ImageIoError::Encode { what: what.clone(), format: "OpenEXR", msg })?;
+    write_file(path, &what, &bytes)
+}
+
+/// Reads an EXR as a tile of its display window: the tile's region (the data window) and the full
+/// image's size. An EXR of a whole image reads as a tile that covers it.
+pub fn read_exr_tile(path: &Path) -> Result<Tile, ImageIoError> {
+    let what = path.display().to_string();
+    let (image, pixels) = read_exr_image(path)?;
+    let (w, h) = (image.layer_data.size.width(), image.layer_data.size.height());
+    let display = image.attributes.display_window;
+    let position = image.layer_data.attributes.layer_position;
+    let bad = |msg: String| ImageIoError::Io { what: what.clone(), msg };
+    if display.position.x() != 0 || display.position.y() != 0 {
+        return Err(bad(format!("display window starts at {:?}, not at 0,0", display.position)));
+    }
+    let (x0, y0) = (u32::try_from(position.x()), u32::try_from(position.y()));
+    let (Ok(x0), Ok(y0)) = (x0, y0) else {
+        return Err(bad(format!("data window starts at {position:?}, left of or above the image")));
+    };
+    let crop = Crop { x0, y0, x1: x0 + w as u32, y1: y0 + h as u32 };
+    let (width, height) = (display.size.width() as u32, display.size.height() as u32);
+    Ok(Tile { name: what.clone(), width, height, crop, pixels })
+}
+
 /// Reads an OpenEXR written by [`write_exr`] back exactly (negative values included, unlike the
 /// validating loader for light maps in `scene::image`): width, height and the row-major pixels.
 pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<Vec3>), ImageIoError> {
+    let (image, pixels) = read_exr_image(path)?;
+    let size = image.layer_data.size;
+    Ok((size.width(), size.height(), pixels))
+}
+
+type ExrRgb =
+    exr::image::Image<exr::image::Layer<exr::image::SpecificChannels<(usize, Vec<Vec3>), exr::prelude::RgbChannels>>>;
+
+/// The first RGB layer of an EXR, with its attributes (and size), and its row-major pixels.
+fn read_exr_image(path: &Path) -> Result<(ExrRgb, Vec<Vec3>), ImageIoError> {
     use exr::prelude::{ReadChannels, ReadLayers};
     let what = path.display().to_string();
-    let image = exr::prelude::read()
+    let mut image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
         .rgb_channels(
@@ -67,8 +124,8 @@ pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<Vec3>), ImageIoError> 
         .non_parallel()
         .from_file(path)
         .map_err(|e| ImageIoError::Io { what: what.clone(), msg: e.to_string() })?;
-    let size = image.layer_data.size;
-    Ok((size.width(), size.height(), image.layer_data.channel_data.pixels.1))
+    let pixels = std::mem::take(&mut image.layer_data.channel_data.pixels.1);
+    Ok((image, pixels))
 }
 
 /// Writes a tone-mapped 8-bit sRGB PNG; `exposure` is in stops (0 = unchanged). See the module docs.
@@ -120,13 +177,18 @@ pub fn tone_map_srgb8(linear: Vec3, exposure_scale: f32) -> [u8; 3] {
     mapped.to_array().map(|v| (srgb_encode(v as f64) * 255.0).round() as u8)
 }
 
-fn encode_exr(width: usize, height: usize, rgb: &[Vec3]) -> Result<Vec<u8>, String> {
-    use exr::prelude::{Encoding, Image, SpecificChannels, WritableImage};
+/// `tile`: the crop these pixels are of a full image of the given size (the data and display windows).
+fn encode_exr(width: usize, height: usize, rgb: &[Vec3], tile: Option<(Crop, u32, u32)>) -> Result<Vec<u8>, String> {
+    use exr::prelude::{Encoding, Image, IntegerBounds, SpecificChannels, WritableImage};
     let channels = SpecificChannels::rgb(|exr::math::Vec2(x, y): exr::math::Vec2<usize>| {
         let p = rgb[y * width + x];
         (p.x, p.y, p.z)
     });
-    let image = Image::from_encoded_channels((width, height), Encoding::SMALL_LOSSLESS, channels);
+    let mut image = Image::from_encoded_channels((width, height), Encoding::SMALL_LOSSLESS, channels);
+    if let Some((crop, full_width, full_height)) = tile {
+        image.attributes.display_window = IntegerBounds::new((0, 0), (full_width as usize, full_height as usize));
+        image.layer_data.attributes.layer_position = exr::math::Vec2(crop.x0 as i32, crop.y0 as i32);
+    }
     let mut bytes = Vec::new();
     image.write().to_buffered(Cursor::new(&mut bytes)).map_err(|e| e.to_string())?;
     Ok(bytes)
@@ -149,7 +211,15 @@ fn check_dimensions(
 }
 
 fn write_file(path: &Path, what: &str, bytes: &[u8]) -> Result<(), ImageIoError> {
-    std::fs::write(path, bytes).map_err(|e| ImageIoError::Io { what: what.into(), msg: e.to_string() })
+    let io = |e: std::io::Error| ImageIoError::Io { what: what.into(), msg: e.to_string() };
+    // A temporary name in the same directory, so the rename stays on one file system.
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let temp = path.with_file_name(format!(".{name}.{}.partial", std::process::id()));
+    std::fs::write(&temp, bytes).map_err(io)?;
+    std::fs::rename(&temp, path).map_err(|e| {
+        std::fs::remove_file(&temp).ok();
+        io(e)
+    })
 }
 
 #[cfg(test)]

@@ -10,3 +10,4 @@ pub mod renderer;
 pub mod scene_file;
 mod shade;
 mod shade_lanes;
+pub mod tiles;

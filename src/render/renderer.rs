@@ -11,6 +11,7 @@ use super::camera_pass::{CameraColumns, SampleRange, trace_camera_rays};
 use super::film::Film;
 use super::path::{PathDepth, PathJob, Paths};
 use super::shade::{Materials, ShadeContext};
+use super::tiles::Crop;
 use crate::geometry::{RAY_CHUNK, SceneBvh};
 use crate::lanes::LANES;
 use crate::rng::SampleStream;
@@ -71,6 +72,7 @@ impl Default for Integrator {
 /// What to render.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderOptions {
+    /// Size of the full image, which the camera frames.
     pub width: u32,
     pub height: u32,
     pub spp: u32,
@@ -81,6 +83,10 @@ pub struct RenderOptions {
     /// Render passes of `spp` samples per pixel until this much time has passed (at least one
     /// pass); None for one pass.
     pub time_budget: Option<std::time::Duration>,
+    /// Renders only this region of the full image (the film is its size), with the full image's
+    /// camera rays and random streams: its pixels are bit for bit those of the full render. A crop
+    /// is clipped to the image; [`Crop::check`] says whether it lies inside. None: the whole image.
+    pub crop: Option<Crop>,
 }
 
 impl Default for RenderOptions {
@@ -92,6 +98,7 @@ impl Default for RenderOptions {
             strategy: Strategy::Mis,
             integrator: Integrator::default(),
             time_budget: None,
+            crop: None,
         }
     }
 }
@@ -100,6 +107,11 @@ impl RenderOptions {
     /// Direct lighting at `width` x `height` and `spp`, with MIS.
     pub fn direct(width: u32, height: u32, spp: u32) -> Self {
         Self { width, height, spp, integrator: Integrator::Direct, ..Default::default() }
+    }
+
+    /// The region of the image the film covers: the crop clipped to the image, or all of it.
+    pub fn region(&self) -> Crop {
+        self.crop.map_or(Crop::full(self.width, self.height), |c| c.clipped(self.width, self.height))
     }
 }
 
@@ -182,7 +194,7 @@ pub fn render_environment(
 ) -> (crate::scene::image::RgbImage, RenderStats) {
     let model = CameraModel::LatLong { origin, width: opts.width, height: opts.height };
     let (film, stats) = render_with(world, schedule, opts, Some(model), |_| {});
-    let (width, height) = (opts.width as usize, opts.height as usize);
+    let (width, height) = (film.width as usize, film.height as usize);
     (crate::scene::image::RgbImage { width, height, pixels: film.pixels() }, stats)
 }
 
@@ -222,8 +234,9 @@ fn render_on_pool(
     let spectral = settings.color_mode == ColorMode::Spectral;
     let seed = settings.seed ^ RENDER_SALT;
 
-    let mut film = Film::new(opts.width, opts.height);
-    let total = opts.width as usize * opts.height as usize * opts.spp as usize;
+    let region = opts.region();
+    let mut film = Film::new(region.width(), region.height());
+    let total = region.pixels() * opts.spp as usize;
     let mut columns = CameraColumns::default();
     let mut contributions: Vec<Vec3> = Vec::new();
     let mut paths = Paths::default();
@@ -234,7 +247,7 @@ fn render_on_pool(
         let mut first = 0usize;
         while first < total {
             let len = BATCH_SAMPLES.min(total - first);
-            let range = SampleRange { first, len, width: opts.width, spp: opts.spp, seed, first_sample };
+            let range = SampleRange { first, len, region, full_width: opts.width, spp: opts.spp, seed, first_sample };
             let camera_start = std::time::Instant::now();
             // Every camera sample takes a slot of the batch (one with no point if its ray escaped).
             world.resource_scope(|world, mut batch: Mut<ShadingBatch>| {

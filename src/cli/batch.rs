@@ -1,0 +1,94 @@
+//! `kelvin batch MANIFEST [--plan] [--force] [--threads T]`: renders a manifest's jobs one after
+//! another with a progress bar and a summary. A job whose output exists is finished (images are
+//! written under a temporary name and renamed, the .exr after its .png preview) and is skipped, so
+//! a rerun resumes; a job that fails says why and the others still run.
+
+use std::path::PathBuf;
+
+use super::CliError;
+use super::manifest::{PlannedJob, plan};
+
+#[derive(clap::Args)]
+pub struct BatchArgs {
+    /// The manifest: JSON, `{"jobs": [{"scene", "output", "size", "spp", "camera", "settings"}, ...]}`.
+    manifest: PathBuf,
+    /// Print the jobs as JSON (resolved `kelvin render` arguments, size, finished or not, errors)
+    /// instead of rendering them: what a distributed driver reads.
+    #[arg(long)]
+    plan: bool,
+    /// Render finished jobs again.
+    #[arg(long)]
+    force: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+enum Outcome {
+    Rendered(f64),
+    Skipped,
+    Failed(String),
+}
+
+pub fn run(args: BatchArgs) -> Result<(), CliError> {
+    let jobs = plan(&args.manifest)?;
+    if args.plan {
+        println!("{}", serde_json::to_string_pretty(&serde_json::json!({ "jobs": jobs }))?);
+        return Ok(());
+    }
+    if let Some(t) = args.threads {
+        rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global()?;
+    }
+    let n = jobs.len();
+    let mut outcomes = Vec::with_capacity(n);
+    for job in &jobs {
+        let bar = super::render::progress_bar();
+        bar.set_message(format!("[{}/{n}] {} ", job.index + 1, job.name));
+        let outcome = run_job(job, args.force, |f| bar.set_position((f * 1000.0) as u64));
+        bar.finish_and_clear();
+        outcomes.push(outcome);
+    }
+    let (mut rendered, mut skipped, mut failed) = (0, 0, 0);
+    println!("{:<9} {:<24} {:>9}  output / cause", "status", "job", "seconds");
+    for (job, outcome) in jobs.iter().zip(&outcomes) {
+        let out = job.output.display();
+        match outcome {
+            Outcome::Rendered(s) => {
+                rendered += 1;
+                println!("{:<9} {:<24} {s:>9.2}  {out}", "rendered", job.name);
+            }
+            Outcome::Skipped => {
+                skipped += 1;
+                println!("{:<9} {:<24} {:>9}  {out} (exists; --force renders it again)", "skipped", job.name, "-");
+            }
+            Outcome::Failed(e) => {
+                failed += 1;
+                println!("{:<9} {:<24} {:>9}  {e}", "FAILED", job.name, "-");
+            }
+        }
+    }
+    println!("{n} jobs: {rendered} rendered, {skipped} skipped, {failed} failed");
+    if failed > 0 {
+        return Err(format!("{failed} of {n} jobs failed").into());
+    }
+    Ok(())
+}
+
+fn run_job(job: &PlannedJob, force: bool, progress: impl FnMut(f32) + Send) -> Outcome {
+    if let Some(e) = &job.error {
+        return Outcome::Failed(e.clone());
+    }
+    if job.done && !force {
+        return Outcome::Skipped;
+    }
+    let result = job.render_args(&job.output).map_err(|e| e.to_string()).and_then(|render| {
+        if let Some(dir) = job.output.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        }
+        super::render::render_to_files(&render, progress).map_err(|e| e.to_string())
+    });
+    match result {
+        Ok(stats) => Outcome::Rendered(stats.seconds),
+        Err(e) => Outcome::Failed(format!("job {} ({}): {e}", job.index, job.name)),
+    }
+}

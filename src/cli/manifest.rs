@@ -1,0 +1,220 @@
+//! The batch manifest: a JSON list of render jobs, each turned into the arguments of
+//! `kelvin render` (so a job means exactly what the command line means, and is checked by the
+//! same parser). `kelvin batch` runs the jobs; `kelvin batch --plan` prints them for a driver
+//! that spreads them over machines (distributed/ray/).
+//!
+//! ```json
+//! { "jobs": [ { "name": "cornell", "scene": "cornell.glb", "output": "out/cornell.exr",
+//!               "size": "256x256", "spp": 64, "camera": { "environment_at": [0, 1, 0] },
+//!               "settings": { "color": "spectral", "light_sampler": "bvh", "seed": 7,
+//!                             "integrator": "path", "max_depth": 8 } } ] }
+//! ```
+//! Relative paths are relative to the manifest's folder. Unknown keys are errors.
+
+use std::path::{Path, PathBuf};
+
+use clap::Parser;
+use serde::{Deserialize, Serialize};
+
+use super::render::RenderArgs;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    pub jobs: Vec<serde_json::Value>,
+}
+
+/// One job as written in the manifest. Settings default as `kelvin render`'s flags do.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JobSpec {
+    /// For messages; the output's file name when absent (`plan_job` reads it from the JSON, so
+    /// that it names even a job that does not parse).
+    #[allow(dead_code)]
+    name: Option<String>,
+    /// glTF scene; the embedded default scene when absent.
+    scene: Option<PathBuf>,
+    /// .exr (with a .png preview) or .png.
+    output: PathBuf,
+    /// WIDTHxHEIGHT.
+    size: Option<String>,
+    spp: Option<u32>,
+    #[serde(default)]
+    camera: CameraSpec,
+    /// Frames of an animated scene: not implemented yet, so a job that asks for them fails.
+    frames: Option<serde_json::Value>,
+    #[serde(default)]
+    settings: SettingsSpec,
+}
+
+/// The scene's camera (the first one, or one framing the scene), or an environment camera.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct CameraSpec {
+    environment_at: Option<[f32; 3]>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct SettingsSpec {
+    /// rgb or spectral.
+    color: Option<String>,
+    /// uniform, power, bvh or ris.
+    light_sampler: Option<String>,
+    /// Light samples per resampled one (light_sampler ris).
+    candidates: Option<u32>,
+    /// path or direct.
+    integrator: Option<String>,
+    max_depth: Option<u32>,
+    roulette_depth: Option<u32>,
+    /// A physical sun and sky, as `--sky` takes it: "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]".
+    sky: Option<String>,
+    seed: Option<u64>,
+    #[serde(default)]
+    all_lights: bool,
+    /// false: light sampling only.
+    mis: Option<bool>,
+    env: Option<PathBuf>,
+    env_intensity: Option<f32>,
+    exposure: Option<f32>,
+}
+
+/// A job ready to run, or why it cannot.
+#[derive(Serialize)]
+pub struct PlannedJob {
+    pub index: usize,
+    pub name: String,
+    /// Resolved output path (empty when the job did not parse).
+    pub output: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    /// `kelvin render` arguments, the output (`-o`) excepted.
+    pub args: Vec<String>,
+    /// The output exists: a finished render (images are written under a temporary name and renamed).
+    pub done: bool,
+    pub error: Option<String>,
+}
+
+impl PlannedJob {
+    /// The job's `RenderArgs`, writing to `output`.
+    pub fn render_args(&self, output: &Path) -> Result<RenderArgs, String> {
+        parse_render_args(&self.args, output)
+    }
+}
+
+#[derive(Parser)]
+#[command(name = "kelvin render")]
+struct RenderCommand {
+    #[command(flatten)]
+    args: RenderArgs,
+}
+
+fn parse_render_args(args: &[String], output: &Path) -> Result<RenderArgs, String> {
+    let argv = ["kelvin-render".to_owned()].into_iter().chain(args.iter().cloned());
+    let argv = argv.chain(["-o".to_owned(), output.display().to_string()]);
+    let parsed = RenderCommand::try_parse_from(argv).map_err(|e| {
+        // clap's first line says what was wrong; the usage lines after it are for a terminal.
+        let text = e.to_string();
+        text.lines().next().unwrap_or_default().trim_start_matches("error: ").to_owned()
+    })?;
+    Ok(parsed.args)
+}
+
+/// Reads the manifest at `path`: an error if it is not a manifest at all; otherwise every job,
+/// with its own error if it has one.
+pub fn plan(path: &Path) -> Result<Vec<PlannedJob>, String> {
+    let what = path.display();
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{what}: {e}"))?;
+    let manifest: Manifest = serde_json::from_str(&text).map_err(|e| format!("{what}: {e}"))?;
+    // Absolute paths in the arguments, so that they mean the same from any working directory.
+    let base = std::path::absolute(path).map_err(|e| format!("{what}: {e}"))?;
+    let base = base.parent().unwrap_or(Path::new("/"));
+    Ok(manifest.jobs.into_iter().enumerate().map(|(i, job)| plan_job(i, job, base)).collect())
+}
+
+fn plan_job(index: usize, job: serde_json::Value, base: &Path) -> PlannedJob {
+    let name = job.get("name").and_then(|n| n.as_str()).map(str::to_owned);
+    let output = job.get("output").and_then(|o| o.as_str()).map(|o| base.join(o));
+    let mut planned = PlannedJob {
+        index,
+        name: name.clone().unwrap_or_else(|| format!("job {index}")),
+        output: output.clone().unwrap_or_default(),
+        width: 0,
+        height: 0,
+        args: Vec::new(),
+        done: false,
+        error: None,
+    };
+    if name.is_none()
+        && let Some(file) = output.as_ref().and_then(|o| o.file_name())
+    {
+        planned.name = file.to_string_lossy().into_owned();
+    }
+    match resolve(job, base) {
+        Ok((args, (width, height))) => {
+            planned.done = planned.output.exists();
+            (planned.args, planned.width, planned.height) = (args, width, height);
+        }
+        Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
+    }
+    planned
+}
+
+/// The job's `kelvin render` arguments (without `-o`) and image size, checked by its parser.
+fn resolve(job: serde_json::Value, base: &Path) -> Result<(Vec<String>, (u32, u32)), String> {
+    let spec: JobSpec = serde_json::from_value(job).map_err(|e| e.to_string())?;
+    if spec.frames.is_some() {
+        return Err("frames: animated scenes are not supported yet; render one frame per job".into());
+    }
+    let mut args = Vec::new();
+    let mut push = |flag: &str, value: String| args.extend([flag.to_owned(), value]);
+    let size = spec.size.unwrap_or_else(|| "512x512".into());
+    push("--size", size);
+    if let Some(spp) = spec.spp {
+        push("--spp", spp.to_string());
+    }
+    if let Some([x, y, z]) = spec.camera.environment_at {
+        push("--environment-at", format!("{x},{y},{z}"));
+    }
+    let s = spec.settings;
+    let numbers =
+        [("--candidates", s.candidates), ("--max-depth", s.max_depth), ("--roulette-depth", s.roulette_depth)];
+    let words =
+        [("--color", s.color), ("--light-sampler", s.light_sampler), ("--integrator", s.integrator), ("--sky", s.sky)];
+    for (flag, value) in words.into_iter().chain(numbers.map(|(f, v)| (f, v.map(|n| n.to_string())))) {
+        if let Some(v) = value {
+            push(flag, v);
+        }
+    }
+    if let Some(seed) = s.seed {
+        push("--seed", seed.to_string());
+    }
+    if let Some(env) = &s.env {
+        let env = base.join(env);
+        if !env.is_file() {
+            return Err(format!("settings.env {}: no such file", env.display()));
+        }
+        push("--env", env.display().to_string());
+    }
+    if let Some(x) = s.env_intensity {
+        push("--env-intensity", x.to_string());
+    }
+    if let Some(x) = s.exposure {
+        push("--exposure", x.to_string());
+    }
+    if s.all_lights {
+        args.push("--all-lights".into());
+    }
+    if s.mis == Some(false) {
+        args.push("--no-mis".into());
+    }
+    if let Some(scene) = &spec.scene {
+        let scene = base.join(scene);
+        if !scene.is_file() {
+            return Err(format!("scene {}: no such file", scene.display()));
+        }
+        args.push(scene.display().to_string());
+    }
+    let parsed = parse_render_args(&args, &base.join(&spec.output))?;
+    Ok((args, parsed.size()))
+}

@@ -1,0 +1,31 @@
+//! `kelvin merge TILE.exr... -o FULL.exr [--exposure S]`: joins the tiles of `kelvin render --crop`
+//! into the full image, which must be covered exactly once.
+
+use std::path::PathBuf;
+
+use kelvin::render::film_io::read_exr_tile;
+use kelvin::render::tiles::merge_tiles;
+
+use super::CliError;
+
+#[derive(clap::Args)]
+pub struct MergeArgs {
+    /// Tile EXRs written by `kelvin render --crop` (each records its region and the image size).
+    #[arg(required = true)]
+    tiles: Vec<PathBuf>,
+    /// The full image: .exr (with a .png preview) or .png, as `kelvin render` writes it.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// PNG exposure in stops; automatic (as `kelvin render`'s) when absent.
+    #[arg(long)]
+    exposure: Option<f32>,
+}
+
+pub fn run(args: MergeArgs) -> Result<(), CliError> {
+    let tiles = args.tiles.iter().map(|p| read_exr_tile(p)).collect::<Result<Vec<_>, _>>()?;
+    let (width, height, rgb) = merge_tiles(&tiles)?;
+    let exposure = args.exposure.unwrap_or_else(|| super::render::auto_exposure(&rgb));
+    super::render::write_outputs(&args.output, width, height, &rgb, exposure)?;
+    println!("merged {} tiles into {width}x{height}", tiles.len());
+    Ok(())
+}

@@ -1,0 +1,211 @@
+//! Tiles of an image: the crop a render is limited to, and the merge of tile renders back into the
+//! full image with a check that they cover it exactly once.
+//!
+//! A crop renders the same camera rays and random streams as the full image (pixel ids are the
+//! full image's), so a tile's pixels equal the same region of the full render bit for bit.
+
+use glam::Vec3;
+
+/// A rectangle of pixels `x0..x1` by `y0..y1` (exclusive ends) of a full image, row 0 at the top.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Crop {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+/// Why a crop or a set of tiles was refused.
+#[derive(Debug, thiserror::Error, Clone, PartialEq, Eq)]
+pub enum TileError {
+    #[error("crop '{given}': expected four whole numbers X0,Y0,X1,Y1 (pixels, X1 and Y1 exclusive)")]
+    Syntax { given: String },
+    #[error("crop {crop} is empty: X1 must be greater than X0 and Y1 greater than Y0")]
+    Empty { crop: Crop },
+    #[error("crop {crop} is not inside the {width}x{height} image")]
+    Outside { crop: Crop, width: u32, height: u32 },
+    #[error(
+        "{tile}: it belongs to a {width}x{height} image, but {first} belongs to a {first_width}x{first_height} one"
+    )]
+    ImageSize { tile: String, width: u32, height: u32, first: String, first_width: u32, first_height: u32 },
+    #[error("{tile}: region {crop} is not inside its {width}x{height} image")]
+    TileOutside { tile: String, crop: Crop, width: u32, height: u32 },
+    #[error("{tile} and {other} overlap (both cover pixel {x},{y})")]
+    Overlap { tile: String, other: String, x: u32, y: u32 },
+    #[error("{count} pixels of the {width}x{height} image are in no tile, within {region} (e.g. pixel {x},{y})")]
+    Gap { count: u64, width: u32, height: u32, region: Crop, x: u32, y: u32 },
+    #[error("{tile}: {len} pixels for a {crop} region")]
+    PixelCount { tile: String, len: usize, crop: Crop },
+    #[error("no tiles to merge")]
+    NoTiles,
+}
+
+impl std::fmt::Display for Crop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{},{},{}", self.x0, self.y0, self.x1, self.y1)
+    }
+}
+
+impl std::str::FromStr for Crop {
+    type Err = TileError;
+
+    /// `X0,Y0,X1,Y1`; the crop must not be empty.
+    fn from_str(s: &str) -> Result<Self, TileError> {
+        let v: Result<Vec<u32>, _> = s.split(',').map(|c| c.trim().parse()).collect();
+        match v.as_deref() {
+            Ok(&[x0, y0, x1, y1]) => Self::new(x0, y0, x1, y1),
+            _ => Err(TileError::Syntax { given: s.into() }),
+        }
+    }
+}
+
+impl Crop {
+    /// A non-empty crop.
+    pub fn new(x0: u32, y0: u32, x1: u32, y1: u32) -> Result<Self, TileError> {
+        let crop = Self { x0, y0, x1, y1 };
+        if x1 <= x0 || y1 <= y0 { Err(TileError::Empty { crop }) } else { Ok(crop) }
+    }
+
+    /// The whole of a `width` x `height` image.
+    pub fn full(width: u32, height: u32) -> Self {
+        Self { x0: 0, y0: 0, x1: width, y1: height }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.x1.saturating_sub(self.x0)
+    }
+
+    pub fn height(&self) -> u32 {
+        self.y1.saturating_sub(self.y0)
+    }
+
+    /// Number of pixels.
+    pub fn pixels(&self) -> usize {
+        self.width() as usize * self.height() as usize
+    }
+
+    /// Whether the crop is non-empty and inside a `width` x `height` image.
+    pub fn check(&self, width: u32, height: u32) -> Result<(), TileError> {
+        Self::new(self.x0, self.y0, self.x1, self.y1)?;
+        if self.x1 > width || self.y1 > height {
+            return Err(TileError::Outside { crop: *self, width, height });
+        }
+        Ok(())
+    }
+
+    /// The part of the crop inside a `width` x `height` image (empty if none is).
+    pub fn clipped(&self, width: u32, height: u32) -> Self {
+        let (x1, y1) = (self.x1.min(width), self.y1.min(height));
+        Self { x0: self.x0.min(x1), y0: self.y0.min(y1), x1, y1 }
+    }
+}
+
+/// One rendered tile: its region of a `width` x `height` image and its pixels (row-major, the
+/// region's size). `name` says where it came from, for errors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tile {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub crop: Crop,
+    pub pixels: Vec<Vec3>,
+}
+
+/// Assembles tiles into their full image (width, height, row-major pixels). The tiles must belong
+/// to one image size, lie inside it, and cover every pixel exactly once.
+pub fn merge_tiles(tiles: &[Tile]) -> Result<(u32, u32, Vec<Vec3>), TileError> {
+    let first = tiles.first().ok_or(TileError::NoTiles)?;
+    let (width, height) = (first.width, first.height);
+    const NONE: u32 = u32::MAX;
+    let mut owner = vec![NONE; width as usize * height as usize];
+    let mut pixels = vec![Vec3::ZERO; owner.len()];
+    for (t, tile) in tiles.iter().enumerate() {
+        if (tile.width, tile.height) != (width, height) {
+            return Err(TileError::ImageSize {
+                tile: tile.name.clone(),
+                width: tile.width,
+                height: tile.height,
+                first: first.name.clone(),
+                first_width: width,
+                first_height: height,
+            });
+        }
+        let crop = tile.crop;
+        if crop.check(width, height).is_err() {
+            return Err(TileError::TileOutside { tile: tile.name.clone(), crop, width, height });
+        }
+        if tile.pixels.len() != crop.pixels() {
+            return Err(TileError::PixelCount { tile: tile.name.clone(), len: tile.pixels.len(), crop });
+        }
+        for (row, src) in (crop.y0..crop.y1).zip(tile.pixels.chunks(crop.width() as usize)) {
+            let start = row as usize * width as usize + crop.x0 as usize;
+            let span = start..start + crop.width() as usize;
+            if let Some(i) = owner[span.clone()].iter().position(|&o| o != NONE) {
+                return Err(TileError::Overlap {
+                    tile: tile.name.clone(),
+                    other: tiles[owner[start + i] as usize].name.clone(),
+                    x: crop.x0 + i as u32,
+                    y: row,
+                });
+            }
+            owner[span.clone()].fill(t as u32);
+            pixels[span].copy_from_slice(src);
+        }
+    }
+    // Uncovered pixels: their count, bounding box and first one.
+    let mut gap: Option<(u64, Crop, (u32, u32))> = None;
+    for (i, _) in owner.iter().enumerate().filter(|(_, o)| **o == NONE) {
+        let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
+        let (count, b, _) = gap.get_or_insert((0, Crop { x0: x, y0: y, x1: x + 1, y1: y + 1 }, (x, y)));
+        *count += 1;
+        (b.x0, b.y0, b.x1, b.y1) = (b.x0.min(x), b.y0.min(y), b.x1.max(x + 1), b.y1.max(y + 1));
+    }
+    if let Some((count, region, (x, y))) = gap {
+        return Err(TileError::Gap { count, width, height, region, x, y });
+    }
+    Ok((width, height, pixels))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tile(name: &str, crop: Crop) -> Tile {
+        let pixels = (0..crop.pixels()).map(|i| Vec3::splat(i as f32)).collect();
+        Tile { name: name.into(), width: 5, height: 3, crop, pixels }
+    }
+
+    #[test]
+    fn crops_parse_and_refuse_bad_input() {
+        assert_eq!("1,2,3,4".parse::<Crop>(), Ok(Crop { x0: 1, y0: 2, x1: 3, y1: 4 }));
+        for bad in ["1,2,3", "1,2,3,4,5", "a,b,c,d", "-1,0,2,2", ""] {
+            assert!(matches!(bad.parse::<Crop>(), Err(TileError::Syntax { .. })), "{bad}");
+        }
+        assert!(matches!("3,0,3,4".parse::<Crop>(), Err(TileError::Empty { .. })));
+        assert!(matches!("0,4,3,2".parse::<Crop>(), Err(TileError::Empty { .. })));
+        let crop: Crop = "2,0,6,3".parse().unwrap();
+        assert!(matches!(crop.check(5, 3), Err(TileError::Outside { .. })));
+        assert_eq!(crop.clipped(5, 3), Crop { x0: 2, y0: 0, x1: 5, y1: 3 });
+        assert_eq!(crop.clipped(1, 3).pixels(), 0);
+    }
+
+    #[test]
+    fn merge_places_tiles_and_names_gaps_and_overlaps() {
+        let (a, b) = (Crop { x0: 0, y0: 0, x1: 2, y1: 3 }, Crop { x0: 2, y0: 0, x1: 5, y1: 3 });
+        let (w, h, px) = merge_tiles(&[tile("b", b), tile("a", a)]).unwrap();
+        assert_eq!((w, h), (5, 3));
+        // Pixel (3, 1) is b's pixel (1, 1), index 4 of its 3-wide rows.
+        assert_eq!(px[5 + 3], Vec3::splat(4.0));
+        assert_eq!(px[5 + 1], Vec3::splat(3.0));
+
+        let err = merge_tiles(&[tile("a", a), tile("a2", Crop { x0: 1, y0: 2, x1: 3, y1: 3 })]).unwrap_err();
+        assert_eq!(err, TileError::Overlap { tile: "a2".into(), other: "a".into(), x: 1, y: 2 });
+        let err = merge_tiles(&[tile("a", a), tile("b", Crop { x0: 2, y0: 0, x1: 5, y1: 2 })]).unwrap_err();
+        let region = Crop { x0: 2, y0: 2, x1: 5, y1: 3 };
+        assert_eq!(err, TileError::Gap { count: 3, width: 5, height: 3, region, x: 2, y: 2 });
+        let mut other = tile("c", b);
+        other.width = 6;
+        assert!(matches!(merge_tiles(&[tile("a", a), other]), Err(TileError::ImageSize { .. })));
+        assert!(err.to_string().contains("3 pixels"), "{err}");
+    }
+}

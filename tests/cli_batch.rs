@@ -1,0 +1,114 @@
+//! `kelvin batch MANIFEST`: jobs render as `kelvin render` would, failing jobs say why while the
+//! others complete, the exit code says whether all succeeded, and a rerun skips finished outputs.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use common::files::{TempDir, test_data};
+
+fn kelvin(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_kelvin")).args(args).output().expect("kelvin runs")
+}
+
+fn text(out: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr))
+}
+
+fn write_manifest(dir: &TempDir, jobs: &str) -> String {
+    let path = dir.join("jobs.json");
+    std::fs::write(&path, format!("{{\"jobs\": [{jobs}]}}")).unwrap();
+    path.to_str().unwrap().to_owned()
+}
+
+#[test]
+fn batch_renders_good_jobs_reports_bad_ones_and_resumes() {
+    let dir = TempDir::new("cli-batch", "resume");
+    let cornell = test_data("gltf/bevy/CornellBox.glb");
+    let manifest = write_manifest(
+        &dir,
+        &format!(
+            r#"{{"name": "room", "output": "out/room.exr", "size": "23x17", "spp": 2}},
+               {{"name": "box", "scene": "{}", "output": "out/box.exr", "size": "20x16", "spp": 3,
+                 "settings": {{"color": "spectral", "seed": 9, "light_sampler": "power"}}}},
+               {{"name": "lost", "scene": "no/such/scene.glb", "output": "out/lost.exr"}},
+               {{"name": "flat", "output": "out/flat.exr", "size": "0x16"}}"#,
+            cornell.display()
+        ),
+    );
+    let out = kelvin(&["batch", &manifest]);
+    let log = text(&out);
+    assert!(!out.status.success(), "two jobs failed: {log}");
+    assert!(log.contains("lost") && log.contains("no/such/scene.glb: no such file"), "{log}");
+    assert!(log.contains("flat") && log.contains("'0x16'"), "{log}");
+    assert!(log.contains("4 jobs: 2 rendered, 0 skipped, 2 failed"), "{log}");
+
+    // Each finished job's EXR is the plain render's, byte for byte.
+    let plain = dir.join("plain.exr");
+    let p = plain.to_str().unwrap();
+    let cornell = cornell.to_str().unwrap();
+    for (job, args) in [
+        ("room.exr", vec!["render", "-o", p, "--size", "23x17", "--spp", "2"]),
+        ("box.exr", vec!["render", "-o", p, "--size", "20x16", "--spp", "3", "--color", "spectral", "--seed", "9"]),
+    ] {
+        let args = [args, if job == "box.exr" { vec!["--light-sampler", "power", cornell] } else { vec![] }].concat();
+        assert!(kelvin(&args).status.success());
+        let batch = std::fs::read(dir.join("out").join(job)).unwrap();
+        assert!(batch == std::fs::read(&plain).unwrap(), "{job} differs from kelvin render");
+        assert!(dir.join("out").join(job).with_extension("png").exists());
+    }
+
+    // A rerun skips what is finished; a removed output is rendered again.
+    let room = dir.join("out/room.exr");
+    let before = std::fs::metadata(&room).unwrap().modified().unwrap();
+    std::fs::remove_file(dir.join("out/box.exr")).unwrap();
+    let out = kelvin(&["batch", &manifest]);
+    let log = text(&out);
+    assert!(log.contains("4 jobs: 1 rendered, 1 skipped, 2 failed"), "{log}");
+    assert_eq!(std::fs::metadata(&room).unwrap().modified().unwrap(), before, "room.exr was not rewritten");
+    assert!(dir.join("out/box.exr").exists());
+    // No temporary files are left beside the outputs.
+    let names: Vec<_> = std::fs::read_dir(dir.join("out")).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(names.len(), 4, "{names:?}");
+}
+
+#[test]
+fn a_manifest_of_good_jobs_succeeds_and_plans_as_json() {
+    let dir = TempDir::new("cli-batch", "plan");
+    let manifest = write_manifest(
+        &dir,
+        r#"{"output": "a.exr", "size": "8x6", "spp": 1, "camera": {"environment_at": [0, 1, 0]}},
+           {"output": "b.png", "size": "5x4", "spp": 1, "settings": {"mis": false, "all_lights": true}}"#,
+    );
+    let plan = kelvin(&["batch", &manifest, "--plan"]);
+    assert!(plan.status.success(), "{}", text(&plan));
+    let plan: serde_json::Value = serde_json::from_slice(&plan.stdout).unwrap();
+    let a = &plan["jobs"][0];
+    assert_eq!((a["width"].as_u64(), a["height"].as_u64(), a["done"].as_bool()), (Some(8), Some(6), Some(false)));
+    assert!(Path::new(a["output"].as_str().unwrap()).is_absolute());
+    let args: Vec<&str> = a["args"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+    assert!(args.windows(2).any(|w| w == ["--environment-at", "0,1,0"]), "{args:?}");
+    let b: Vec<&str> = plan["jobs"][1]["args"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+    assert!(b.contains(&"--no-mis") && b.contains(&"--all-lights"), "{b:?}");
+
+    let out = kelvin(&["batch", &manifest]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(dir.join("a.exr").exists() && dir.join("b.png").exists());
+    assert!(text(&out).contains("2 jobs: 2 rendered, 0 skipped, 0 failed"));
+}
+
+#[test]
+fn unreadable_manifests_and_unsupported_entries_are_clear_errors() {
+    let dir = TempDir::new("cli-batch", "errors");
+    let out = kelvin(&["batch", dir.join("none.json").to_str().unwrap()]);
+    assert!(!out.status.success() && text(&out).contains("none.json"), "{}", text(&out));
+    std::fs::write(dir.join("bad.json"), "{\"jobs\": 3}").unwrap();
+    let out = kelvin(&["batch", dir.join("bad.json").to_str().unwrap()]);
+    assert!(!out.status.success() && text(&out).contains("bad.json") && !text(&out).contains("panicked"));
+    let manifest = write_manifest(&dir, r#"{"output": "f.exr", "frames": "0..10"}, {"size": "4x4"}"#);
+    let out = kelvin(&["batch", &manifest]);
+    let log = text(&out);
+    assert!(log.contains("frames: animated scenes are not supported yet"), "{log}");
+    assert!(log.contains("missing field `output`"), "{log}");
+}
