@@ -381,6 +381,15 @@ impl SceneBvh {
         (inst, id, rec.material)
     }
 
+    /// World-space dp/du and dp/dv of triangle `primitive` of mesh instance `instance` (see
+    /// [`Mesh::uv_derivatives`]); None for shapes, meshes without uvs and degenerate uvs.
+    pub fn uv_derivatives(&self, instance: u32, primitive: u32) -> Option<(Vec3, Vec3)> {
+        let mesh = self.mesh_of(instance)?;
+        let (dpdu, dpdv) = mesh.uv_derivatives(primitive as usize)?;
+        let t = self.instances[instance as usize].transform;
+        Some((t.transform_vector(dpdu), t.transform_vector(dpdv)))
+    }
+
     pub(crate) fn mesh_of(&self, instance: u32) -> Option<&Mesh> {
         match self.instances[instance as usize].source {
             Source::Mesh(m) => Some(&self.meshes[m as usize]),

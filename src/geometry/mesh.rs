@@ -118,6 +118,23 @@ impl Mesh {
         a == b || b == c || a == c || is_degenerate(&self.triangle(i))
     }
 
+    /// dp/du and dp/dv of triangle `i` in the mesh's space, from its vertices and uvs (pbrt-v4's
+    /// triangle shading frame); None without uvs or for uvs of zero area.
+    pub fn uv_derivatives(&self, i: usize) -> Option<(Vec3, Vec3)> {
+        let uvs = self.uvs()?;
+        let [a, b, c] = self.triangle_indices(i).map(|k| k as usize);
+        let (p, uv) = (self.positions(), [uvs[a], uvs[b], uvs[c]]);
+        let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
+        let (dp02, dp12) = (p[a] - p[c], p[b] - p[c]);
+        let det = duv02.x * duv12.y - duv02.y * duv12.x;
+        if !(det.abs() > 1e-12) {
+            return None;
+        }
+        let dpdu = (dp02 * duv12.y - dp12 * duv02.y) / det;
+        let dpdv = (dp12 * duv02.x - dp02 * duv12.x) / det;
+        (dpdu.is_finite() && dpdv.is_finite()).then_some((dpdu, dpdv))
+    }
+
     /// A UV sphere of `radius` around the origin, poles on local +-Y, with outward normals and
     /// (longitude, latitude) uvs in [0, 1]. `segments >= 3` around, `rings >= 2` from pole to
     /// pole; smaller values are raised to these. Triangles at the poles are not degenerate.

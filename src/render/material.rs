@@ -26,6 +26,10 @@ pub struct Material {
     pub roughness: f32,
     /// glTF packs roughness in G and metallic in B.
     pub metallic_roughness_texture: Option<Arc<RgbImage>>,
+    /// Tangent-space normals (linear, [0, 1] per axis as glTF stores them), on meshes with uvs.
+    pub normal_texture: Option<Arc<RgbImage>>,
+    /// glTF `normalTexture.scale`: multiplies the map's x and y.
+    pub normal_scale: f32,
     /// KHR_materials_specular `specularFactor`; 0 removes the dielectric specular lobe.
     pub specular: f32,
     /// KHR_materials_ior; 1 removes the dielectric specular lobe.
@@ -42,6 +46,8 @@ impl Default for Material {
             metallic: 0.0,
             roughness: 0.5,
             metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
             specular: 1.0,
             ior: DEFAULT_IOR,
             double_sided: false,
@@ -53,6 +59,24 @@ impl Material {
     /// A pure Lambertian surface of the given albedo (specular factor 0).
     pub fn lambertian(albedo: Vec3) -> Self {
         Self { base_color: albedo, specular: 0.0, ..Default::default() }
+    }
+
+    /// The shading normal the normal texture gives at `uv` (None without one): the map's
+    /// tangent-space normal, x and y scaled, in the frame of `tangent` (dp/du), `bitangent`
+    /// (dp/dv) and `ns`, the front-side shading normal. Tangents are made orthogonal to `ns`.
+    pub fn mapped_normal(&self, uv: Vec2, ns: Vec3, tangent: Vec3, bitangent: Vec3) -> Option<Vec3> {
+        let map = self.normal_texture.as_ref()?;
+        let t = map.bilinear(uv) * 2.0 - Vec3::ONE;
+        let local = Vec3::new(t.x * self.normal_scale, t.y * self.normal_scale, t.z).normalize_or_zero();
+        let tangent = (tangent - ns * ns.dot(tangent)).normalize_or_zero();
+        if local == Vec3::ZERO || tangent == Vec3::ZERO {
+            return None;
+        }
+        // The bitangent's side follows the uv layout (mirrored uvs flip it), as glTF's tangent.w.
+        let handedness = if ns.cross(tangent).dot(bitangent) < 0.0 { -1.0 } else { 1.0 };
+        let bitangent = ns.cross(tangent) * handedness;
+        let n = (tangent * local.x + bitangent * local.y + ns * local.z).normalize_or_zero();
+        (n != Vec3::ZERO).then_some(n)
     }
 
     /// Dielectric F0 = ((ior - 1) / (ior + 1))^2 times the specular factor (KHR_materials_ior,

@@ -5,6 +5,7 @@ mod camera_pass;
 pub mod film;
 pub mod film_io;
 pub mod material;
+mod normal_map;
 pub mod path;
 pub mod renderer;
 pub mod scene_file;

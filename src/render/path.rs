@@ -14,6 +14,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::camera_pass::{CameraColumns, FoundSurface, write_found_surfaces};
+use super::normal_map::apply_normal_maps;
 use super::renderer::{RenderStats, Strategy, to_rgb};
 use super::shade::{Bounce, BounceRules, Continuation, Materials, ShadeContext};
 use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
@@ -112,7 +113,10 @@ impl Paths {
             self.follow(&ctx, rules);
             stats.bsdf_rays += self.continuations.len() as u64;
             drop(ctx);
-            world.resource_scope(|_, mut batch: Mut<ShadingBatch>| self.next_batch(&mut batch, columns));
+            world.resource_scope(|world, mut batch: Mut<ShadingBatch>| {
+                self.next_batch(&mut batch, columns);
+                apply_normal_maps(&mut batch, columns, world.resource::<SceneBvh>(), job.materials);
+            });
             stats.passes.shading += shading_start.elapsed().as_secs_f64();
         }
         world.resource_mut::<Settings>().seed = seed;

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::camera_pass::{CameraColumns, SampleRange, trace_camera_rays};
 use super::film::Film;
+use super::normal_map::apply_normal_maps;
 use super::path::{PathDepth, PathJob, Paths};
 use super::shade::{Materials, ShadeContext};
 use super::tiles::Crop;
@@ -251,7 +252,9 @@ fn render_on_pool(
             let camera_start = std::time::Instant::now();
             // Every camera sample takes a slot of the batch (one with no point if its ray escaped).
             world.resource_scope(|world, mut batch: Mut<ShadingBatch>| {
-                trace_camera_rays(&mut batch, &mut columns, world.resource::<SceneBvh>(), &camera, range);
+                let bvh = world.resource::<SceneBvh>();
+                trace_camera_rays(&mut batch, &mut columns, bvh, &camera, range);
+                apply_normal_maps(&mut batch, &columns, bvh, &materials);
                 // Spectral mode: the wavelengths of each sample (dimension 2 of its stream).
                 if spectral {
                     let batch = &mut *batch;

@@ -33,6 +33,8 @@ pub(super) struct Materials {
     pub(super) materials: Vec<Material>,
     /// Each material's [`Material::uniform_rgb_bsdf`].
     pub(super) uniform_bsdfs: Vec<Option<Bsdf>>,
+    /// Whether some material has a normal texture.
+    pub(super) any_normal_map: bool,
 }
 
 impl Materials {
@@ -41,7 +43,8 @@ impl Materials {
         let materials: Vec<Material> =
             entities.iter().map(|&e| world.get::<Material>(e).cloned().unwrap_or_default()).collect();
         let uniform_bsdfs = materials.iter().map(Material::uniform_rgb_bsdf).collect();
-        Self { materials, uniform_bsdfs }
+        let any_normal_map = materials.iter().any(|m| m.normal_texture.is_some());
+        Self { materials, uniform_bsdfs, any_normal_map }
     }
 }
 

@@ -53,6 +53,8 @@ fn material_of(m: &MaterialData, scene: &GltfScene) -> Material {
         metallic: m.metallic,
         roughness: m.roughness,
         metallic_roughness_texture: tex(m.metallic_roughness_texture),
+        normal_texture: tex(m.normal_texture),
+        normal_scale: m.normal_scale,
         specular: m.specular_factor,
         ior: m.ior,
         double_sided: m.double_sided,

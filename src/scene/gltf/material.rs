@@ -89,24 +89,34 @@ fn read_material(
         Some(name) => format!("material {index} {name:?}"),
         None => format!("material {index}"),
     };
-    let mut texture = |info: Option<&::gltf::json::texture::Info>, slot: SlotKind, encoding: Encoding| {
+    let info = |i: &::gltf::json::texture::Info| (i.index.value(), i.tex_coord);
+    let normal = material.normal_texture.as_ref();
+    let mut normal_scale = normal.map_or(1.0, |n| n.scale);
+    if !normal_scale.is_finite() {
+        warnings.push(&format!("{pointer}/normalTexture/scale"), format!("{normal_scale} is not finite; 1 used"));
+        normal_scale = 1.0;
+    }
+    let mut texture = |info: Option<(usize, u32)>, slot: SlotKind, encoding: Encoding| {
         let slot = Slot { pointer: format!("{pointer}/{}", slot.field()), material: &label, kind: slot };
         info.and_then(|info| texture_index(doc, info, &slot, encoding, cache, warnings))
     };
+
     MaterialData {
         name: material.name.clone(),
         base_color,
-        base_color_texture: texture(pbr.base_color_texture.as_ref(), SlotKind::BaseColor, Encoding::Srgb),
+        base_color_texture: texture(pbr.base_color_texture.as_ref().map(info), SlotKind::BaseColor, Encoding::Srgb),
         metallic,
         roughness,
         metallic_roughness_texture: texture(
-            pbr.metallic_roughness_texture.as_ref(),
+            pbr.metallic_roughness_texture.as_ref().map(info),
             SlotKind::MetallicRoughness,
             Encoding::Linear,
         ),
         emissive: emissive_factor * emissive_strength,
         emissive_strength,
-        emissive_texture: texture(material.emissive_texture.as_ref(), SlotKind::Emissive, Encoding::Srgb),
+        emissive_texture: texture(material.emissive_texture.as_ref().map(info), SlotKind::Emissive, Encoding::Srgb),
+        normal_texture: texture(normal.map(|n| (n.index.value(), n.tex_coord)), SlotKind::Normal, Encoding::Linear),
+        normal_scale,
         specular_factor,
         ior,
         double_sided: material.double_sided,
@@ -129,6 +139,7 @@ enum SlotKind {
     BaseColor,
     MetallicRoughness,
     Emissive,
+    Normal,
 }
 
 impl SlotKind {
@@ -138,6 +149,7 @@ impl SlotKind {
             Self::BaseColor => "pbrMetallicRoughness/baseColorTexture",
             Self::MetallicRoughness => "pbrMetallicRoughness/metallicRoughnessTexture",
             Self::Emissive => "emissiveTexture",
+            Self::Normal => "normalTexture",
         }
     }
 
@@ -152,6 +164,7 @@ impl SlotKind {
             Self::BaseColor => "baseColorFactor",
             Self::MetallicRoughness => "metallicFactor and roughnessFactor",
             Self::Emissive => "emissiveFactor",
+            Self::Normal => "interpolated normals",
         }
     }
 }
@@ -198,24 +211,23 @@ fn is_ktx2(doc: &Doc, index: usize) -> bool {
     }
 }
 
-/// The index in `cache.images` of the texture `info` refers to, or `None` (with a warning) if it cannot be used.
+/// The index in `cache.images` of texture `t` (read through UV set `tex_coord`), or `None` (with a warning) if it cannot be used.
 fn texture_index(
     doc: &Doc,
-    info: &::gltf::json::texture::Info,
+    (t, tex_coord): (usize, u32),
     slot: &Slot,
     encoding: Encoding,
     cache: &mut TextureCache,
     warnings: &mut Warnings,
 ) -> Option<usize> {
     let pointer = slot.pointer.as_str();
-    if info.tex_coord != 0 {
-        warnings.push(pointer, format!("uses UV set {}; only TEXCOORD_0 is read, texture ignored", info.tex_coord));
+    if tex_coord != 0 {
+        warnings.push(pointer, format!("uses UV set {tex_coord}; only TEXCOORD_0 is read, texture ignored"));
         return None;
     }
     if doc.raw(&format!("{pointer}/extensions/KHR_texture_transform")).is_some() {
         warnings.push(pointer, "KHR_texture_transform ignored (texture used untransformed)");
     }
-    let t = info.index.value();
     let Some(texture) = doc.root.textures.get(t) else {
         warnings.push(pointer, format!("texture {t} does not exist: {}", slot.fallback()));
         return None;

@@ -176,6 +176,10 @@ pub struct MaterialData {
     pub emissive_strength: f32,
     /// Index into [`GltfScene::textures`] (sRGB-decoded to linear RGB).
     pub emissive_texture: Option<usize>,
+    /// Index into [`GltfScene::textures`], linear data: a tangent-space normal in [0, 1]^3.
+    pub normal_texture: Option<usize>,
+    /// `normalTexture.scale`: multiplies the map's x and y. Defaults to 1.
+    pub normal_scale: f32,
     /// KHR_materials_specular `specularFactor` in [0, 1]. Defaults to 1.
     pub specular_factor: f32,
     /// KHR_materials_ior, >= 1. Defaults to 1.5.
@@ -196,6 +200,8 @@ impl Default for MaterialData {
             emissive: Vec3::ZERO,
             emissive_strength: 1.0,
             emissive_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
             specular_factor: 1.0,
             ior: 1.5,
             double_sided: false,
