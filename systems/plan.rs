@@ -77,7 +77,14 @@ pub fn plan_sampling(
             crate::shading::ColorMode::Rgb => "RGB",
             crate::shading::ColorMode::Spectral => "spectral",
         };
-        (true, format!("{} points x {} lights, {mode} mode", batch.len(), table.len()))
+        let selection = match settings.selection {
+            crate::shading::LightSelection::OneSampled => String::new(),
+            crate::shading::LightSelection::All => ", every light".to_string(),
+            crate::shading::LightSelection::Resampled { candidates } => {
+                format!(", resampled (RIS) from {} candidates", candidates.max(1))
+            }
+        };
+        (true, format!("{} points x {} lights, {mode} mode{selection}", batch.len(), table.len()))
     };
     work.sampling = run;
     if run {

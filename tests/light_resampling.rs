@@ -84,6 +84,11 @@ fn resampling_is_unbiased_on_ten_thousand_lights_and_beats_the_light_bvh_at_equa
     let fall = err_low / err_high;
     assert!((8.0..32.0).contains(&fall), "relMSE fell {fall}x for 16x spp");
     assert!(err_low < err_bvh, "RIS {err_low} vs BVH {err_bvh} at 64 spp");
+    // The run report says which selection ran (the last update was the BVH's one-sampled one).
+    irradiance(&mut world, &mut schedule, &points, LightSelection::Resampled { candidates: 8 }, 1);
+    let report = world.resource::<kelvin::shading::RunReport>();
+    let said = format!("{report:?}");
+    assert!(said.contains("resampled (RIS) from 8 candidates"), "{said}");
 }
 
 /// The target (unshadowed contribution at the shading normal) is zero for a light under the
