@@ -49,7 +49,7 @@ impl ImageInfiniteLight {
         }
     }
 
-    fn validate(&self) -> Result<(), LightError> {
+    pub fn validate(&self) -> Result<(), LightError> {
         let (w, h, n) = (self.image.width, self.image.height, self.image.pixels.len());
         if w == 0 || h == 0 || w.checked_mul(h) != Some(n) {
             let msg = format!("image is {w} x {h} with {n} pixels; needs at least 1 x 1 and width * height pixels");
@@ -66,9 +66,12 @@ impl ImageInfiniteLight {
     /// The sampling tables of this light's image (the expensive part: build once per image).
     pub fn build_tables(&self) -> Result<EnvMapTables, LightError> {
         self.validate()?;
-        let options =
-            EnvTableOptions { compensate: self.mis_compensation, max_width: self.table_max_width, lookup: self.lookup };
-        Ok(EnvMapTables::build_with(&self.image, options))
+        Ok(EnvMapTables::build_with(&self.image, self.table_options()))
+    }
+
+    /// How this light's tables are built (they depend on these and the image only).
+    pub fn table_options(&self) -> EnvTableOptions {
+        EnvTableOptions { compensate: self.mis_compensation, max_width: self.table_max_width, lookup: self.lookup }
     }
 
     /// World-space form; `scene` is the scene's bounding sphere (the preprocess step).
