@@ -161,8 +161,9 @@ pub fn sample_direct_lighting(
         k,
         spp: settings.samples_per_point.max(1),
     };
-    // Point lights sampled one per entry in RGB f32 go through the lane kernel.
-    let lanes = settings.selection == LightSelection::OneSampled
+    // Point lights sampled one per entry (or resampled from candidates) in RGB f32 go through
+    // the lane kernel.
+    let lanes = matches!(settings.selection, LightSelection::OneSampled | LightSelection::Resampled { .. })
         && settings.color_mode == ColorMode::Rgb
         && settings.light_precision == LightPrecision::F32
         && !table.points.is_empty();
@@ -365,13 +366,10 @@ impl Sampling<'_> {
         ray
     }
 
-    /// Samples entries `e..e + LANES` (or to the chunk's end) of the chunk starting at global
-    /// entry `first` under `LightSelection::OneSampled`, RGB and f32: random numbers and point
-    /// lights in lanes, lights of other kinds one at a time. Same entries as [`Self::entry`],
-    /// bit for bit. Returns the number of shadow rays.
+    /// The batch points, random-stream keys, positions and normals of entries `e..e + n` of the
+    /// chunk starting at global entry `first`, as lane columns.
     #[inline(always)]
-    fn lane_block(&self, first: usize, e: usize, cols: &mut EntryColumns) -> usize {
-        let n = LANES.min(cols.len() - e);
+    fn block(&self, first: usize, e: usize, n: usize) -> Block {
         let (mut point, mut pixel, mut stream) = ([0usize; LANES], [0u32; LANES], [0u32; LANES]);
         let mut p = [[0.0f32; LANES]; 3];
         if self.k == 1 && n == LANES {
@@ -391,16 +389,30 @@ impl Sampling<'_> {
                 (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
             }
         }
-        let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
-        // The choices as plain lane arrays: arrays of `Option<(LightId, f32)>` cost store-to-load
-        // forwarding stalls on every read.
-        let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
-        let (mut rows, mut points) = ([0u32; LANES], 0);
         let mut normal = [[0.0f32; LANES]; 3];
         for l in 0..n {
             let v = self.batch.normal[point[l]];
             (normal[0][l], normal[1][l], normal[2][l]) = (v.x, v.y, v.z);
         }
+        Block { point, pixel, stream, p, normal }
+    }
+
+    /// Samples entries `e..e + LANES` (or to the chunk's end) of the chunk starting at global
+    /// entry `first` under `LightSelection::OneSampled`, RGB and f32: random numbers and point
+    /// lights in lanes, lights of other kinds one at a time. Same entries as [`Self::entry`],
+    /// bit for bit. Returns the number of shadow rays.
+    #[inline(always)]
+    fn lane_block(&self, first: usize, e: usize, cols: &mut EntryColumns) -> usize {
+        let n = LANES.min(cols.len() - e);
+        if let LightSelection::Resampled { candidates } = self.settings.selection {
+            return self.resampled_block(first, e, n, cols, candidates);
+        }
+        let Block { point, pixel, stream, p, normal } = self.block(first, e, n);
+        let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
+        // The choices as plain lane arrays: arrays of `Option<(LightId, f32)>` cost store-to-load
+        // forwarding stalls on every read.
+        let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
+        let (mut rows, mut points) = ([0u32; LANES], 0);
         // `sample_lanes` leaves slots without a finite position unchosen (as `entry`).
         let choices = self.sampler.sample_lanes(&p, &normal, &u, (1u32 << n) - 1);
         for l in 0..n {
@@ -431,6 +443,15 @@ impl Sampling<'_> {
         }
         traced
     }
+}
+
+/// A block's points as lane columns (see `Sampling::block`).
+struct Block {
+    point: [usize; LANES],
+    pixel: [u32; LANES],
+    stream: [u32; LANES],
+    p: [[f32; LANES]; 3],
+    normal: [[f32; LANES]; 3],
 }
 
 /// One chunk of the columns the sampling pass writes, indexed by entry within the chunk.

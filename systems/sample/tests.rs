@@ -34,7 +34,7 @@ fn slot_without_point_gets_no_light() {
     }
 }
 
-/// Entries the schedule wrote (through the lane path: one sampled light, RGB, f32) must equal
+/// Entries the schedule wrote (through the lane path: one sampled or resampled light, RGB, f32) must equal
 /// those of the one-at-a-time path, bit for bit, for a mix of light kinds, under the power,
 /// uniform and BVH samplers. Hard cases: a point exactly at a light, one 1e-30 m from it
 /// (r^2 underflows to 0), one 1e30 m away (r^2 overflows) and one at NaN (no light may be
@@ -46,10 +46,22 @@ fn slot_without_point_gets_no_light() {
 #[test]
 fn lane_path_matches_entry_by_entry() {
     use crate::shading::LightSamplerKind::{Bvh, Power, Uniform};
-    // (samples per point, sampler, lights: 6 of four kinds and a disk light, 3 points, or 1 point)
-    let runs =
-        [(1, Power, 6), (3, Power, 6), (2, Uniform, 6), (1, Bvh, 6), (1, Power, 3), (1, Power, 1), (2, Uniform, 1)];
-    for (samples_per_point, light_sampler, lights) in runs {
+    use crate::shading::LightSelection::{OneSampled, Resampled};
+    // (samples per point, sampler, lights: 6 of four kinds and a disk light, 3 points, or 1
+    // point; selection: one sampled light, or resampled from candidates)
+    let runs = [
+        (1, Power, 6, OneSampled),
+        (3, Power, 6, OneSampled),
+        (2, Uniform, 6, OneSampled),
+        (1, Bvh, 6, OneSampled),
+        (1, Power, 3, OneSampled),
+        (1, Power, 1, OneSampled),
+        (2, Uniform, 1, OneSampled),
+        (1, Bvh, 6, Resampled { candidates: 4 }),
+        (2, Power, 6, Resampled { candidates: 3 }),
+        (1, Uniform, 3, Resampled { candidates: 5 }),
+    ];
+    for (samples_per_point, light_sampler, lights, selection) in runs {
         let points_only = lights <= 3;
         let mut world = World::new();
         let mut schedule = Schedule::default();
@@ -73,6 +85,7 @@ fn lane_path_matches_entry_by_entry() {
         {
             let mut settings = world.resource_mut::<Settings>();
             (settings.samples_per_point, settings.light_sampler) = (samples_per_point, light_sampler);
+            settings.selection = selection;
         }
         {
             let mut batch = world.resource_mut::<ShadingBatch>();
@@ -131,10 +144,16 @@ fn lane_path_matches_entry_by_entry() {
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         let vec_bits = |v: &[Vec3]| v.iter().flat_map(|x| x.to_array()).map(f32::to_bits).collect::<Vec<_>>();
         let spectrum_bits = |v: &[SampledSpectrum]| v.iter().flat_map(|x| x.0).map(f32::to_bits).collect::<Vec<_>>();
+        // The schedule traced the shadow rays; the disk can block a resampled sample of the sky.
+        let blocked = lit.occluded.clone();
+        assert!(selection != OneSampled || blocked.iter().all(|&b| !b), "no shadow falls on these samples");
+        for e in (0..m).filter(|&e| blocked[e]) {
+            radiance[e] = SampledSpectrum::default();
+        }
         assert_eq!(spectrum_bits(&lit.radiance), spectrum_bits(&radiance));
         assert_eq!(vec_bits(&lit.wi), vec_bits(&wi));
         assert_eq!(bits(&lit.pdf), bits(&pdf));
-        assert_eq!((&lit.light, &lit.delta, &lit.occluded), (&light, &delta, &vec![false; m]));
+        assert_eq!((&lit.light, &lit.delta), (&light, &delta));
         assert_eq!(rays.kind, ray_kind);
         // Targets are written for entries with rays only, normals for rays to a light's surface.
         let written = |column: &[Vec3], kinds: &[ShadowTarget]| {
@@ -149,8 +168,10 @@ fn lane_path_matches_entry_by_entry() {
         assert!(light.iter().any(|l| l.kind == LightKind::Point));
         assert!(points_only || light.iter().any(|l| l.kind != LightKind::Point));
         assert!(ray_kind.contains(&ShadowTarget::Point));
-        assert!(points_only || ray_kind.contains(&ShadowTarget::Infinity));
-        assert!(points_only || ray_kind.contains(&ShadowTarget::Surface));
+        // (Resampling keeps the strong lights: the weak disk need not survive.)
+        let every_kind = !points_only && selection == OneSampled;
+        assert!(!every_kind || ray_kind.contains(&ShadowTarget::Infinity));
+        assert!(!every_kind || ray_kind.contains(&ShadowTarget::Surface));
         // (The power sampler's choices for the point at a light include that light.)
         let at_light = (0..m).any(|e| batch.pixel[e / k] == 0 && pdf[e] == 0.0 && light[e].kind == LightKind::Point);
         assert!(at_light || light_sampler != Power, "at the light");
