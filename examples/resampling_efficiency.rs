@@ -37,14 +37,7 @@ fn estimate(
     let lighting = world.resource::<DirectLighting>();
     let values = (0..points.len())
         .map(|i| {
-            let sum: f64 = lighting
-                .entries(i)
-                .filter(|&e| lighting.pdf[e] > 0.0)
-                .map(|e| {
-                    let cos = points[i].n.dot(lighting.wi[e]).max(0.0) as f64;
-                    lighting.radiance[e].0.iter().map(|&c| c as f64).sum::<f64>() * cos / lighting.pdf[e] as f64
-                })
-                .sum();
+            let sum: f64 = lighting.irradiance(i, points[i].n).0.iter().map(|&c| c as f64).sum();
             sum / spp as f64
         })
         .collect();

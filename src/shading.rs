@@ -211,6 +211,13 @@ impl DirectLighting {
     pub fn entries(&self, i: usize) -> std::ops::Range<usize> {
         self.offsets[i] as usize..self.offsets[i + 1] as usize
     }
+    /// The irradiance estimate at point `i` of normal `n`: the sum over its entries of
+    /// Li max(0, n . wi) / pdf (visibility applied), not divided by the entries' count.
+    pub fn irradiance(&self, i: usize, n: Vec3) -> SampledSpectrum {
+        self.entries(i).filter(|&e| self.pdf[e] > 0.0).fold(SampledSpectrum::default(), |sum, e| {
+            sum.add(self.radiance[e].scale(n.dot(self.wi[e]).max(0.0) / self.pdf[e]))
+        })
+    }
     /// Number of entries.
     pub fn len(&self) -> usize {
         self.wi.len()

@@ -21,6 +21,12 @@ fn one_and_two_threads_give_identical_exr_in_rgb_and_spectral_mode_with_either_i
     for (color, integrator) in [("rgb", "path"), ("spectral", "path"), ("rgb", "direct"), ("spectral", "direct")] {
         let (a, b) = (render(&dir, 1, color, integrator), render(&dir, 2, color, integrator));
         assert!(a.len() > 1000, "{color} {integrator}: EXR written");
+        let (_, _, pixels) =
+            kelvin::render::film_io::read_exr(&dir.join(format!("t2-{color}-{integrator}.exr"))).unwrap();
+        assert!(
+            pixels.iter().filter(|p| p.max_element() > 0.0).count() > pixels.len() / 2,
+            "{color} {integrator}: lit"
+        );
         assert!(a == b, "{color} {integrator}: 1 and 2 threads differ");
     }
     std::fs::remove_dir_all(&dir).ok();

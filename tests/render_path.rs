@@ -193,5 +193,7 @@ fn time_budget_renders_passes_equal_to_one_render_at_their_total_spp() {
     let (once, spp) = render_with(total, None);
     assert_eq!(spp, total);
     let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    let lit = once.iter().filter(|p| p.max_element() > 0.0).count();
+    assert!(lit > once.len() / 4, "the box is lit: {lit} of {} pixels", once.len());
     assert_eq!(bits(&passes), bits(&once), "{total} spp");
 }
