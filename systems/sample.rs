@@ -398,9 +398,10 @@ impl Sampling<'_> {
     }
 
     /// Samples entries `e..e + LANES` (or to the chunk's end) of the chunk starting at global
-    /// entry `first` under `LightSelection::OneSampled`, RGB and f32: random numbers and point
-    /// lights in lanes, lights of other kinds one at a time. Same entries as [`Self::entry`],
-    /// bit for bit. Returns the number of shadow rays.
+    /// entry `first` under `LightSelection::OneSampled` (or `Resampled`, through
+    /// `resampled_block`), RGB and f32: random numbers and point lights in lanes, lights of other
+    /// kinds one at a time. Same entries as [`Self::entry`], bit for bit. Returns the number of
+    /// shadow rays.
     #[inline(always)]
     fn lane_block(&self, first: usize, e: usize, cols: &mut EntryColumns) -> usize {
         let n = LANES.min(cols.len() - e);

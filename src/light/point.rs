@@ -229,6 +229,24 @@ pub struct PointLanes {
     pub valid: [bool; LANES],
 }
 
+impl PointLanes {
+    /// Lane `l` as the `LiSample` that `sample_li` gives (pdf 1, no light normal); None where
+    /// it has no sample.
+    #[inline(always)]
+    pub fn li_sample(&self, l: usize) -> Option<LiSample> {
+        let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
+        let radiance =
+            crate::spectrum::SampledSpectrum([self.radiance[0][l], self.radiance[1][l], self.radiance[2][l], 0.0]);
+        self.valid[l].then(|| LiSample {
+            radiance,
+            wi: v(&self.wi),
+            pdf: 1.0,
+            p_light: v(&self.target),
+            n_light: Vec3::ZERO,
+        })
+    }
+}
+
 impl PointColumns {
     /// [`Self::sample_li`] in RGB mode for `LANES` points at once, bit for bit: lane `l` samples
     /// light `rows[l]` from `p[l]`. Every row must be a valid row.

@@ -158,8 +158,9 @@ impl<'a> ShadeContext<'a> {
         (surface, bsdf)
     }
 
-    /// The light the camera (or a BSDF ray, for the path tracer's later surfaces) sees on sample
-    /// `j`'s surface when it emits, unweighted (its sidedness needs the unflipped normal).
+    /// The light the camera sees on sample `j`'s surface when it emits, unweighted (its
+    /// sidedness needs the unflipped normal). Later surfaces' emission is weighed where the BSDF
+    /// ray that found them is traced.
     fn emitted_toward_viewer(&self, j: usize, surface: &SampleSurface) -> SampledSpectrum {
         let n = self.batch.normal[j];
         let ng = if surface.flipped { -n } else { n };

@@ -14,7 +14,6 @@ use super::{EntryColumns, NO_LIGHT, Sampled, Sampling};
 use crate::lanes::LANES;
 use crate::light::{LiSample, LightFlags, LightId, LightKind, LightSampleContext};
 use crate::rng::SampleStream;
-use crate::spectrum::SampledSpectrum;
 
 /// Weighted reservoir sampling over one point's candidates.
 #[derive(Clone, Copy)]
@@ -118,19 +117,9 @@ impl Sampling<'_> {
                 }
                 let chosen = (choices.light[l], choices.pmf[l]);
                 let sampled = match &lit {
-                    Some(lit) if chosen.0.kind == LightKind::Point => lit.valid[l].then(|| {
-                        let v = |c: &[[f32; LANES]; 3]| glam::Vec3::new(c[0][l], c[1][l], c[2][l]);
-                        let radiance =
-                            SampledSpectrum([lit.radiance[0][l], lit.radiance[1][l], lit.radiance[2][l], 0.0]);
-                        let ls = LiSample {
-                            radiance,
-                            wi: v(&lit.wi),
-                            pdf: 1.0,
-                            p_light: v(&lit.target),
-                            n_light: glam::Vec3::ZERO,
-                        };
-                        (ls, chosen.1, LightKind::Point.flags())
-                    }),
+                    Some(lit) if chosen.0.kind == LightKind::Point => {
+                        lit.li_sample(l).map(|ls| (ls, chosen.1, LightKind::Point.flags()))
+                    }
                     _ => self.evaluate(block.point[l], block.stream[l], 3 * j + 1, &ctx[l], chosen),
                 };
                 if let Some(sampled) = sampled {
