@@ -220,7 +220,70 @@ def mirrored_emitter(mirrored):
     g.write("mirrored_emitter.gltf" if mirrored else "unmirrored_emitter.gltf")
 
 
+# ---- animated_lamp.gltf ----
+
+
+def animated_lamp():
+    """Node animation with a closed-form value per frame (tests/render_animation.rs). Over a 6 x 6 m Lambertian
+    floor (base colour 0.5, KHR_materials_specular factor 0) for t in [0, 2] s:
+
+    * "rig" (root): translation STEP, x = 0 before t = 1 and 0.6 from then; scale CUBICSPLINE from 1 to 2 with
+      zero tangents, s(t) = 1 + 3u^2 - 2u^3, u = t / 2.
+    * "lamp" (child of rig): a 10 cd white KHR_lights_punctual point light; translation LINEAR from (0, 1, 0) to
+      (0, 2, 0). Its world position is (rig x, s(t) (1 + t / 2), 0).
+    * "shutter": a grey 0.8 x 0.8 m quad at y = 0.5 facing up, translation LINEAR from x = 3 to x = -3, over the
+      origin at t = 1, where it shadows the point the camera looks at.
+    * "camera": yfov 0.01 rad at (0, 3, 3) looking at the floor point (cx, 0, 0); translation LINEAR moves cx
+      from 0 to 0.4.
+    """
+    g = Gltf()
+    g.doc["extensionsUsed"] = ["KHR_lights_punctual", "KHR_materials_specular"]
+    g.doc["extensions"] = {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 10.0, "name": "lamp"}]}}
+    s = 3.0
+    positions = quad([-s, 0.0, -s], [0.0, 0.0, 2 * s], [2 * s, 0.0, 0.0])
+    lambert = g.material(
+        name="floor",
+        pbrMetallicRoughness={"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0},
+        extensions={"KHR_materials_specular": {"specularFactor": 0.0}},
+    )
+    g.node(name="floor", mesh=g.mesh("floor", positions, QUAD_INDICES, lambert))
+    shutter_quad = quad([-0.4, 0.0, -0.4], [0.0, 0.0, 0.8], [0.8, 0.0, 0.0])
+    assert normalize(cross(sub(shutter_quad[1], shutter_quad[0]), sub(shutter_quad[2], shutter_quad[0]))) == [0, 1, 0]
+    shutter = g.node(name="shutter", mesh=g.mesh("shutter", shutter_quad, QUAD_INDICES, lambert), translation=[3.0, 0.5, 0.0])
+    rig = g.node(name="rig", children=[])
+    lamp = len(g.doc["nodes"])
+    g.doc["nodes"].append({"name": "lamp", "translation": [0.0, 1.0, 0.0], "extensions": {"KHR_lights_punctual": {"light": 0}}})
+    g.doc["nodes"][rig]["children"].append(lamp)
+    # Looking along (0, -1, -1): -Z turned down by 45 degrees, a rotation of -45 degrees about +X.
+    look = [-math.sin(math.pi / 8), 0.0, 0.0, math.cos(math.pi / 8)]
+    g.doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.01, "znear": 0.01}}]
+    camera = g.node(name="camera", camera=0, translation=[0.0, 3.0, 3.0], rotation=look)
+
+    def floats(values, kind):
+        flat = [x for v in values for x in (v if isinstance(v, list) else [v])]
+        view = g._view(struct.pack(f"<{len(flat)}f", *flat), None)
+        g.doc["bufferViews"][view].pop("target")
+        extra = {"min": [min(values)], "max": [max(values)]} if kind == "SCALAR" else {}
+        return g._accessor(bufferView=view, componentType=FLOAT, count=len(values), type=kind, **extra)
+
+    samplers, channels = [], []
+
+    def channel(node, path, times, values, interpolation):
+        samplers.append({"input": floats(times, "SCALAR"), "output": floats(values, "VEC3"), "interpolation": interpolation})
+        channels.append({"sampler": len(samplers) - 1, "target": {"node": node, "path": path}})
+
+    channel(rig, "translation", [0.0, 1.0], [[0.0, 0.0, 0.0], [0.6, 0.0, 0.0]], "STEP")
+    # In-tangent, value, out-tangent per keyframe.
+    channel(rig, "scale", [0.0, 2.0], [[0.0] * 3, [1.0] * 3, [0.0] * 3, [0.0] * 3, [2.0] * 3, [0.0] * 3], "CUBICSPLINE")
+    channel(lamp, "translation", [0.0, 2.0], [[0.0, 1.0, 0.0], [0.0, 2.0, 0.0]], "LINEAR")
+    channel(shutter, "translation", [0.0, 2.0], [[3.0, 0.5, 0.0], [-3.0, 0.5, 0.0]], "LINEAR")
+    channel(camera, "translation", [0.0, 2.0], [[0.0, 3.0, 3.0], [0.4, 3.0, 3.0]], "LINEAR")
+    g.doc["animations"] = [{"name": "day", "samplers": samplers, "channels": channels}]
+    g.write("animated_lamp.gltf")
+
+
 if __name__ == "__main__":
+    animated_lamp()
     ies_light_colour()
     mirrored_emitter(True)
     mirrored_emitter(False)

@@ -88,7 +88,7 @@ fn run_job(job: &PlannedJob, force: bool, progress: impl FnMut(f32) + Send) -> O
         super::render::render_to_files(&render, progress).map_err(|e| e.to_string())
     });
     match result {
-        Ok(stats) => Outcome::Rendered(stats.seconds),
+        Ok(frames) => Outcome::Rendered(frames.iter().map(|r| r.stats.seconds).sum()),
         Err(e) => Outcome::Failed(format!("job {} ({}): {e}", job.index, job.name)),
     }
 }

@@ -1,6 +1,7 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
 mod batch;
 mod bench;
+mod frames;
 mod ies;
 mod manifest;
 mod merge;

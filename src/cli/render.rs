@@ -1,7 +1,7 @@
 //! `kelvin render [SCENE] [-o out.exr] [--spp N] [--time SECONDS] [--size WxH] [--env map [--env-intensity X]]
 //! [--sky LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY] [--sky-intensity X]] [--integrator path|direct] [--max-depth N]
 //! [--roulette-depth N] [--light-sampler uniform|power|bvh|ris [--candidates M]] [--color rgb|spectral] [--seed S]
-//! [--threads T] [--report] [--crop X0,Y0,X1,Y1]`.
+//! [--threads T] [--report] [--crop X0,Y0,X1,Y1] [--frames FIRST..LAST [--fps F] [--animation NAME|INDEX]]`.
 
 use std::path::{Path, PathBuf};
 
@@ -13,10 +13,12 @@ use kelvin::render::film_io::{write_exr, write_exr_tile, write_png};
 use kelvin::render::path::PathDepth;
 use kelvin::render::renderer::{Integrator, RenderOptions, RenderStats, Strategy, render_with};
 use kelvin::render::tiles::Crop;
+use kelvin::scene::animate::{GltfAnimations, pose_gltf};
 use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, Settings};
 use kelvin::systems::LightingPlugin;
 
 use super::CliError;
+use super::frames::{FrameRange, frame_path};
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum SamplerArg {
@@ -111,6 +113,17 @@ pub struct RenderArgs {
     /// in the full render, into an EXR that records its place (`kelvin merge` joins tiles).
     #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_crop)]
     crop: Option<Crop>,
+    /// Render these frames of the scene's animation (both ends included, or one frame) in one
+    /// process, each frame moving only what the animation moves; the output's run of '#' takes
+    /// the frame number (-o out_####.exr).
+    #[arg(long, value_name = "FIRST..LAST")]
+    frames: Option<FrameRange>,
+    /// Frames per second: frame k shows the animation at k / fps seconds.
+    #[arg(long, default_value_t = 24.0, value_parser = parse_fps)]
+    fps: f64,
+    /// The animation --frames plays, by name or index.
+    #[arg(long, default_value = "0")]
+    animation: String,
     /// Print the light system's run report over the whole render (which systems ran in how many
     /// of its updates, with counts summed over the batches, why others were skipped, and every
     /// warning), and the time of each pass.
@@ -140,6 +153,13 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     }
 }
 
+fn parse_fps(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(f) if f.is_finite() && f > 0.0 && f <= 1e6 => Ok(f),
+        _ => Err(format!("'{s}': expected frames per second, a number > 0")),
+    }
+}
+
 fn parse_crop(s: &str) -> Result<Crop, String> {
     s.parse().map_err(|e: kelvin::render::tiles::TileError| e.to_string())
 }
@@ -154,8 +174,8 @@ pub(super) fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 /// Builds the world: settings, the scene (file or default) and the optional environment light and
-/// sun and sky.
-fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
+/// sun and sky. Also returns the glTF file's index in `GltfAnimations`.
+fn build_world(args: &RenderArgs) -> Result<(World, Schedule, Option<usize>), CliError> {
     // Checked before the scene loads, so a typo fails at once.
     let sky = match &args.sky {
         Some(spec) => {
@@ -186,21 +206,27 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
         ..Default::default()
     });
     LightingPlugin::build(&mut world, &mut schedule);
+    let mut file = None;
     match &args.scene {
         Some(path) => {
+            let start = std::time::Instant::now();
             let report = kelvin::render::scene_file::spawn_gltf_file(&mut world, path)?;
+            let load = start.elapsed().as_secs_f64();
             for w in &report.warnings {
                 eprintln!("warning: {w}");
             }
             eprintln!(
-                "scene {}: {} meshes ({} triangles, {} emissive), {} lights, {} cameras",
+                "scene {} (loaded in {:.1} ms): {} meshes ({} triangles, {} emissive), {} lights, {} cameras, {} animations",
                 path.display(),
+                load * 1e3,
                 report.meshes,
                 report.triangles,
                 report.emissive_meshes,
                 report.lights,
-                report.cameras
+                report.cameras,
+                report.animations
             );
+            file = Some(report.file);
         }
         None => kelvin::scenes::default_scene::spawn_default_scene(&mut world),
     }
@@ -212,7 +238,30 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule), CliError> {
     if let Some(light) = sky {
         world.spawn(light);
     }
-    Ok((world, schedule))
+    Ok((world, schedule, file))
+}
+
+/// The index of the animation `--animation` names in the spawned file, or why there is none.
+fn chosen_clip(world: &World, file: Option<usize>, args: &RenderArgs) -> Result<usize, CliError> {
+    let clips = file.and_then(|f| world.resource::<GltfAnimations>().files.get(f)).map(|a| &a.clips[..]);
+    let scene = args.scene.as_ref().map_or("the default scene".to_string(), |p| p.display().to_string());
+    match clips {
+        None | Some([]) => Err(format!("--frames: {scene} has no animation").into()),
+        Some(clips) => {
+            let index = clips
+                .iter()
+                .position(|c| c.name.as_deref() == Some(&args.animation))
+                .or_else(|| args.animation.parse::<usize>().ok().filter(|&i| i < clips.len()));
+            index.ok_or_else(|| {
+                let names: Vec<String> = clips
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| format!("{i}: {}", c.name.as_deref().unwrap_or("-")))
+                    .collect();
+                format!("--animation {}: not in {scene} (it has {})", args.animation, names.join(", ")).into()
+            })
+        }
+    }
 }
 
 /// Exposure (stops) that maps the log-average luminance to 18% grey.
@@ -246,8 +295,20 @@ pub(super) fn write_outputs(path: &Path, w: u32, h: u32, rgb: &[glam::Vec3], exp
     Ok(())
 }
 
-/// Renders as `args` say and writes the outputs; `progress` gets the finished fraction.
-pub(super) fn render_to_files(args: &RenderArgs, progress: impl FnMut(f32) + Send) -> Result<RenderStats, CliError> {
+/// One rendered image: its frame (with --frames), the time posing the frame took, and the
+/// render's statistics.
+pub(super) struct Rendered {
+    pub frame: Option<u32>,
+    pub pose_seconds: f64,
+    pub stats: RenderStats,
+}
+
+/// Renders as `args` say and writes the outputs, one per frame with --frames; `progress` gets
+/// the finished fraction.
+pub(super) fn render_to_files(
+    args: &RenderArgs,
+    mut progress: impl FnMut(f32) + Send,
+) -> Result<Vec<Rendered>, CliError> {
     let (width, height) = args.size;
     if let Some(crop) = args.crop {
         crop.check(width, height)?;
@@ -257,7 +318,16 @@ pub(super) fn render_to_files(args: &RenderArgs, progress: impl FnMut(f32) + Sen
             return Err(format!("{out}: a --crop tile is written as .exr, which records its place in the image").into());
         }
     }
-    let (mut world, mut schedule) = build_world(args)?;
+    // Checked before the scene loads, so a bad name fails at once.
+    let frames: Vec<Option<u32>> = match args.frames {
+        Some(range) => {
+            frame_path(&args.output, range.first)?;
+            range.iter().map(Some).collect()
+        }
+        None => vec![None],
+    };
+    let (mut world, mut schedule, file) = build_world(args)?;
+    let clip = if args.frames.is_some() { Some(chosen_clip(&world, file, args)?) } else { None };
     let opts = RenderOptions {
         width,
         height,
@@ -273,23 +343,39 @@ pub(super) fn render_to_files(args: &RenderArgs, progress: impl FnMut(f32) + Sen
         crop: args.crop,
     };
     let camera = args.environment_at.map(|origin| CameraModel::LatLong { origin, width, height });
-    let (film, stats) = render_with(&mut world, &mut schedule, &opts, camera, progress);
-    if args.report {
-        eprint!("{}", stats.report);
+    let mut rendered = Vec::with_capacity(frames.len());
+    let n = frames.len() as f32;
+    for (k, frame) in frames.into_iter().enumerate() {
+        let (output, pose_seconds) = match (frame, clip, file) {
+            (Some(f), Some(clip), Some(file)) => {
+                let start = std::time::Instant::now();
+                pose_gltf(&mut world, file, clip, (f as f64 / args.fps) as f32)?;
+                (frame_path(&args.output, f)?, start.elapsed().as_secs_f64())
+            }
+            _ => (args.output.clone(), 0.0),
+        };
+        let (film, stats) = render_with(&mut world, &mut schedule, &opts, camera, |f| progress((k as f32 + f) / n));
+        write_image(args, &output, &film.pixels())?;
+        rendered.push(Rendered { frame, pose_seconds, stats });
     }
-    let rgb = film.pixels();
+    Ok(rendered)
+}
+
+/// Writes one render: a tile's EXR, or the image and its preview.
+fn write_image(args: &RenderArgs, output: &Path, rgb: &[glam::Vec3]) -> Result<(), CliError> {
+    let (width, height) = args.size;
     match args.crop {
         // No preview: a tile's automatic exposure is not the image's (`kelvin merge` writes that).
         Some(crop) => {
-            write_exr_tile(&args.output, crop, width, height, &rgb)?;
-            eprintln!("wrote {} (tile {crop} of {width}x{height})", args.output.display());
+            write_exr_tile(output, crop, width, height, rgb)?;
+            eprintln!("wrote {} (tile {crop} of {width}x{height})", output.display());
         }
         None => {
-            let exposure = args.exposure.unwrap_or_else(|| auto_exposure(&rgb));
-            write_outputs(&args.output, width, height, &rgb, exposure)?;
+            let exposure = args.exposure.unwrap_or_else(|| auto_exposure(rgb));
+            write_outputs(output, width, height, rgb, exposure)?;
         }
     }
-    Ok(stats)
+    Ok(())
 }
 
 /// A progress bar of 1000 steps.
@@ -307,25 +393,35 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global()?;
     }
     let bar = progress_bar();
-    let stats = render_to_files(&args, |f| bar.set_position((f * 1000.0) as u64));
+    let rendered = render_to_files(&args, |f| bar.set_position((f * 1000.0) as u64));
     bar.finish_and_clear();
-    let stats = stats?;
     let (width, height) = args.crop.map_or(args.size, |c| (c.width(), c.height()));
-    let secs = stats.seconds.max(1e-9);
-    println!(
-        "rendered {width}x{height} at {} spp in {:.3} s: {:.2} M samples/s, {:.2} M shadow rays/s, {:.2} M BSDF rays/s",
-        stats.spp,
-        stats.seconds,
-        stats.camera_samples as f64 / secs / 1e6,
-        stats.shadow_rays as f64 / secs / 1e6,
-        stats.bsdf_rays as f64 / secs / 1e6
-    );
-    if args.report {
-        let p = stats.passes;
+    for Rendered { frame, pose_seconds, stats, .. } in rendered? {
+        if let Some(f) = frame {
+            println!(
+                "frame {f} (t = {:.4} s): pose {:.3} ms, light system update {:.3} ms",
+                f as f64 / args.fps,
+                pose_seconds * 1e3,
+                stats.update_seconds * 1e3
+            );
+        }
+        let secs = stats.seconds.max(1e-9);
         println!(
-            "passes: camera {:.3} s, light system {:.3} s, shading and film {:.3} s",
-            p.camera, p.light_system, p.shading
+            "rendered {width}x{height} at {} spp in {:.3} s: {:.2} M samples/s, {:.2} M shadow rays/s, {:.2} M BSDF rays/s",
+            stats.spp,
+            stats.seconds,
+            stats.camera_samples as f64 / secs / 1e6,
+            stats.shadow_rays as f64 / secs / 1e6,
+            stats.bsdf_rays as f64 / secs / 1e6
         );
+        if args.report {
+            eprint!("{}", stats.report);
+            let p = stats.passes;
+            println!(
+                "passes: camera {:.3} s, light system {:.3} s, shading and film {:.3} s",
+                p.camera, p.light_system, p.shading
+            );
+        }
     }
     Ok(())
 }

@@ -125,6 +125,9 @@ pub struct RenderStats {
     pub camera_samples: u64,
     pub shadow_rays: u64,
     pub bsdf_rays: u64,
+    /// The light system's update before the first batch, s: what bringing the BVH and light
+    /// tables up to date with the world cost (a scene's load, or an animation frame's changes).
+    pub update_seconds: f64,
     /// Where the time went, pass by pass (their sum is `seconds` less the set-up).
     pub passes: PassSeconds,
     /// The light system's run report over every update of the render (the one before the first
@@ -226,6 +229,7 @@ fn render_on_pool(
     // One update brings the BVH and light tables up to date before cameras are placed.
     world.resource_mut::<ShadingBatch>().clear();
     schedule.run(world);
+    stats.update_seconds = start.elapsed().as_secs_f64();
     // Each update clears the world's run report: what it says (this update's warnings above all)
     // is kept in the render's own.
     stats.report.add(world.resource::<RunReport>());

@@ -13,8 +13,9 @@
 use std::sync::Arc;
 
 use bevy_ecs::prelude::*;
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 
+use super::animate::{GltfAnimations, GltfNode};
 use super::gltf::{GltfScene, IesSource, LightKind, MaterialData};
 use super::ies::IesProfile;
 use crate::geometry::{Mesh, Transform};
@@ -31,6 +32,10 @@ pub struct SpawnReport {
     pub emissive_meshes: usize,
     pub lights: usize,
     pub cameras: usize,
+    /// The file's index in the world's [`GltfAnimations`] (what `animate::pose_gltf` takes).
+    pub file: usize,
+    /// Its animations.
+    pub animations: usize,
     pub warnings: Vec<String>,
 }
 
@@ -61,9 +66,18 @@ fn material_of(m: &MaterialData, scene: &GltfScene) -> Material {
     }
 }
 
-/// Spawns everything in `scene` into `world`.
+/// Spawns everything in `scene` into `world`. Each entity placed by a node carries its
+/// [`GltfNode`], and the file's node tree and animations are added to the world's
+/// [`GltfAnimations`], so that `animate::pose_gltf` can move them.
 pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
     let mut report = SpawnReport { warnings: scene.warnings.clone(), ..Default::default() };
+    {
+        let mut animations = world.get_resource_or_init::<GltfAnimations>();
+        (report.file, report.animations) = (animations.files.len(), scene.animations.clips.len());
+        animations.files.push(scene.animations.clone());
+    }
+    let file = report.file;
+    let at_node = |node: Option<usize>, rest_inverse| node.map(|node| GltfNode { file, node, rest_inverse });
     let materials: Vec<Material> = scene.materials.iter().map(|m| material_of(m, scene)).collect();
     for inst in &scene.instances {
         let Some(mesh) = scene.meshes.get(inst.mesh) else { continue };
@@ -72,6 +86,8 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
         // swap two corners to keep their front face, which one-sided emitters emit from.
         let normal_matrix = inst.world.matrix3.inverse().transpose();
         let mirrors = inst.world.matrix3.determinant() < 0.0;
+        let inverse = inst.world.inverse();
+        let node = at_node(inst.node, inverse.is_finite().then_some(inverse));
         for (p, prim) in mesh.primitives.iter().enumerate() {
             let what = format!("mesh {} primitive {p}", mesh.name.as_deref().unwrap_or("?"));
             let positions: Vec<Vec3> = prim.positions.iter().map(|&v| inst.world.transform_point3(v)).collect();
@@ -98,6 +114,9 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
             report.meshes += 1;
             report.triangles += mesh_component.triangle_count();
             let mut entity = world.spawn((mesh_component, Transform::IDENTITY, material));
+            if let Some(node) = node {
+                entity.insert(node);
+            }
             if let Some(area) =
                 prim.material.and_then(|i| scene.materials.get(i)).and_then(|m| emissive_light(m, scene))
             {
@@ -111,6 +130,9 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
         let (spectrum, y) = colour_spectrum(light.color);
         let luminous = light.intensity * y;
         let mut e = world.spawn_empty();
+        if let Some(node) = at_node(light.node, Some(Affine3A::IDENTITY)) {
+            e.insert(node);
+        }
         match light.kind {
             LightKind::Point => {
                 e.insert((PointLight { amount: Amount::Candela(luminous), spectrum, ..Default::default() }, transform));
@@ -147,7 +169,10 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
         report.lights += 1;
     }
     for cam in &scene.cameras {
-        world.spawn((Camera { yfov: cam.yfov }, Transform::from_affine(cam.world)));
+        let mut e = world.spawn((Camera { yfov: cam.yfov }, Transform::from_affine(cam.world)));
+        if let Some(node) = at_node(cam.node, Some(Affine3A::IDENTITY)) {
+            e.insert(node);
+        }
         report.cameras += 1;
     }
     report
@@ -177,7 +202,7 @@ fn emissive_light(m: &MaterialData, scene: &GltfScene) -> Option<crate::light::A
 
 #[cfg(test)]
 mod tests {
-    use glam::{Affine3A, Quat};
+    use glam::Quat;
 
     use super::*;
     use crate::scene::gltf::{MeshData, MeshInstance, PrimitiveData};
@@ -193,7 +218,7 @@ mod tests {
         };
         GltfScene {
             meshes: vec![MeshData { name: None, primitives: vec![primitive] }],
-            instances: vec![MeshInstance { mesh: 0, world, node_name: None }],
+            instances: vec![MeshInstance { mesh: 0, world, node: None, node_name: None }],
             ..Default::default()
         }
     }

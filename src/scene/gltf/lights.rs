@@ -128,6 +128,7 @@ impl LightTable {
         }
         for light in &mut out {
             light.world = world;
+            light.node = Some(node);
             light.node_name = node_name.map(str::to_string);
         }
         out
@@ -163,6 +164,7 @@ impl LightTable {
             range: None,
             world: Affine3A::IDENTITY,
             name: None,
+            node: None,
             node_name: None,
             ies: Some(source),
         })
@@ -220,6 +222,7 @@ fn parse_punctual(light: &Value, pointer: &str, warnings: &mut Warnings) -> Opti
         range,
         world: Affine3A::IDENTITY,
         name: obj.get("name").and_then(Value::as_str).map(str::to_string),
+        node: None,
         node_name: None,
         ies: None,
     })

@@ -12,8 +12,10 @@
 //! - The default scene, else the first scene, else every root node; its node tree is flattened into
 //!   [`MeshInstance`]s, lights and cameras with world transforms (glTF node matrices or T * R * S).
 //! - Triangles (lists, strips and fans; strips and fans become lists), POSITION, NORMAL and TEXCOORD_0, in any
-//!   component type (so KHR_mesh_quantization works), sparse accessors included. Skins, morph targets and
-//!   animations are ignored (with a warning for skins and morph targets).
+//!   component type (so KHR_mesh_quantization works), sparse accessors included. Skins and morph targets are
+//!   ignored with a warning.
+//! - Node animations (translation, rotation, scale; STEP, LINEAR, CUBICSPLINE) as [`animation::SceneAnimations`];
+//!   a bad channel is dropped with a warning.
 //! - Metallic-roughness materials with KHR_materials_emissive_strength, KHR_materials_specular (`specularFactor`)
 //!   and KHR_materials_ior; textures on UV set 0 (PNG/JPEG, also EXR/HDR by file extension).
 //!
@@ -72,6 +74,7 @@
 //! light colours are clamped to [0, 1]; a non-positive range is dropped.
 
 mod accessor;
+pub mod animation;
 mod container;
 mod lights;
 mod material;
@@ -118,6 +121,9 @@ pub struct GltfScene {
     pub lights: Vec<LightData>,
     /// Perspective cameras placed by the chosen scene's nodes.
     pub cameras: Vec<CameraData>,
+    /// The chosen scene's node tree at rest and the file's animations (`clips` is empty for a
+    /// still scene).
+    pub animations: animation::SceneAnimations,
     /// What was ignored, fixed or dropped, one line each: `<file>: <JSON pointer>: <what and the fallback>`.
     pub warnings: Vec<String>,
 }
@@ -152,6 +158,8 @@ pub struct MeshInstance {
     pub mesh: usize,
     /// Local-to-world transform (the product of the node and all its ancestors).
     pub world: Affine3A,
+    /// The glTF node that places it.
+    pub node: Option<usize>,
     pub node_name: Option<String>,
 }
 
@@ -247,6 +255,8 @@ pub struct LightData {
     pub range: Option<f32>,
     /// Local-to-world transform of the light's node.
     pub world: Affine3A,
+    /// The glTF node that places it.
+    pub node: Option<usize>,
     /// The light's own name (not the node's).
     pub name: Option<String>,
     pub node_name: Option<String>,
@@ -267,6 +277,8 @@ pub struct CameraData {
     /// Far plane distance; `None` means infinite.
     pub zfar: Option<f32>,
     pub world: Affine3A,
+    /// The glTF node that places it.
+    pub node: Option<usize>,
 }
 
 /// Why a glTF file could not be loaded. `what` names the file (or the in-memory source).
@@ -322,7 +334,8 @@ pub fn load_gltf_from_bytes(bytes: &[u8], base_dir: Option<&Path>, what: &str) -
     let meshes = mesh::read_meshes(&doc, &mut warnings)?;
     let (materials, textures) = material::read_materials(&doc, &mut warnings);
     let light_table = lights::LightTable::new(&doc, raw_lights, &mut warnings);
-    let placed = nodes::flatten(&doc, &light_table, &mut warnings);
+    let mut placed = nodes::flatten(&doc, &light_table, &mut warnings);
+    placed.tree.clips = animation::read_clips(&doc, &placed.tree.rest, &mut warnings);
     Ok(GltfScene {
         meshes,
         instances: placed.instances,
@@ -330,6 +343,7 @@ pub fn load_gltf_from_bytes(bytes: &[u8], base_dir: Option<&Path>, what: &str) -
         textures,
         lights: placed.lights,
         cameras: placed.cameras,
+        animations: placed.tree,
         warnings: warnings.list,
     })
 }

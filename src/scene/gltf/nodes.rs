@@ -1,28 +1,43 @@
-//! The node hierarchy of the chosen scene, flattened into world-space mesh instances, lights and cameras.
+//! The node hierarchy of the chosen scene, flattened into world-space mesh instances, lights and cameras,
+//! each of which remembers its node (for animation).
 
 use ::gltf::json::camera::Type as CameraType;
 use ::gltf::json::validation::Checked;
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
 
+use super::animation::{LocalTransform, SceneAnimations};
 use super::lights::LightTable;
 use super::{CameraData, Doc, LightData, MeshInstance, Warnings};
 
-/// What the scene's nodes place in the world.
+/// What the scene's nodes place in the world, and the node tree they were placed by (its
+/// `clips` left for the caller).
 pub(super) struct Placed {
     pub instances: Vec<MeshInstance>,
     pub lights: Vec<LightData>,
     pub cameras: Vec<CameraData>,
+    pub tree: SceneAnimations,
 }
 
 /// Walks the chosen scene (the default scene, else the first, else every root node) depth first. Each node is
 /// visited at most once, so cycles and nodes with two parents (both invalid glTF) cannot loop or blow up.
 pub(super) fn flatten(doc: &Doc, lights: &LightTable, warnings: &mut Warnings) -> Placed {
     let nodes = &doc.root.nodes;
-    let mut placed = Placed { instances: Vec::new(), lights: Vec::new(), cameras: Vec::new() };
+    let tree = SceneAnimations {
+        rest: vec![
+            LocalTransform::Trs { translation: Vec3::ZERO, rotation: Quat::IDENTITY, scale: Vec3::ONE };
+            nodes.len()
+        ],
+        parent: vec![None; nodes.len()],
+        ..Default::default()
+    };
+    let mut placed = Placed { instances: Vec::new(), lights: Vec::new(), cameras: Vec::new(), tree };
     let mut visited = vec![false; nodes.len()];
-    let mut stack: Vec<(usize, Affine3A, String)> =
-        scene_roots(doc, warnings).into_iter().rev().map(|(n, pointer)| (n, Affine3A::IDENTITY, pointer)).collect();
-    while let Some((n, parent, reference)) = stack.pop() {
+    let mut stack: Vec<(usize, Option<usize>, Affine3A, String)> = scene_roots(doc, warnings)
+        .into_iter()
+        .rev()
+        .map(|(n, pointer)| (n, None, Affine3A::IDENTITY, pointer))
+        .collect();
+    while let Some((n, parent_node, parent, reference)) = stack.pop() {
         let Some(node) = nodes.get(n) else {
             warnings.push(&reference, format!("node {n} does not exist ({} defined); skipped", nodes.len()));
             continue;
@@ -32,12 +47,16 @@ pub(super) fn flatten(doc: &Doc, lights: &LightTable, warnings: &mut Warnings) -
             continue;
         }
         let pointer = format!("/nodes/{n}");
-        let world = parent * local_transform(node, &pointer, warnings);
+        let local = local_transform(node, &pointer, warnings);
+        let world = parent * local.to_affine();
         let name = node.name.as_deref();
+        placed.tree.rest[n] = local;
+        placed.tree.parent[n] = parent_node;
+        placed.tree.order.push(n);
 
         if let Some(mesh) = node.mesh.map(|m| m.value()) {
             if mesh < doc.root.meshes.len() {
-                placed.instances.push(MeshInstance { mesh, world, node_name: name.map(str::to_string) });
+                placed.instances.push(MeshInstance { mesh, world, node: Some(n), node_name: name.map(str::to_string) });
                 if node.skin.is_some() {
                     warnings.push(&pointer, "skin ignored; the mesh is placed at its node transform");
                 }
@@ -46,11 +65,12 @@ pub(super) fn flatten(doc: &Doc, lights: &LightTable, warnings: &mut Warnings) -
             }
         }
         if let Some(camera) = node.camera.map(|c| c.value()) {
-            placed.cameras.extend(camera_at(doc, camera, world, &format!("{pointer}/camera"), warnings));
+            let camera = camera_at(doc, camera, world, &format!("{pointer}/camera"), warnings);
+            placed.cameras.extend(camera.map(|c| CameraData { node: Some(n), ..c }));
         }
         placed.lights.extend(lights.at_node(doc, n, name, world, warnings));
         for (k, child) in node.children.as_deref().unwrap_or_default().iter().enumerate().rev() {
-            stack.push((child.value(), world, format!("{pointer}/children/{k}")));
+            stack.push((child.value(), Some(n), world, format!("{pointer}/children/{k}")));
         }
     }
     placed
@@ -86,7 +106,7 @@ fn scene_roots(doc: &Doc, warnings: &mut Warnings) -> Vec<(usize, String)> {
 
 /// The node's local transform: its matrix, or T * R * S (glTF 2.0 spec, section 3.5.2 "Transformations").
 /// Non-finite values give the identity (or the default of that part) with a warning.
-fn local_transform(node: &::gltf::json::Node, pointer: &str, warnings: &mut Warnings) -> Affine3A {
+fn local_transform(node: &::gltf::json::Node, pointer: &str, warnings: &mut Warnings) -> LocalTransform {
     let has_trs = node.translation.is_some() || node.rotation.is_some() || node.scale.is_some();
     if let Some(m) = node.matrix {
         if has_trs {
@@ -95,12 +115,12 @@ fn local_transform(node: &::gltf::json::Node, pointer: &str, warnings: &mut Warn
         let m = Mat4::from_cols_array(&m);
         if !m.is_finite() {
             warnings.push(&format!("{pointer}/matrix"), "NaN or infinite values; identity used");
-            return Affine3A::IDENTITY;
+            return LocalTransform::Matrix(Affine3A::IDENTITY);
         }
         if m.row(3) != Vec4::W {
             warnings.push(&format!("{pointer}/matrix"), "last row is not (0, 0, 0, 1); the projective part ignored");
         }
-        return Affine3A::from_mat4(m);
+        return LocalTransform::Matrix(Affine3A::from_mat4(m));
     }
     let mut vector = |v: Option<[f32; 3]>, default: Vec3, field: &str| match v.map(Vec3::from_array) {
         Some(v) if v.is_finite() => v,
@@ -120,7 +140,7 @@ fn local_transform(node: &::gltf::json::Node, pointer: &str, warnings: &mut Warn
             Quat::IDENTITY
         }
     };
-    Affine3A::from_scale_rotation_translation(scale, rotation, translation)
+    LocalTransform::Trs { translation, rotation, scale }
 }
 
 /// The perspective camera `index` placed at `world`; orthographic and invalid cameras are skipped with a warning.
@@ -160,5 +180,5 @@ fn camera_at(doc: &Doc, index: usize, world: Affine3A, reference: &str, warnings
         }
         ok
     });
-    Some(CameraData { name: camera.name.clone(), yfov, aspect, znear, zfar, world })
+    Some(CameraData { name: camera.name.clone(), yfov, aspect, znear, zfar, world, node: None })
 }

@@ -1,0 +1,333 @@
+//! glTF node animation (glTF 2.0 spec, section 3.11 "Animations"): channels that drive a node's
+//! translation, rotation or scale through keyframes with STEP, LINEAR or CUBICSPLINE
+//! interpolation, and the node tree at rest, so that a frame's world transforms can be computed
+//! without the document.
+//!
+//! A bad channel (missing node or accessor, times not increasing, too few values, a node with a
+//! `matrix`) is dropped with a warning; the rest of the clip and the scene load as they are.
+
+use ::gltf::json::animation::{Interpolation as JsonInterpolation, Property};
+use ::gltf::json::validation::Checked;
+use glam::{Affine3A, Quat, Vec3, Vec4};
+
+use super::accessor::read_vectors;
+use super::{Doc, Warnings};
+
+/// A node's own transform: a matrix (which glTF forbids animating) or translation, rotation
+/// and scale, applied as T * R * S.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LocalTransform {
+    Matrix(Affine3A),
+    Trs { translation: Vec3, rotation: Quat, scale: Vec3 },
+}
+
+impl LocalTransform {
+    pub fn to_affine(self) -> Affine3A {
+        match self {
+            Self::Matrix(m) => m,
+            Self::Trs { translation, rotation, scale } => {
+                Affine3A::from_scale_rotation_translation(scale, rotation, translation)
+            }
+        }
+    }
+}
+
+/// What a channel drives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target {
+    Translation,
+    Rotation,
+    Scale,
+}
+
+/// How values between keyframes are found (glTF 2.0 spec, Appendix C "Interpolation").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    Step,
+    Linear,
+    /// Hermite spline; each keyframe stores an in-tangent, a value and an out-tangent.
+    CubicSpline,
+}
+
+/// Keyframes of one channel. Vectors are stored as `Vec4` (translation and scale in xyz,
+/// rotation as the quaternion xyzw).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Keyframes {
+    /// Strictly increasing, finite, seconds.
+    times: Vec<f32>,
+    /// One value per time, or for CUBICSPLINE three (in-tangent, value, out-tangent).
+    values: Vec<Vec4>,
+    interpolation: Interpolation,
+}
+
+impl Keyframes {
+    /// Keyframes after the checks glTF asks for; the error says what is wrong.
+    pub fn new(times: Vec<f32>, values: Vec<Vec4>, interpolation: Interpolation) -> Result<Self, String> {
+        if times.is_empty() {
+            return Err("no keyframes".into());
+        }
+        if let Some(t) = times.iter().find(|t| !t.is_finite()) {
+            return Err(format!("keyframe time {t} is not finite"));
+        }
+        if let Some(k) = times.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(format!("keyframe times not strictly increasing at {k} ({} then {})", times[k], times[k + 1]));
+        }
+        let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+        if values.len() != per_key * times.len() {
+            return Err(format!(
+                "{} output values for {} keyframes ({per_key} each needed)",
+                values.len(),
+                times.len()
+            ));
+        }
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err("NaN or infinite output values".into());
+        }
+        Ok(Self { times, values, interpolation })
+    }
+
+    /// The last keyframe's time.
+    pub fn end(&self) -> f32 {
+        *self.times.last().expect("at least one keyframe")
+    }
+
+    /// The value at time `t`: the first value before the first keyframe, the last after the last.
+    pub fn sample(&self, t: f32, target: Target) -> Vec4 {
+        let cubic = self.interpolation == Interpolation::CubicSpline;
+        let value = |k: usize| if cubic { self.values[3 * k + 1] } else { self.values[k] };
+        let n = self.times.len();
+        // Keyframe k is the last with times[k] <= t.
+        let next = self.times.partition_point(|&tk| tk <= t);
+        if next == 0 {
+            return value(0);
+        }
+        if next == n {
+            return value(n - 1);
+        }
+        let k = next - 1;
+        let (t0, t1) = (self.times[k], self.times[next]);
+        let span = t1 - t0;
+        let s = ((t - t0) / span).clamp(0.0, 1.0);
+        match self.interpolation {
+            Interpolation::Step => value(k),
+            Interpolation::Linear if target == Target::Rotation => {
+                let (a, mut b) = (Quat::from_vec4(value(k)), Quat::from_vec4(value(next)));
+                // The shorter of the two arcs between q and -q (spec Appendix C).
+                if a.dot(b) < 0.0 {
+                    b = -b;
+                }
+                Vec4::from(a.normalize().slerp(b.normalize(), s))
+            }
+            Interpolation::Linear => value(k).lerp(value(next), s),
+            Interpolation::CubicSpline => {
+                // p(s) = (2s^3 - 3s^2 + 1) v_k + (s^3 - 2s^2 + s) span b_k + (-2s^3 + 3s^2) v_k+1
+                //        + (s^3 - s^2) span a_k+1 (spec Appendix C, b the out-, a the in-tangent).
+                let (s2, s3) = (s * s, s * s * s);
+                let out_tangent = self.values[3 * k + 2];
+                let in_tangent = self.values[3 * next];
+                let p = (2.0 * s3 - 3.0 * s2 + 1.0) * value(k)
+                    + (s3 - 2.0 * s2 + s) * span * out_tangent
+                    + (-2.0 * s3 + 3.0 * s2) * value(next)
+                    + (s3 - s2) * span * in_tangent;
+                if target == Target::Rotation { p.normalize_or_zero() } else { p }
+            }
+        }
+    }
+}
+
+/// One channel: a node's property driven by keyframes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    pub node: usize,
+    pub target: Target,
+    pub keys: Keyframes,
+}
+
+/// An animation of the file: channels played together.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AnimationClip {
+    pub name: Option<String>,
+    pub channels: Vec<Channel>,
+}
+
+impl AnimationClip {
+    /// The time of the clip's last keyframe, s (0 without channels).
+    pub fn duration(&self) -> f32 {
+        self.channels.iter().map(|c| c.keys.end()).fold(0.0, f32::max)
+    }
+}
+
+/// The chosen scene's node tree at rest and the file's animations.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneAnimations {
+    /// Per glTF node, its rest transform (the identity for nodes outside the scene).
+    pub rest: Vec<LocalTransform>,
+    /// Per glTF node, its parent in the chosen scene.
+    pub parent: Vec<Option<usize>>,
+    /// The scene's nodes, each after its parent.
+    pub order: Vec<usize>,
+    pub clips: Vec<AnimationClip>,
+}
+
+impl SceneAnimations {
+    /// Index of the clip named `name`, or numbered `name`.
+    pub fn find(&self, name: &str) -> Option<usize> {
+        self.clips
+            .iter()
+            .position(|c| c.name.as_deref() == Some(name))
+            .or_else(|| name.parse::<usize>().ok().filter(|&i| i < self.clips.len()))
+    }
+
+    /// Per glTF node, whether clip `clip` moves it (it or an ancestor has a channel).
+    pub fn moved_by(&self, clip: usize) -> Vec<bool> {
+        let mut moved = vec![false; self.rest.len()];
+        for c in self.clips.get(clip).map_or(&[][..], |c| &c.channels) {
+            moved[c.node] = true;
+        }
+        for &n in &self.order {
+            if let Some(p) = self.parent[n] {
+                moved[n] |= moved[p];
+            }
+        }
+        moved
+    }
+
+    /// Every node's local-to-world transform at time `t` (s) of clip `clip`; the rest pose for a
+    /// clip that does not exist.
+    pub fn pose(&self, clip: usize, t: f32) -> Vec<Affine3A> {
+        let mut local = self.rest.clone();
+        for c in self.clips.get(clip).map_or(&[][..], |c| &c.channels) {
+            let LocalTransform::Trs { translation, rotation, scale } = &mut local[c.node] else { continue };
+            let v = c.keys.sample(t, c.target);
+            match c.target {
+                Target::Translation => *translation = v.truncate(),
+                Target::Rotation => *rotation = Quat::from_vec4(v).normalize(),
+                Target::Scale => *scale = v.truncate(),
+            }
+        }
+        let mut world = vec![Affine3A::IDENTITY; local.len()];
+        for &n in &self.order {
+            let parent = self.parent[n].map_or(Affine3A::IDENTITY, |p| world[p]);
+            world[n] = parent * local[n].to_affine();
+        }
+        world
+    }
+}
+
+/// Reads every animation of the file; `rest` tells which nodes have a matrix.
+pub(super) fn read_clips(doc: &Doc, rest: &[LocalTransform], warnings: &mut Warnings) -> Vec<AnimationClip> {
+    let mut clips = Vec::new();
+    for (a, animation) in doc.root.animations.iter().enumerate() {
+        let mut clip = AnimationClip { name: animation.name.clone(), channels: Vec::new() };
+        for (c, channel) in animation.channels.iter().enumerate() {
+            let pointer = format!("/animations/{a}/channels/{c}");
+            match read_channel(doc, animation, channel, rest) {
+                Ok(Some(ch)) => clip.channels.push(ch),
+                Ok(None) => warnings.push(&pointer, "morph target weights are not animated; channel ignored"),
+                Err(msg) => warnings.push(&pointer, format!("{msg}; channel dropped")),
+            }
+        }
+        clips.push(clip);
+    }
+    clips
+}
+
+fn read_channel(
+    doc: &Doc,
+    animation: &::gltf::json::Animation,
+    channel: &::gltf::json::animation::Channel,
+    rest: &[LocalTransform],
+) -> Result<Option<Channel>, String> {
+    let target = match channel.target.path {
+        Checked::Valid(Property::Translation) => Target::Translation,
+        Checked::Valid(Property::Rotation) => Target::Rotation,
+        Checked::Valid(Property::Scale) => Target::Scale,
+        Checked::Valid(Property::MorphTargetWeights) => return Ok(None),
+        Checked::Invalid => return Err("invalid target path".into()),
+    };
+    let node = channel.target.node.value();
+    match rest.get(node) {
+        None => return Err(format!("node {node} does not exist")),
+        Some(LocalTransform::Matrix(_)) => {
+            return Err(format!("node {node} has a matrix, which glTF forbids animating"));
+        }
+        Some(_) => {}
+    }
+    let s = channel.sampler.value();
+    let sampler = animation.samplers.get(s).ok_or_else(|| format!("sampler {s} does not exist"))?;
+    let interpolation = match sampler.interpolation {
+        Checked::Valid(JsonInterpolation::Step) => Interpolation::Step,
+        Checked::Valid(JsonInterpolation::Linear) => Interpolation::Linear,
+        Checked::Valid(JsonInterpolation::CubicSpline) => Interpolation::CubicSpline,
+        Checked::Invalid => return Err(format!("sampler {s}: invalid interpolation")),
+    };
+    let error = |e: super::GltfError| format!("sampler {s}: {e}");
+    let times = read_vectors::<1>(doc, sampler.input.value(), "animation input").map_err(error)?;
+    let times = times.into_iter().map(|[t]| t).collect();
+    let values: Vec<Vec4> = if target == Target::Rotation {
+        let v = read_vectors::<4>(doc, sampler.output.value(), "rotation output").map_err(error)?;
+        v.into_iter().map(Vec4::from_array).collect()
+    } else {
+        let v = read_vectors::<3>(doc, sampler.output.value(), "animation output").map_err(error)?;
+        v.into_iter().map(|v| Vec3::from_array(v).extend(0.0)).collect()
+    };
+    let keys = Keyframes::new(times, values, interpolation).map_err(|e| format!("sampler {s}: {e}"))?;
+    Ok(Some(Channel { node, target, keys }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn keys(times: &[f32], values: &[[f32; 3]], interpolation: Interpolation) -> Keyframes {
+        let values = values.iter().map(|&v| Vec3::from_array(v).extend(0.0)).collect();
+        Keyframes::new(times.to_vec(), values, interpolation).unwrap()
+    }
+
+    #[test]
+    fn step_and_linear_hold_the_ends_and_interpolate_between() {
+        let step = keys(&[1.0, 2.0, 4.0], &[[0.0; 3], [1.0; 3], [5.0; 3]], Interpolation::Step);
+        let linear = keys(&[1.0, 2.0, 4.0], &[[0.0; 3], [1.0; 3], [5.0; 3]], Interpolation::Linear);
+        for (t, s, l) in [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.5, 0.0, 0.5), (2.0, 1.0, 1.0), (3.0, 1.0, 3.0)] {
+            assert_eq!(step.sample(t, Target::Translation).x, s, "step at {t}");
+            assert!((linear.sample(t, Target::Translation).x - l).abs() < 1e-6, "linear at {t}");
+        }
+        assert_eq!(step.sample(9.0, Target::Scale).x, 5.0);
+        assert_eq!(linear.sample(4.0, Target::Scale).x, 5.0);
+    }
+
+    /// Hermite basis at s = 1/2 is (1/2, 1/8, 1/2, -1/8): with values 0 and 2 over a span of 2,
+    /// out-tangent 3 and in-tangent -1, p = 1 + 2 (3/8 + 1/8) = 2.
+    #[test]
+    fn cubic_spline_follows_the_hermite_basis_with_tangents_scaled_by_the_span() {
+        let values = [[9.0; 3], [0.0; 3], [3.0; 3], [-1.0; 3], [2.0; 3], [9.0; 3]];
+        let k = keys(&[1.0, 3.0], &values, Interpolation::CubicSpline);
+        assert!((k.sample(2.0, Target::Translation).x - 2.0).abs() < 1e-6);
+        // The ends are the values, not the tangents.
+        assert_eq!(k.sample(0.0, Target::Translation).x, 0.0);
+        assert_eq!(k.sample(5.0, Target::Translation).x, 2.0);
+    }
+
+    /// Hard case: keys q and a quaternion near -q (the same rotation): the shorter arc is taken,
+    /// so halfway is q again, not a half turn.
+    #[test]
+    fn linear_rotation_takes_the_shorter_arc() {
+        let q = Quat::from_rotation_y(0.3);
+        let r = -Quat::from_rotation_y(0.5);
+        let k = Keyframes::new(vec![0.0, 1.0], vec![Vec4::from(q), Vec4::from(r)], Interpolation::Linear).unwrap();
+        let half = Quat::from_vec4(k.sample(0.5, Target::Rotation));
+        assert!(half.angle_between(Quat::from_rotation_y(0.4)) < 1e-5, "{half}");
+    }
+
+    #[test]
+    fn keyframes_that_break_the_spec_are_refused_with_a_reason() {
+        let v = |n: usize| vec![Vec4::ZERO; n];
+        let refuse = |times: Vec<f32>, values, i| Keyframes::new(times, values, i).unwrap_err();
+        assert!(refuse(vec![], v(0), Interpolation::Linear).contains("no keyframes"));
+        assert!(refuse(vec![0.0, 0.0], v(2), Interpolation::Linear).contains("strictly increasing"));
+        assert!(refuse(vec![0.0, f32::NAN], v(2), Interpolation::Step).contains("not finite"));
+        assert!(refuse(vec![0.0, 1.0], v(2), Interpolation::CubicSpline).contains("3 each"));
+        let nan = vec![Vec4::NAN; 2];
+        assert!(refuse(vec![0.0, 1.0], nan, Interpolation::Linear).contains("NaN"));
+    }
+}
