@@ -106,9 +106,51 @@ fn unreadable_manifests_and_unsupported_entries_are_clear_errors() {
     std::fs::write(dir.join("bad.json"), "{\"jobs\": 3}").unwrap();
     let out = kelvin(&["batch", dir.join("bad.json").to_str().unwrap()]);
     assert!(!out.status.success() && text(&out).contains("bad.json") && !text(&out).contains("panicked"));
-    let manifest = write_manifest(&dir, r#"{"output": "f.exr", "frames": "0..10"}, {"size": "4x4"}"#);
+    let manifest = write_manifest(
+        &dir,
+        r#"{"output": "f.exr", "frames": "0..1"}, {"size": "4x4"}, {"output": "g_#.exr", "frames": "3..1"},
+           {"output": "h_#.exr", "frames": "2", "size": "4x4", "spp": 1}, {"output": "i.exr", "fps": 30}"#,
+    );
     let out = kelvin(&["batch", &manifest]);
     let log = text(&out);
-    assert!(log.contains("frames: animated scenes are not supported yet"), "{log}");
+    assert!(log.contains("f.exr: an output for --frames needs a run of '#'"), "{log}");
     assert!(log.contains("missing field `output`"), "{log}");
+    assert!(log.contains("frames: '3..1': the last frame is before the first"), "{log}");
+    assert!(log.contains("--frames: the default scene has no animation"), "{log}");
+    assert!(log.contains("fps and animation need frames"), "{log}");
+    assert!(log.contains("6 jobs: 0 rendered, 0 skipped, 6 failed"), "{log}");
+}
+
+/// A job with frames is planned as one job per frame, each the image `kelvin render --frames`
+/// writes for that frame, byte for byte; a rerun skips the frames that exist.
+#[test]
+fn frames_of_an_animated_scene_are_jobs_of_their_own() {
+    let dir = TempDir::new("cli-batch", "frames");
+    let scene = test_data("gltf/kelvin/animated_lamp.gltf");
+    let job = format!(
+        r#"{{"name": "lamp", "scene": "{}", "output": "anim/f_##.exr", "frames": "3..5", "fps": 4,
+             "animation": "day", "size": "6x5", "spp": 2, "settings": {{"integrator": "direct"}}}}"#,
+        scene.display()
+    );
+    let manifest = write_manifest(&dir, &job);
+    let plan = kelvin(&["batch", &manifest, "--plan"]);
+    let plan: serde_json::Value = serde_json::from_slice(&plan.stdout).unwrap();
+    let names: Vec<&str> = plan["jobs"].as_array().unwrap().iter().map(|j| j["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["lamp frame 3", "lamp frame 4", "lamp frame 5"]);
+    let out = kelvin(&["batch", &manifest]);
+    assert!(out.status.success() && text(&out).contains("3 jobs: 3 rendered"), "{}", text(&out));
+
+    let one = dir.join("one_#.exr");
+    let scene = scene.to_str().unwrap();
+    let args =
+        ["render", scene, "--frames", "3..5", "--fps", "4", "--size", "6x5", "--spp", "2", "--integrator", "direct"];
+    let out = kelvin(&[&args[..], &["-o", one.to_str().unwrap()]].concat());
+    assert!(out.status.success() && text(&out).contains("frame 5 (t = 1.2500 s)"), "{}", text(&out));
+    for k in 3..=5 {
+        let batch = std::fs::read(dir.join(format!("anim/f_0{k}.exr"))).unwrap();
+        assert!(batch == std::fs::read(dir.join(format!("one_{k}.exr"))).unwrap(), "frame {k} differs");
+    }
+    std::fs::remove_file(dir.join("anim/f_04.exr")).unwrap();
+    let out = kelvin(&["batch", &manifest]);
+    assert!(text(&out).contains("3 jobs: 1 rendered, 2 skipped, 0 failed"), "{}", text(&out));
 }

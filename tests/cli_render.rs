@@ -1,5 +1,5 @@
-//! `kelvin render --report`: the summary line, the time of each pass and the light system's run
-//! report.
+//! `kelvin render`: the --report summary line, the time of each pass and the light system's run
+//! report; crops and merges; the sky; errors of bad crops and frame requests.
 
 use std::process::Command;
 
@@ -166,4 +166,25 @@ fn bad_crops_are_clear_errors() {
     }
     let out = kelvin(&["render", "--size", "40x30", "--crop", "0,0,4,4", "-o", "tile.png"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("written as .exr"));
+}
+
+/// `--frames` names what is wrong: a still scene, an animation the file lacks, several frames
+/// into one file, a bad range or rate.
+#[test]
+fn bad_frame_requests_are_clear_errors() {
+    let lamp = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/gltf/kelvin/animated_lamp.gltf");
+    let cornell = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/gltf/bevy/CornellBox.glb");
+    for (args, says) in [
+        (vec![cornell, "--frames", "0..2", "-o", "never_#.exr"], "has no animation"),
+        (vec![lamp, "--frames", "0..2", "--animation", "night", "-o", "never_#.exr"], "(it has 0: day)"),
+        (vec![lamp, "--frames", "0..2", "--animation", "1", "-o", "never_#.exr"], "--animation 1: not in"),
+        (vec![lamp, "--frames", "0..2", "-o", "never.exr"], "needs a run of '#'"),
+        (vec![lamp, "--frames", "2..0", "-o", "never_#.exr"], "before the first"),
+        (vec![lamp, "--frames", "0..2", "--fps", "0", "-o", "never_#.exr"], "frames per second"),
+    ] {
+        let out = kelvin(&[&["render", "--size", "4x4", "--spp", "1"][..], &args].concat());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(says) && !err.contains("panicked"), "{args:?}: {err}");
+    }
+    assert!(!std::path::Path::new("never_0.exr").exists());
 }

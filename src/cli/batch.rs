@@ -41,9 +41,9 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
     }
     let n = jobs.len();
     let mut outcomes = Vec::with_capacity(n);
-    for job in &jobs {
+    for (k, job) in jobs.iter().enumerate() {
         let bar = super::render::progress_bar();
-        bar.set_message(format!("[{}/{n}] {} ", job.index + 1, job.name));
+        bar.set_message(format!("[{}/{n}] {} ", k + 1, job.name));
         let outcome = run_job(job, args.force, |f| bar.set_position((f * 1000.0) as u64));
         bar.finish_and_clear();
         outcomes.push(outcome);

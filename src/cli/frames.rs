@@ -55,6 +55,15 @@ pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf, String> {
     Ok(pattern.with_file_name(numbered))
 }
 
+/// The file frame `frame` of `range` goes to: `frame_path`, or `pattern` itself when the range
+/// is one frame and the name has no '#'.
+pub fn frame_output(pattern: &Path, range: FrameRange, frame: u32) -> Result<PathBuf, String> {
+    match frame_path(pattern, frame) {
+        Err(_) if range.first == range.last => Ok(pattern.to_path_buf()),
+        numbered => numbered,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -70,5 +79,10 @@ mod tests {
         // Only the file name's last run counts.
         assert_eq!(frame_path(Path::new("a#/b_##_c_##.exr"), 4).unwrap(), Path::new("a#/b_##_c_04.exr"));
         assert!(frame_path(Path::new("out.exr"), 1).unwrap_err().contains("'#'"));
+        // One frame may go to a plain name (as `kelvin batch` plans each frame of a job).
+        let one = FrameRange { first: 4, last: 4 };
+        assert_eq!(frame_output(Path::new("out.exr"), one, 4).unwrap(), Path::new("out.exr"));
+        assert_eq!(frame_output(Path::new("o_##.exr"), one, 4).unwrap(), Path::new("o_04.exr"));
+        assert!(frame_output(Path::new("out.exr"), FrameRange { first: 4, last: 5 }, 4).is_err());
     }
 }

@@ -7,15 +7,20 @@
 //! { "jobs": [ { "name": "cornell", "scene": "cornell.glb", "output": "out/cornell.exr",
 //!               "size": "256x256", "spp": 64, "camera": { "environment_at": [0, 1, 0] },
 //!               "settings": { "color": "spectral", "light_sampler": "bvh", "seed": 7,
-//!                             "integrator": "path", "max_depth": 8 } } ] }
+//!                             "integrator": "path", "max_depth": 8 } },
+//!             { "scene": "walk.glb", "output": "out/walk_####.exr", "frames": "0..47", "fps": 24,
+//!               "animation": "walk" } ] }
 //! ```
-//! Relative paths are relative to the manifest's folder. Unknown keys are errors.
+//! Relative paths are relative to the manifest's folder. Unknown keys are errors. A job with
+//! `frames` is planned as one job per frame (`--frames K`, the output's '#' run numbered), so
+//! that frames, like tiles, can be spread, skipped when finished and retried one by one.
 
 use std::path::{Path, PathBuf};
 
 use clap::Parser;
 use serde::{Deserialize, Serialize};
 
+use super::frames::{FrameRange, frame_path};
 use super::render::RenderArgs;
 
 #[derive(Deserialize)]
@@ -41,8 +46,13 @@ struct JobSpec {
     spp: Option<u32>,
     #[serde(default)]
     camera: CameraSpec,
-    /// Frames of an animated scene: not implemented yet, so a job that asks for them fails.
-    frames: Option<serde_json::Value>,
+    /// Frames of the scene's animation, "FIRST..LAST" or "K", as `--frames` takes them.
+    #[allow(dead_code)] // read by `plan_frames` from the JSON
+    frames: Option<String>,
+    /// Frames per second (default 24).
+    fps: Option<f64>,
+    /// The animation to play, by name or index (default the first).
+    animation: Option<String>,
     #[serde(default)]
     settings: SettingsSpec,
 }
@@ -82,7 +92,10 @@ struct SettingsSpec {
 /// A job ready to run, or why it cannot.
 #[derive(Serialize)]
 pub struct PlannedJob {
+    /// The job's place in the manifest (the frames of one job share it).
     pub index: usize,
+    /// The frame this job renders, for a job with `frames`.
+    pub frame: Option<u32>,
     pub name: String,
     /// Resolved output path (empty when the job did not parse).
     pub output: PathBuf,
@@ -129,15 +142,39 @@ pub fn plan(path: &Path) -> Result<Vec<PlannedJob>, String> {
     // Absolute paths in the arguments, so that they mean the same from any working directory.
     let base = std::path::absolute(path).map_err(|e| format!("{what}: {e}"))?;
     let base = base.parent().unwrap_or(Path::new("/"));
-    Ok(manifest.jobs.into_iter().enumerate().map(|(i, job)| plan_job(i, job, base)).collect())
+    Ok(manifest.jobs.into_iter().enumerate().flat_map(|(i, job)| plan_frames(i, job, base)).collect())
 }
 
-fn plan_job(index: usize, job: serde_json::Value, base: &Path) -> PlannedJob {
+/// A job, or one job per frame of its `frames`.
+fn plan_frames(index: usize, job: serde_json::Value, base: &Path) -> Vec<PlannedJob> {
+    let frames = match job.get("frames") {
+        None => return vec![plan_job(index, None, job, base)],
+        Some(f) => f.as_str().ok_or_else(|| format!("frames: {f} is not a string like \"0..47\"")),
+    };
+    let range = frames.and_then(|f| f.parse::<FrameRange>().map_err(|e| format!("frames: {e}")));
+    match range {
+        Ok(range) => range.iter().map(|k| plan_job(index, Some(k), job.clone(), base)).collect(),
+        Err(e) => {
+            let mut failed = plan_job(index, None, serde_json::Value::Null, base);
+            failed.error = Some(format!("job {index}: {e}"));
+            vec![failed]
+        }
+    }
+}
+
+fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Path) -> PlannedJob {
     let name = job.get("name").and_then(|n| n.as_str()).map(str::to_owned);
-    let output = job.get("output").and_then(|o| o.as_str()).map(|o| base.join(o));
+    let pattern = job.get("output").and_then(|o| o.as_str()).map(|o| base.join(o));
+    let output = match (frame, &pattern) {
+        (Some(k), Some(p)) => frame_path(p, k).ok(),
+        _ => pattern,
+    };
     let mut planned = PlannedJob {
         index,
-        name: name.clone().unwrap_or_else(|| format!("job {index}")),
+        frame,
+        name: name
+            .clone()
+            .map_or_else(|| format!("job {index}"), |n| frame.map_or(n.clone(), |k| format!("{n} frame {k}"))),
         output: output.clone().unwrap_or_default(),
         width: 0,
         height: 0,
@@ -150,7 +187,7 @@ fn plan_job(index: usize, job: serde_json::Value, base: &Path) -> PlannedJob {
     {
         planned.name = file.to_string_lossy().into_owned();
     }
-    match resolve(job, base) {
+    match resolve(job, frame, base) {
         Ok((args, (width, height))) => {
             planned.done = planned.output.exists();
             (planned.args, planned.width, planned.height) = (args, width, height);
@@ -160,13 +197,23 @@ fn plan_job(index: usize, job: serde_json::Value, base: &Path) -> PlannedJob {
     planned
 }
 
-/// The job's `kelvin render` arguments (without `-o`) and image size, checked by its parser.
-fn resolve(job: serde_json::Value, base: &Path) -> Result<(Vec<String>, (u32, u32)), String> {
+/// The job's `kelvin render` arguments (without `-o`) and image size, checked by its parser;
+/// for one `frame` of a job with frames.
+fn resolve(job: serde_json::Value, frame: Option<u32>, base: &Path) -> Result<(Vec<String>, (u32, u32)), String> {
     let spec: JobSpec = serde_json::from_value(job).map_err(|e| e.to_string())?;
-    if spec.frames.is_some() {
-        return Err("frames: animated scenes are not supported yet; render one frame per job".into());
-    }
     let mut args = Vec::new();
+    if let Some(k) = frame {
+        frame_path(&spec.output, k)?;
+        args.extend(["--frames".to_owned(), k.to_string()]);
+        if let Some(fps) = spec.fps {
+            args.extend(["--fps".to_owned(), fps.to_string()]);
+        }
+        if let Some(a) = &spec.animation {
+            args.extend(["--animation".to_owned(), a.clone()]);
+        }
+    } else if spec.fps.is_some() || spec.animation.is_some() {
+        return Err("fps and animation need frames".into());
+    }
     let mut push = |flag: &str, value: String| args.extend([flag.to_owned(), value]);
     let size = spec.size.unwrap_or_else(|| "512x512".into());
     push("--size", size);
@@ -215,6 +262,10 @@ fn resolve(job: serde_json::Value, base: &Path) -> Result<(Vec<String>, (u32, u3
         }
         args.push(scene.display().to_string());
     }
-    let parsed = parse_render_args(&args, &base.join(&spec.output))?;
+    let output = match frame {
+        Some(k) => frame_path(&base.join(&spec.output), k)?,
+        None => base.join(&spec.output),
+    };
+    let parsed = parse_render_args(&args, &output)?;
     Ok((args, parsed.size()))
 }

@@ -18,7 +18,7 @@ use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, Settings};
 use kelvin::systems::LightingPlugin;
 
 use super::CliError;
-use super::frames::{FrameRange, frame_path};
+use super::frames::{FrameRange, frame_output};
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum SamplerArg {
@@ -321,7 +321,7 @@ pub(super) fn render_to_files(
     // Checked before the scene loads, so a bad name fails at once.
     let frames: Vec<Option<u32>> = match args.frames {
         Some(range) => {
-            frame_path(&args.output, range.first)?;
+            frame_output(&args.output, range, range.first)?;
             range.iter().map(Some).collect()
         }
         None => vec![None],
@@ -346,11 +346,11 @@ pub(super) fn render_to_files(
     let mut rendered = Vec::with_capacity(frames.len());
     let n = frames.len() as f32;
     for (k, frame) in frames.into_iter().enumerate() {
-        let (output, pose_seconds) = match (frame, clip, file) {
-            (Some(f), Some(clip), Some(file)) => {
+        let (output, pose_seconds) = match (frame, args.frames, clip, file) {
+            (Some(f), Some(range), Some(clip), Some(file)) => {
                 let start = std::time::Instant::now();
                 pose_gltf(&mut world, file, clip, (f as f64 / args.fps) as f32)?;
-                (frame_path(&args.output, f)?, start.elapsed().as_secs_f64())
+                (frame_output(&args.output, range, f)?, start.elapsed().as_secs_f64())
             }
             _ => (args.output.clone(), 0.0),
         };
