@@ -116,11 +116,11 @@ def run(opts):
     else:
         ray.init(log_to_driver=False)
     start = time.monotonic()
-    status = {}  # job index -> ("rendered" | "skipped" | "FAILED", detail)
-    pending = {}  # object ref -> (job index, tile index)
-    tiles = {}  # job index -> [EXR bytes or None]
-    for job in jobs:
-        i = job["index"]
+    # Jobs are keyed by their place in the plan: the frames of one manifest job share its index.
+    status = {}  # plan position -> ("rendered" | "skipped" | "FAILED", detail)
+    pending = {}  # object ref -> (plan position, tile index)
+    tiles = {}  # plan position -> [EXR bytes or None]
+    for i, job in enumerate(jobs):
         if job["error"]:
             status[i] = ("FAILED", job["error"])
         elif job["done"] and not opts.force:
@@ -170,8 +170,8 @@ def run(opts):
                 tiles[i] = []  # the bytes are written; free them
     wall = time.monotonic() - start
     print(f"{'status':<9} {'job':<24} output / cause")
-    for job in jobs:
-        state, detail = status.get(job["index"], ("FAILED", "not finished"))
+    for i, job in enumerate(jobs):
+        state, detail = status.get(i, ("FAILED", "not finished"))
         print(f"{state:<9} {job['name']:<24} {detail}")
     counts = {s: sum(1 for v in status.values() if v[0] == s) for s in ("rendered", "skipped", "FAILED")}
     print(f"{len(jobs)} jobs: {counts['rendered']} rendered, {counts['skipped']} skipped, {counts['FAILED']} failed")

@@ -3,10 +3,11 @@
 
     python test_cluster.py [--kelvin target/debug/kelvin]
 
-1. A manifest of 3 jobs (two scenes, both colour modes, an environment camera) and 2 bad ones (a missing scene,
-   a bad size), split into 16 tiles each: every merged image is byte for byte a plain `kelvin render`, both
-   nodes rendered tiles, the bad jobs fail with kelvin's message and the exit code says so.
-2. The same 3 jobs again while the second node's worker processes are killed mid-run: Ray retries their
+1. A manifest of 3 jobs (two scenes, both colour modes, an environment camera), one of 2 frames of an animated
+   scene, and 2 bad ones (a missing scene, a bad size), split into 16 tiles each: every merged image is byte for
+   byte a plain `kelvin render`, both nodes rendered tiles, the bad jobs fail with kelvin's message and the exit
+   code says so.
+2. The same good jobs again while the second node's worker processes are killed mid-run: Ray retries their
    tiles and the images are still byte-identical.
 
 Every wait is bounded. The cluster runs in its own temporary folder and is stopped at the end, also when a
@@ -133,8 +134,8 @@ def kelvin_plan(kelvin, manifest):
 def references(kelvin, jobs, folder):
     """A plain `kelvin render` of each job: its EXR's bytes."""
     refs = {}
-    for job in jobs:
-        out = os.path.join(folder, f"ref{job['index']}.exr")
+    for i, job in enumerate(jobs):
+        out = os.path.join(folder, f"ref{i}.exr")
         run = subprocess.run([kelvin, "render", *job["args"], "-o", out], capture_output=True, text=True, timeout=120)
         check(run.returncode == 0, run.stderr)
         with open(out, "rb") as f:
@@ -173,6 +174,9 @@ def main():
              "output": "out/box.exr", "size": "80x80", "spp": 128, "settings": {"color": "spectral", "seed": 3}},
             {"name": "room-env-camera", "output": "out/env.exr", "size": "96x48", "spp": 128,
              "camera": {"environment_at": [0, 1, 0]}, "settings": {"light_sampler": "power"}},
+            # Two frames of an animation: two jobs of 16 tiles.
+            {"name": "lamp", "scene": os.path.join(REPO, "tests/data/gltf/kelvin/animated_lamp.gltf"),
+             "output": "out/lamp_#.exr", "frames": "3..4", "fps": 4, "size": "48x32", "spp": 16},
         ]
         bad = [
             {"name": "missing-scene", "scene": "no/such/scene.glb", "output": "out/missing.exr"},
@@ -181,7 +185,7 @@ def main():
         manifest = os.path.join(work, "jobs.json")
         with open(manifest, "w") as f:
             json.dump({"jobs": good + bad}, f)
-        refs = references(kelvin, kelvin_plan(kelvin, manifest)[:3], work)
+        refs = references(kelvin, kelvin_plan(kelvin, manifest)[:5], work)
 
         cluster.start()
         print(f"cluster up at {cluster.address} in {time.monotonic() - started:.1f} s", flush=True)
@@ -196,12 +200,12 @@ def main():
         with open(summary) as f:
             result = json.load(f)
         states = {int(k): v for k, v in result["jobs"].items()}
-        check([states[i]["status"] for i in range(5)] == ["rendered"] * 3 + ["FAILED"] * 2, f"{states}")
-        check("no/such/scene.glb: no such file" in states[3]["detail"], states[3]["detail"])
-        check("'0x10'" in states[4]["detail"], states[4]["detail"])
+        check([states[i]["status"] for i in range(7)] == ["rendered"] * 5 + ["FAILED"] * 2, f"{states}")
+        check("no/such/scene.glb: no such file" in states[5]["detail"], states[5]["detail"])
+        check("'0x10'" in states[6]["detail"], states[6]["detail"])
         check(len(result["nodes"]) == 2, f"tiles ran on both nodes: {result['nodes']}")
-        check(sum(n["tiles"] for n in result["nodes"].values()) == 48, f"{result['nodes']}")
-        print(f"1. 3 jobs x 16 tiles byte-identical, bad jobs failed clearly ({time.monotonic() - started:.1f} s)")
+        check(sum(n["tiles"] for n in result["nodes"].values()) == 80, f"{result['nodes']}")
+        print(f"1. 3 jobs and 2 frames x 16 tiles byte-identical, bad jobs failed clearly ({time.monotonic() - started:.1f} s)")
 
         # 2. The same jobs while the second node's workers are killed.
         fault = os.path.join(work, "fault")
