@@ -140,6 +140,14 @@ levels! {
     Avx2 => avx2 ["avx2", "avx", "sse4.2", "sse4.1", "ssse3", "sse3", "popcnt", "bmi1", "bmi2", "lzcnt"];
 }
 
+/// Runs `f` compiled for `level` (as [`widest`] does for the widest), or None if the CPU lacks
+/// a feature of it: for tests that compare a kernel's results across levels.
+pub fn at_level<R>(level: Level, f: impl FnOnce() -> R) -> Option<R> {
+    let has_all = level.features().iter().all(|feature| cpu_has(feature) == Some(true));
+    // SAFETY: the CPU has every feature of `level`.
+    has_all.then(|| unsafe { run_at(level, f) })
+}
+
 /// The widest level for which `has` reports every feature (as `Some(true)`).
 fn choose(has: impl Fn(&str) -> Option<bool>) -> Level {
     let every = |l: &&Level| l.features().iter().all(|f| has(f) == Some(true));

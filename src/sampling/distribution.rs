@@ -40,6 +40,7 @@ pub struct Bins<'a> {
 /// Turns a row's raw values, held in `cdf[1..]` on entry, into its sanitised `func` and normalised
 /// `cdf`; returns the sum of the values. Values in the cdf slot keep the row in one cache-resident
 /// buffer and let 2D rows and the f64 marginal share this code. `func.len() + 1 == cdf.len()`.
+#[inline(always)]
 fn finish_bins(func: &mut [f32], cdf: &mut [f64]) -> f64 {
     let n = func.len();
     cdf[0] = 0.0;
@@ -66,6 +67,7 @@ fn finish_bins(func: &mut [f32], cdf: &mut [f64]) -> f64 {
 /// In-place inclusive prefix sum in f64; returns the total. Four interleaved segments, each a
 /// serial running sum, then each segment offset by the totals before it: four add chains in
 /// flight instead of one (the serial sum is bound by the add latency), with the same error bound.
+#[inline(always)]
 fn prefix_sum(v: &mut [f64]) -> f64 {
     const K: usize = 4;
     let seg = v.len() / K;
@@ -388,20 +390,28 @@ impl PiecewiseConstant2D {
             }
             tasks.push(task);
         }
+        // Each task's rows compiled for the widest instruction set: `fill` and the row finish
+        // are inlined into it (see `lanes::widest`).
         tasks.into_par_iter().enumerate().for_each(|(t, mut task)| {
-            let first = lo + t * k;
-            let n = task[0].3.len();
-            let mut state = init(first..first + n);
-            for i in 0..n {
-                let mut values: Vec<&mut [f64]> =
-                    task.iter_mut().map(|(_, _, c, _)| &mut c[i * (nu + 1) + 1..(i + 1) * (nu + 1)]).collect();
-                fill(&mut state, first + i, &mut values);
-                drop(values);
-                for (span, f, c, r) in task.iter_mut() {
-                    let sum = finish_bins(&mut f[i * nu..(i + 1) * nu], &mut c[i * (nu + 1)..(i + 1) * (nu + 1)]);
-                    r[i] = sum * *span / nu as f64;
-                }
-            }
+            crate::lanes::widest(
+                #[inline(always)]
+                || {
+                    let first = lo + t * k;
+                    let n = task[0].3.len();
+                    let mut state = init(first..first + n);
+                    for i in 0..n {
+                        let mut values: Vec<&mut [f64]> =
+                            task.iter_mut().map(|(_, _, c, _)| &mut c[i * (nu + 1) + 1..(i + 1) * (nu + 1)]).collect();
+                        fill(&mut state, first + i, &mut values);
+                        drop(values);
+                        for (span, f, c, r) in task.iter_mut() {
+                            let row = i * (nu + 1)..(i + 1) * (nu + 1);
+                            let sum = finish_bins(&mut f[i * nu..(i + 1) * nu], &mut c[row]);
+                            r[i] = sum * *span / nu as f64;
+                        }
+                    }
+                },
+            )
         });
         drop(per_dist);
         for d in dists.iter_mut().filter(|d| (d.nu, d.nv) == (nu, nv)) {

@@ -17,6 +17,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::{EnvLookup, EnvMapTables, EnvTableOptions, clean_texel, row_band, row_divisor, table_resolution};
+use crate::lanes::{self, LANES};
 use crate::sampling::PiecewiseConstant2D;
 use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
 
@@ -49,32 +50,38 @@ fn texel_lum(t: Vec3) -> f64 {
 
 /// The [1, 6, 1] / 8 filter: the mean of the bilinear interpolant over a texel, in 1D (the half
 /// texel toward a neighbour averages 1/4 of it and 3/4 of the centre).
-#[inline]
+#[inline(always)]
 fn filter3(a: f64, c: f64, b: f64) -> f64 {
     (a + 6.0 * c + b) / 8.0
 }
 
 /// The compensated importance of luminance `l` (Karlik et al. 2019): max(0, l - mean), with
 /// excesses within rounding of the mean (a constant map) counted as none.
-#[inline]
+#[inline(always)]
 fn excess(l: f64, mean: f64) -> f64 {
     if l - mean > 1e-9 * mean { l - mean } else { 0.0 }
 }
 
 /// A cell value as the table stores it (f32, saturating).
-#[inline]
+#[inline(always)]
 fn cell(v: f64) -> f64 {
     (v.min(f32::MAX as f64) as f32) as f64
 }
 
 /// Luminance of texel row `y` into `out` (the image's width; pixels missing from a short buffer
-/// are black); returns its number of non-finite texels.
+/// are black); returns its number of non-finite texels. Blocks of [`LANES`] texels go through
+/// [`lum_lanes`], the rest through [`texel_lum`], which it equals bit for bit.
+#[inline(always)]
 fn lum_row(image: &RgbImage, y: usize, out: &mut [f64]) -> usize {
     let w = out.len();
     let px = if image.width == w { image.pixels.get(y * w..).unwrap_or(&[]) } else { &[] };
     let px = &px[..px.len().min(w)];
+    let whole = px.len() / LANES * LANES;
     let mut bad = 0;
-    for (o, &t) in out.iter_mut().zip(px) {
+    for b in (0..whole).step_by(LANES) {
+        bad += lum_lanes(lanes::block(px, b), lanes::block_mut(out, b));
+    }
+    for (o, &t) in out[whole..].iter_mut().zip(&px[whole..]) {
         bad += usize::from(!t.is_finite());
         *o = texel_lum(t);
     }
@@ -82,7 +89,25 @@ fn lum_row(image: &RgbImage, y: usize, out: &mut [f64]) -> usize {
     bad
 }
 
+/// [`texel_lum`] of [`LANES`] texels, branch-free so that it vectorises; returns how many are
+/// not finite.
+#[inline(always)]
+fn lum_lanes(texels: &[Vec3; LANES], out: &mut [f64; LANES]) -> usize {
+    let weights = LUMINANCE_WEIGHTS.as_dvec3();
+    let mut bad = 0;
+    for l in 0..LANES {
+        let t = texels[l];
+        let finite = t.x.is_finite() & t.y.is_finite() & t.z.is_finite();
+        bad += usize::from(!finite);
+        // clean_texel: a texel with a non-finite channel is black, negative channels are 0.
+        let channel = |c: f32| if finite { c.max(0.0) as f64 } else { 0.0 };
+        out[l] = weights.x * channel(t.x) + weights.y * channel(t.y) + weights.z * channel(t.z);
+    }
+    bad
+}
+
 /// Sum of a row in four interleaved chains: a serial sum waits on each add's latency.
+#[inline(always)]
 fn row_sum(v: &[f64]) -> f64 {
     let mut acc = [0.0f64; 4];
     let chunks = v.chunks_exact(4);
@@ -94,6 +119,7 @@ fn row_sum(v: &[f64]) -> f64 {
 }
 
 /// The filter across a row, wrapping in u (the seam).
+#[inline(always)]
 fn filter_row(lum: &[f64], out: &mut [f64]) {
     let w = lum.len();
     if w < 3 {
@@ -150,6 +176,7 @@ impl<'a> Window<'a> {
 
     /// Advances to table row `y`; returns its filtered rows above, at and below (clamped at the
     /// poles), and stores the non-finite counts of the task's own rows in `bad`.
+    #[inline(always)]
     fn rows(&mut self, y: usize, bad: &[AtomicUsize]) -> (&[f64], &[f64], &[f64]) {
         let (w, halo) = (self.w, usize::from(self.lookup == EnvLookup::Bilinear));
         let (up, down) = (y.saturating_sub(halo), (y + halo).min(self.h - 1));
@@ -179,25 +206,31 @@ impl Drop for Window<'_> {
 }
 
 /// Table row `y` (table = image resolution) of the plain table into `out[0]` and, with a mean,
-/// the compensated one into `out[1]`.
+/// the compensated one into `out[1]`. Index loops, one per case, so that each vectorises.
+#[inline(always)]
 fn fill_row(win: &mut Window, y: usize, band: f64, mean: Option<f64>, bad: &[AtomicUsize], out: &mut [&mut [f64]]) {
     let bilinear = win.lookup == EnvLookup::Bilinear;
     let (ru, rc, rd) = win.rows(y, bad);
-    let (plain, comp) = match out {
-        [p, c, ..] => (p, Some(c)),
-        [p] => (p, None),
-        [] => return,
-    };
-    // One loop per case, so that each vectorises; the vertical half of the footprint filter.
-    let rows = ru.iter().zip(rc).zip(rd).map(|((&u, &c), &d)| if bilinear { filter3(u, c, d) } else { c });
-    match (comp, mean) {
-        (Some(c), Some(m)) => {
-            for ((l, p), c) in rows.zip(plain.iter_mut()).zip(c.iter_mut()) {
-                *p = cell(l * band);
-                *c = cell(excess(l, m) * band);
+    let w = rc.len();
+    let (ru, rd) = (&ru[..w], &rd[..w]);
+    // The vertical half of the footprint filter.
+    let lum = |x: usize| if bilinear { filter3(ru[x], rc[x], rd[x]) } else { rc[x] };
+    match (out, mean) {
+        ([plain, comp, ..], Some(m)) => {
+            let (plain, comp) = (&mut plain[..w], &mut comp[..w]);
+            for x in 0..w {
+                let l = lum(x);
+                plain[x] = cell(l * band);
+                comp[x] = cell(excess(l, m) * band);
             }
         }
-        _ => rows.zip(plain.iter_mut()).for_each(|(l, p)| *p = cell(l * band)),
+        ([plain, ..], _) => {
+            let plain = &mut plain[..w];
+            for x in 0..w {
+                plain[x] = cell(lum(x) * band);
+            }
+        }
+        ([], _) => {}
     }
 }
 
@@ -265,8 +298,13 @@ impl EnvMapTables {
             s.row_lum_sum[rows.clone()].par_iter_mut().enumerate().for_each_init(
                 || vec![0.0; w],
                 |lum, (i, sum)| {
-                    lum_row(image, rows.start + i, lum);
-                    *sum = row_sum(lum);
+                    lanes::widest(
+                        #[inline(always)]
+                        || {
+                            lum_row(image, rows.start + i, lum);
+                            *sum = row_sum(lum);
+                        },
+                    )
                 },
             );
         }
@@ -302,16 +340,20 @@ impl EnvMapTables {
         // Pass 2: every table row in the range, both tables from one read of the texels.
         let mut comp = comp;
         let init = |own: Range<usize>| Window::new(image, lookup, own, w, h);
-        let fill = |win: &mut Window, y: usize, out: &mut [&mut [f64]]| fill_row(win, y, band[y], threshold, &bad, out);
-        match comp.as_mut() {
-            Some(c) => {
-                if c.resolution() != [w, h] {
-                    c.reset(w, h);
-                }
-                PiecewiseConstant2D::fill_rows(&mut [&mut plain, c], table_rows.clone(), init, fill)
+        let mut dists: Vec<&mut PiecewiseConstant2D> = vec![&mut plain];
+        if let Some(c) = comp.as_mut() {
+            if c.resolution() != [w, h] {
+                c.reset(w, h);
             }
-            None => PiecewiseConstant2D::fill_rows(&mut [&mut plain], table_rows.clone(), init, fill),
+            dists.push(c);
         }
+        PiecewiseConstant2D::fill_rows(
+            &mut dists,
+            table_rows.clone(),
+            init,
+            #[inline(always)]
+            |win: &mut Window, y: usize, out: &mut [&mut [f64]]| fill_row(win, y, band[y], threshold, &bad, out),
+        );
         // Rows in the table range but outside `rows` were reread: their counts are the same.
         for y in rows {
             s.row_bad[y] = bad[y].load(Ordering::Relaxed);
@@ -434,4 +476,33 @@ pub fn texel_luminance(image: &RgbImage, lookup: EnvLookup) -> (Vec<f64>, usize)
         lum = footprint_average(&lum, w, h);
     }
     (lum, bad)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lane luminance equals the scalar `texel_lum` bit for bit, and counts the same bad
+    /// texels, on the hard values (NaN, infinities, negatives, -0, subnormals, f32::MAX) in rows
+    /// that end in whole blocks and in a tail, at every instruction-set level the CPU has.
+    #[test]
+    fn lane_luminance_equals_the_scalar_texel_luminance() {
+        let hard = [0.0, -0.0, 1.0, -2.5, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e-42, f32::MAX, 0.3, 7e5];
+        for w in [16, 37, 64 + 5] {
+            let pixels: Vec<Vec3> = (0..w)
+                .map(|i| {
+                    Vec3::new(hard[i % hard.len()], hard[(i * 5 + 1) % hard.len()], hard[(i * 7 + 3) % hard.len()])
+                })
+                .collect();
+            let image = RgbImage { width: w, height: 1, pixels };
+            let want: Vec<u64> = image.pixels.iter().map(|&t| texel_lum(t).to_bits()).collect();
+            let want_bad = image.pixels.iter().filter(|t| !t.is_finite()).count();
+            for &level in lanes::Level::ALL {
+                let mut out = vec![f64::NAN; w];
+                let Some(bad) = lanes::at_level(level, || lum_row(&image, 0, &mut out)) else { continue };
+                let got: Vec<u64> = out.iter().map(|v| v.to_bits()).collect();
+                assert_eq!((got, bad), (want.clone(), want_bad), "width {w}, {level:?}");
+            }
+        }
+    }
 }
