@@ -243,25 +243,16 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule, Option<usize>), Cl
 
 /// The index of the animation `--animation` names in the spawned file, or why there is none.
 fn chosen_clip(world: &World, file: Option<usize>, args: &RenderArgs) -> Result<usize, CliError> {
-    let clips = file.and_then(|f| world.resource::<GltfAnimations>().files.get(f)).map(|a| &a.clips[..]);
     let scene = args.scene.as_ref().map_or("the default scene".to_string(), |p| p.display().to_string());
-    match clips {
-        None | Some([]) => Err(format!("--frames: {scene} has no animation").into()),
-        Some(clips) => {
-            let index = clips
-                .iter()
-                .position(|c| c.name.as_deref() == Some(&args.animation))
-                .or_else(|| args.animation.parse::<usize>().ok().filter(|&i| i < clips.len()));
-            index.ok_or_else(|| {
-                let names: Vec<String> = clips
-                    .iter()
-                    .enumerate()
-                    .map(|(i, c)| format!("{i}: {}", c.name.as_deref().unwrap_or("-")))
-                    .collect();
-                format!("--animation {}: not in {scene} (it has {})", args.animation, names.join(", ")).into()
-            })
-        }
-    }
+    let files = world.get_resource::<GltfAnimations>().map_or(&[][..], |a| &a.files);
+    let Some(animations) = file.and_then(|f| files.get(f)).filter(|a| !a.clips.is_empty()) else {
+        return Err(format!("--frames: {scene} has no animation").into());
+    };
+    animations.find(&args.animation).ok_or_else(|| {
+        let clips = animations.clips.iter().enumerate();
+        let names: Vec<String> = clips.map(|(i, c)| format!("{i}: {}", c.name.as_deref().unwrap_or("-"))).collect();
+        format!("--animation {}: not in {scene} (it has {})", args.animation, names.join(", ")).into()
+    })
 }
 
 /// Exposure (stops) that maps the log-average luminance to 18% grey.
@@ -349,7 +340,13 @@ pub(super) fn render_to_files(
         let (output, pose_seconds) = match (frame, args.frames, clip, file) {
             (Some(f), Some(range), Some(clip), Some(file)) => {
                 let start = std::time::Instant::now();
-                pose_gltf(&mut world, file, clip, (f as f64 / args.fps) as f32)?;
+                let posed = pose_gltf(&mut world, file, clip, (f as f64 / args.fps) as f32)?;
+                if k == 0 && posed.frozen > 0 {
+                    eprintln!(
+                        "warning: {} animated meshes have a singular rest transform and stay at rest",
+                        posed.frozen
+                    );
+                }
                 (frame_output(&args.output, range, f)?, start.elapsed().as_secs_f64())
             }
             _ => (args.output.clone(), 0.0),
