@@ -176,8 +176,6 @@ pub fn sample_direct_lighting(
     if let LightSelection::Restir(restir) = settings.selection {
         sampling.build_reservoirs(&restir, reservoirs, m, lane_kernel);
         report.record_count("reuse_reservoirs", true, reuse_summary(&restir, &batch, reservoirs), m as u64, "entries");
-    } else {
-        reservoirs.clear_history();
     }
     let sampling = Sampling { reservoirs: &reservoirs.next, ..sampling };
     let chunk = CHUNK * k.max(1);
@@ -220,9 +218,11 @@ pub fn sample_direct_lighting(
             }
         })
         .sum();
+    // Other selections leave the history as it is (an app may interleave a reference run).
     match settings.selection {
         LightSelection::Restir(r) if r.temporal => reservoirs.keep_history(&batch, &table, k),
-        _ => reservoirs.clear_history(),
+        LightSelection::Restir(_) => reservoirs.clear_history(),
+        _ => {}
     }
 }
 
