@@ -292,3 +292,44 @@ fn temporal_reuse_follows_moving_lights_and_forgets_removed_ones() {
     assert!(mean_error.abs() < 0.02, "mean error {mean_error} ({errors:?})");
     assert!(err_restir < err_ris, "temporal reuse {err_restir} vs RIS alone {err_ris}");
 }
+
+/// Bad input to reuse never panics and never makes a non-finite entry: previous indices out of
+/// range (and past the end of u32), an image layout whose `first` is near u64::MAX or whose
+/// width is 0, NaN positions, a batch that shrinks to empty and grows again, and samples per
+/// point changing between runs (the history no longer fits).
+#[test]
+fn bad_reuse_input_never_panics() {
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    world.insert_resource(Settings::default());
+    LightingPlugin::build(&mut world, &mut schedule);
+    world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.0, 2.0, 0.0))));
+    let selection = LightSelection::Restir(Restir { spatial: 16, radius: 1000, ..Default::default() });
+    let layouts = [
+        Some(ImageLayout { width: 0, samples_per_pixel: 0, first: 0 }),
+        Some(ImageLayout { width: 3, samples_per_pixel: 2, first: u64::MAX - 1 }),
+        Some(ImageLayout { width: u32::MAX, samples_per_pixel: u32::MAX, first: 5 }),
+        Some(ImageLayout { width: 1, samples_per_pixel: 1, first: 0 }),
+        None,
+    ];
+    for (run, layout) in layouts.into_iter().enumerate() {
+        let spp = 1 + run as u32 % 2;
+        world.insert_resource(Settings { selection, samples_per_point: spp, ..Default::default() });
+        {
+            let mut batch = world.resource_mut::<ShadingBatch>();
+            batch.clear();
+            let n = if run == 3 { 0 } else { 20 };
+            for i in 0..n {
+                let x = if i % 7 == 3 { f32::NAN } else { i as f32 * 0.1 };
+                batch.push(Vec3::new(x, 0.0, 0.0), Vec3::Y, i, run as u32);
+            }
+            batch.previous = (0..n).map(|i| [i, i + 1000, u32::MAX, u32::MAX - 1][i as usize % 4]).collect();
+            batch.layout = layout;
+        }
+        schedule.run(&mut world);
+        let lighting = world.resource::<DirectLighting>();
+        assert!(lighting.radiance.iter().all(|r| r.is_finite()), "run {run}");
+        assert!(lighting.pdf.iter().all(|p| p.is_finite() && *p >= 0.0), "run {run}");
+        assert!(run == 3 || lighting.pdf.iter().any(|&p| p > 0.0), "run {run}: some entry is lit");
+    }
+}
