@@ -80,7 +80,10 @@ fn print_row(scene: &str, name: &str, spp: u32, seconds: f64, error: f64, bvh: &
     if *bvh == 0.0 {
         *bvh = efficiency;
     }
-    println!("| {scene} | {name} | {spp} | {seconds:.4} | {error:.3e} | {efficiency:.3e} | {:.2}x |", efficiency / *bvh);
+    println!(
+        "| {scene} | {name} | {spp} | {seconds:.4} | {error:.3e} | {efficiency:.3e} | {:.2}x |",
+        efficiency / *bvh
+    );
 }
 
 fn main() {
@@ -142,7 +145,9 @@ fn main() {
 /// each method against the exact per-frame sum (every 5th frame), and the time per frame.
 fn dynamic(n_images: usize) {
     println!();
-    println!("| dynamic: 10k lights, 1% moving per frame | method | spp | seconds per frame | relMSE | efficiency | vs BVH |");
+    println!(
+        "| dynamic: 10k lights, 1% moving per frame | method | spp | seconds per frame | relMSE | efficiency | vs BVH |"
+    );
     println!("|---|---|---:|---:|---:|---:|---:|");
     let spp = 4;
     let methods = [

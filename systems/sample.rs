@@ -12,8 +12,8 @@ use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
 use crate::shading::{ColorMode, DirectLighting, LightPrecision, LightSelection, RunReport, Settings, ShadingBatch};
 
-pub use reuse::{MAX_NEIGHBOURS, Reservoirs};
 use crate::spectrum::SampledSpectrum;
+pub use reuse::{MAX_NEIGHBOURS, Reservoirs};
 
 /// Points per parallel task.
 const CHUNK: usize = 1024;
@@ -168,9 +168,11 @@ pub fn sample_direct_lighting(
     };
     // Point lights sampled one per entry (or resampled from candidates) in RGB f32 go through
     // the lane kernel.
-    let lane_kernel =
-        settings.color_mode == ColorMode::Rgb && settings.light_precision == LightPrecision::F32 && !table.points.is_empty();
-    let lanes = lane_kernel && matches!(settings.selection, LightSelection::OneSampled | LightSelection::Resampled { .. });
+    let lane_kernel = settings.color_mode == ColorMode::Rgb
+        && settings.light_precision == LightPrecision::F32
+        && !table.points.is_empty();
+    let lanes =
+        lane_kernel && matches!(settings.selection, LightSelection::OneSampled | LightSelection::Resampled { .. });
     // ReSTIR builds every entry's final reservoir first; the entries are then written from them.
     let reservoirs = &mut *reservoirs;
     if let LightSelection::Restir(restir) = settings.selection {

@@ -147,7 +147,14 @@ fn image(centre: Vec3, width: u32, spacing: f32) -> Vec<LightSampleContext> {
 
 /// Spatial reuse only (no history), `k` neighbours.
 fn spatial(k: u32, weights: ReuseWeights) -> LightSelection {
-    LightSelection::Restir(Restir { candidates: 8, spatial: k, radius: 6, temporal: false, weights, ..Default::default() })
+    LightSelection::Restir(Restir {
+        candidates: 8,
+        spatial: k,
+        radius: 6,
+        temporal: false,
+        weights,
+        ..Default::default()
+    })
 }
 
 /// Spatial reuse on a 16 x 16 image of the 10,000-light scene: the unbiased (balance-heuristic)
@@ -275,7 +282,17 @@ fn temporal_reuse_follows_moving_lights_and_forgets_removed_ones() {
         }
         // Every other entry found its history; the reservoirs that held the removed light lost theirs.
         let hits = world.resource::<kelvin::systems::Reservoirs>().temporal_hits;
-        assert_eq!(hits, if frame == 105 { 256 - held } else if frame > 0 { 256 } else { 0 }, "frame {frame}");
+        assert_eq!(
+            hits,
+            if frame == 105 {
+                256 - held
+            } else if frame > 0 {
+                256
+            } else {
+                0
+            },
+            "frame {frame}"
+        );
         if frame == 1 {
             let report = format!("{:?}", world.resource::<kelvin::shading::RunReport>());
             assert!(report.contains("temporal: 256 entries reused history (M capped at 20x4)"), "{report}");

@@ -197,7 +197,9 @@ impl Sampling<'_> {
             && let Some((ls, _, flags)) = self.evaluate_at(i, &ctx, (light, 1.0), prev.u)
         {
             let t = target(&ctx, &ls);
-            let r = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream).at_dimension(4 * m0 as u32).next_f32();
+            let r = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream)
+                .at_dimension(4 * m0 as u32)
+                .next_f32();
             c.offer_weighted(Kept { light, u: prev.u, ls, flags, source: 1 }, t, t * prev.w * m_prev, r);
         }
         let sources = [(i, ctx, m0), (i, prev.ctx, m_prev)];
@@ -248,7 +250,12 @@ impl Sampling<'_> {
 
     /// W of the combined reservoir `c` at the point of `sources[0]`, the sources being the
     /// combined reservoirs' (batch point, point, M) in offer order (see the module docs).
-    fn combined_weight(&self, c: &Reservoir, sources: &[(usize, LightSampleContext, f32)], weights: ReuseWeights) -> f32 {
+    fn combined_weight(
+        &self,
+        c: &Reservoir,
+        sources: &[(usize, LightSampleContext, f32)],
+        weights: ReuseWeights,
+    ) -> f32 {
         let Some(kept) = &c.kept else { return 0.0 };
         match weights {
             ReuseWeights::Biased => c.contribution_weight(sources.iter().map(|s| s.2).sum()),
@@ -333,8 +340,11 @@ impl Reservoirs {
         past.clear();
         past.par_extend(next.par_iter().map(|s| Past {
             light: (s.w > 0.0).then(|| {
-                let primitive =
-                    if s.light.kind == LightKind::Area { table.area.items[s.light.row as usize].primitive } else { u32::MAX };
+                let primitive = if s.light.kind == LightKind::Area {
+                    table.area.items[s.light.row as usize].primitive
+                } else {
+                    u32::MAX
+                };
                 (table.owner(s.light), primitive)
             }),
             u: s.u,
