@@ -121,8 +121,11 @@ fn main() {
             ("spatial M=8 k=4", restir(8, 4, false, ReuseWeights::Unbiased)),
             ("spatial M=4 k=4 biased", restir(4, 4, false, ReuseWeights::Biased)),
             ("spatial M=4 k=8", restir(4, 8, false, ReuseWeights::Unbiased)),
-            ("temporal+spatial M=4 k=4", restir(4, 4, true, ReuseWeights::Unbiased)),
+            ("spatial M=1 k=4", restir(1, 4, false, ReuseWeights::Unbiased)),
             ("temporal M=4", restir(4, 0, true, ReuseWeights::Unbiased)),
+            ("temporal+spatial M=4 k=4", restir(4, 4, true, ReuseWeights::Unbiased)),
+            ("temporal+spatial M=1 k=4", restir(1, 4, true, ReuseWeights::Unbiased)),
+            ("temporal+spatial M=1 k=4 biased", restir(1, 4, true, ReuseWeights::Biased)),
         ];
         for (name, selection) in methods {
             // Warm-up runs build what the first one would (sampler kind, buffers) and, under
@@ -154,7 +157,9 @@ fn dynamic(n_images: usize) {
         ("light BVH", LightSelection::OneSampled),
         ("RIS M=4", LightSelection::Resampled { candidates: 4 }),
         ("temporal M=4", restir(4, 0, true, ReuseWeights::Unbiased)),
+        ("temporal M=1", restir(1, 0, true, ReuseWeights::Unbiased)),
         ("temporal+spatial M=4 k=4", restir(4, 4, true, ReuseWeights::Unbiased)),
+        ("temporal+spatial M=1 k=4", restir(1, 4, true, ReuseWeights::Unbiased)),
     ];
     let mut bvh_efficiency = 0.0;
     for (name, selection) in methods {

@@ -177,7 +177,7 @@ pub fn sample_direct_lighting(
     let reservoirs = &mut *reservoirs;
     if let LightSelection::Restir(restir) = settings.selection {
         sampling.build_reservoirs(&restir, reservoirs, m, lane_kernel);
-        report.record_count("reuse_reservoirs", true, reuse_summary(&restir, &batch, reservoirs), m as u64, "entries");
+        report.record_count("reuse_reservoirs", true, reuse::summary(&restir, &batch, reservoirs), m as u64, "entries");
     }
     let sampling = Sampling { reservoirs: &reservoirs.next, ..sampling };
     let chunk = CHUNK * k.max(1);
@@ -226,33 +226,6 @@ pub fn sample_direct_lighting(
         LightSelection::Restir(_) => reservoirs.clear_history(),
         _ => {}
     }
-}
-
-/// The run report's line on reuse: which stages ran, with M and k.
-fn reuse_summary(restir: &crate::shading::Restir, batch: &ShadingBatch, res: &Reservoirs) -> String {
-    let m = restir.candidates.max(1);
-    let weights = match restir.weights {
-        crate::shading::ReuseWeights::Unbiased => "unbiased MIS",
-        crate::shading::ReuseWeights::Biased => "biased 1/sum M",
-    };
-    let temporal = match (restir.temporal, batch.previous.is_empty()) {
-        (false, _) => "temporal off".to_string(),
-        (true, true) => "temporal: no previous points in the batch".to_string(),
-        (true, false) => format!(
-            "temporal: {} entries reused history (M capped at {}x{m})",
-            res.temporal_hits,
-            restir.history_cap.max(1)
-        ),
-    };
-    let k = (restir.spatial as usize).min(reuse::MAX_NEIGHBOURS);
-    let spatial = match (k, batch.layout) {
-        (0, _) => "spatial off".to_string(),
-        (_, None) => "spatial: the batch has no image layout".to_string(),
-        (k, Some(_)) => {
-            format!("spatial: k={k} within {} px, {} neighbours combined", restir.radius.max(1), res.neighbours)
-        }
-    };
-    format!("ReSTIR: RIS M={m}; {temporal}; {spatial}; {weights}")
 }
 
 /// A light chosen for an entry, its Sample_Li, pmf and flags.

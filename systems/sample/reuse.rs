@@ -360,3 +360,52 @@ impl Reservoirs {
         self.past_entries_per_point = k;
     }
 }
+
+/// The run report's line on reuse: which stages ran, with M and k.
+pub(super) fn summary(restir: &Restir, batch: &ShadingBatch, res: &Reservoirs) -> String {
+    let m = restir.candidates.max(1);
+    let weights = match restir.weights {
+        ReuseWeights::Unbiased => "unbiased MIS",
+        ReuseWeights::Biased => "biased 1/sum M",
+    };
+    let temporal = match (restir.temporal, batch.previous.is_empty()) {
+        (false, _) => "temporal off".to_string(),
+        (true, true) => "temporal: no previous points in the batch".to_string(),
+        (true, false) => format!(
+            "temporal: {} entries reused history (M capped at {}x{m})",
+            res.temporal_hits,
+            restir.history_cap.max(1)
+        ),
+    };
+    let k = (restir.spatial as usize).min(MAX_NEIGHBOURS);
+    let spatial = match (k, batch.layout) {
+        (0, _) => "spatial off".to_string(),
+        (_, None) => "spatial: the batch has no image layout".to_string(),
+        (k, Some(_)) => {
+            format!("spatial: k={k} within {} px, {} neighbours combined", restir.radius.max(1), res.neighbours)
+        }
+    };
+    format!("ReSTIR: RIS M={m}; {temporal}; {spatial}; {weights}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A renderer's batch: slots are samples of pixels row-major, the batch starting mid-image.
+    /// Neighbours keep the sample index, stay in the image's row, and in the batch.
+    #[test]
+    fn neighbours_are_the_same_sample_of_nearby_pixels_in_the_batch() {
+        // Width 5, 3 samples per pixel, first slot 7 (pixel 2, sample 1), 16 slots.
+        let layout = ImageLayout { width: 5, samples_per_pixel: 3, first: 7 };
+        assert_eq!(neighbour(&layout, 16, 0, 1, 0), Some(3), "pixel 3, sample 1 = slot 10");
+        assert_eq!(neighbour(&layout, 16, 0, 2, 0), Some(6));
+        assert_eq!(neighbour(&layout, 16, 0, 3, 0), None, "past the row's end");
+        assert_eq!(neighbour(&layout, 16, 0, -1, 0), None, "before the batch");
+        assert_eq!(neighbour(&layout, 16, 0, 0, 1), None, "pixel 7 = slot 22, past the batch");
+        assert_eq!(neighbour(&layout, 32, 0, 0, 1), Some(15));
+        assert_eq!(neighbour(&layout, 32, 0, 0, -1), None, "above the image");
+        let huge = ImageLayout { width: u32::MAX, samples_per_pixel: u32::MAX, first: u64::MAX };
+        assert_eq!(neighbour(&huge, 4, 3, 1, 1), None);
+    }
+}
