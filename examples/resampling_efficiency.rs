@@ -5,8 +5,8 @@
 //! 10,000 and 100,000 point and spot lights, and the panel room lit by 10,082 emissive triangles.
 //! Then the dynamic case: 10,000 lights with 1% moving per frame, temporal reuse against the BVH.
 //!
-//! `cargo run --release --example resampling_efficiency [images]` (default 2 images of 16 x 16
-//! points; `scripts/resampling_efficiency.sh` runs it). The reference is `LightSelection::All`
+//! `cargo run --release --example resampling_efficiency [rows]` (an image of 32 x 16 points by
+//! default; `scripts/resampling_efficiency.sh` runs it). The reference is `LightSelection::All`
 //! (exact for the delta lights; 16 samples of every triangle for the panel).
 
 use bevy_ecs::prelude::*;
@@ -18,7 +18,7 @@ use kelvin::shading::{DirectLighting, ImageLayout, LightSelection, Restir, Reuse
 use kelvin::systems::LightingPlugin;
 
 /// Image width, points.
-const WIDTH: u32 = 16;
+const WIDTH: u32 = 32;
 
 /// Per point, sum Li cos / pdf over its entries divided by the samples per point, and the time
 /// of the schedule run that made them. The batch is `WIDTH` wide and last run's points (for
@@ -58,17 +58,16 @@ fn rel_mse(estimate: &[f64], exact: &[f64]) -> f64 {
     estimate.iter().zip(exact).map(|(e, x)| (e - x).powi(2) / (x * x + 1e-6)).sum::<f64>() / exact.len() as f64
 }
 
-/// `images` images of `WIDTH` x `WIDTH` points `spacing` m apart, stacked as one tall image,
-/// centred at `centres`.
-fn images(centres: &[LightSampleContext], spacing: f32) -> Vec<LightSampleContext> {
-    let half = (WIDTH as f32 - 1.0) / 2.0;
-    let grid = move |c: Vec3| {
-        (0..WIDTH * WIDTH).map(move |k| {
-            let (x, y) = ((k % WIDTH) as f32 - half, (k / WIDTH) as f32 - half);
-            LightSampleContext::on_surface(c + Vec3::new(x, 0.0, y) * spacing, Vec3::Y)
+/// An image of `WIDTH` x `rows` points `spacing` m apart, centred at `centre`: one contiguous
+/// surface, as a camera sees it (neighbours in the image are neighbours on the ground).
+fn image(centre: &LightSampleContext, rows: u32, spacing: f32) -> Vec<LightSampleContext> {
+    let (half_x, half_y) = ((WIDTH as f32 - 1.0) / 2.0, (rows as f32 - 1.0) / 2.0);
+    (0..WIDTH * rows)
+        .map(|k| {
+            let (x, y) = ((k % WIDTH) as f32 - half_x, (k / WIDTH) as f32 - half_y);
+            LightSampleContext::on_surface(centre.p + Vec3::new(x, 0.0, y) * spacing, Vec3::Y)
         })
-    };
-    centres.iter().flat_map(|c| grid(c.p)).collect()
+        .collect()
 }
 
 fn restir(candidates: u32, spatial: u32, temporal: bool, weights: ReuseWeights) -> LightSelection {
@@ -87,17 +86,26 @@ fn print_row(scene: &str, name: &str, spp: u32, seconds: f64, error: f64, bvh: &
 }
 
 fn main() {
-    let n_images: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(2);
-    println!("| scene | method | spp | seconds | relMSE | efficiency | vs BVH |");
-    println!("|---|---|---:|---:|---:|---:|---:|");
-    for scene in ["scaling 10k", "scaling 100k", "panel 10k triangles"] {
+    let rows: u32 = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(16);
+    println!("| scene | method | spp | seconds | mean | relMSE | efficiency | vs BVH |");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|");
+    // KELVIN_SCENES=panel (a substring) limits the run to matching scenes.
+    let only = std::env::var("KELVIN_SCENES").unwrap_or_default();
+    for scene in ["scaling 10k", "scaling 100k", "panel 10k triangles", "dynamic"] {
+        if !scene.contains(only.as_str()) {
+            continue;
+        }
+        if scene == "dynamic" {
+            dynamic(rows);
+            continue;
+        }
         let mut world = World::new();
         let mut schedule = Schedule::default();
         world.insert_resource(Settings::default());
         LightingPlugin::build(&mut world, &mut schedule);
         let points = match scene {
-            "scaling 10k" => images(&spawn_scaling_scene(&mut world, 10_000, 1).ground_points(n_images, 3), 0.25),
-            "scaling 100k" => images(&spawn_scaling_scene(&mut world, 100_000, 1).ground_points(n_images, 3), 0.25),
+            "scaling 10k" => image(&spawn_scaling_scene(&mut world, 10_000, 1).ground_points(1, 3)[0], rows, 0.25),
+            "scaling 100k" => image(&spawn_scaling_scene(&mut world, 100_000, 1).ground_points(1, 3)[0], rows, 0.25),
             _ => {
                 let panel = spawn_emissive_panel_room(&mut world, 71, 1);
                 // The panel's triangles emit instead of its stand-in spot lights.
@@ -105,7 +113,7 @@ fn main() {
                     world.despawn(*e);
                 }
                 world.entity_mut(panel.panel).insert(AreaLight::default());
-                images(&panel.floor_points(n_images, 3), 0.15)
+                image(&LightSampleContext::on_surface(Vec3::ZERO, Vec3::Y), rows, 0.25)
             }
         };
         let reference_spp = if scene.starts_with("panel") { 16 } else { 1 };
@@ -133,20 +141,20 @@ fn main() {
             for frame in 0..20 {
                 estimate(&mut world, &mut schedule, &points, (selection, spp), 1, frame);
             }
-            let (mut error, mut seconds) = (0.0, f64::INFINITY);
+            let (mut error, mut mean, mut seconds) = (0.0, 0.0, f64::INFINITY);
             for frame in 20..23 {
                 let (values, s) = estimate(&mut world, &mut schedule, &points, (selection, spp), 1, frame);
                 (error, seconds) = (error + rel_mse(&values, &exact) / 3.0, seconds.min(s));
+                mean += ratio(&values, &exact) / 3.0;
             }
-            print_row(scene, name, spp, seconds, error, &mut bvh_efficiency);
+            print_row(scene, name, (spp, seconds), (error, mean), &mut bvh_efficiency);
         }
     }
-    dynamic(n_images);
 }
 
 /// 10,000 lights, 1% of them moving each frame; per frame a few samples per point. The error of
 /// each method against the exact per-frame sum (every 5th frame), and the time per frame.
-fn dynamic(n_images: usize) {
+fn dynamic(rows: u32) {
     println!();
     println!(
         "| dynamic: 10k lights, 1% moving per frame | method | spp | seconds per frame | relMSE | efficiency | vs BVH |"
@@ -168,9 +176,9 @@ fn dynamic(n_images: usize) {
         world.insert_resource(Settings::default());
         LightingPlugin::build(&mut world, &mut schedule);
         let scene = spawn_scaling_scene(&mut world, 10_000, 1);
-        let points = images(&scene.ground_points(n_images, 3), 0.25);
+        let points = image(&scene.ground_points(1, 3)[0], rows, 0.25);
         let mut rng = kelvin::rng::SplitMix64::new(11);
-        let (mut error, mut seconds, mut measured) = (0.0, 0.0, 0);
+        let (mut error, mut mean, mut seconds, mut measured) = (0.0, 0.0, 0.0, 0);
         for frame in 0..100u32 {
             for _ in 0..scene.lights.len() / 100 {
                 let e = scene.lights[rng.below(scene.lights.len())];
@@ -183,9 +191,10 @@ fn dynamic(n_images: usize) {
             if frame >= 20 && frame % 5 == 0 {
                 let (exact, _) = estimate(&mut world, &mut schedule, &points, (LightSelection::All, 1), 99, 0);
                 (error, seconds, measured) = (error + rel_mse(&values, &exact), seconds + s, measured + 1);
+                mean += ratio(&values, &exact);
             }
         }
-        let (error, seconds) = (error / measured as f64, seconds / measured as f64);
-        print_row("10k moving", name, spp, seconds, error, &mut bvh_efficiency);
+        let n = measured as f64;
+        print_row("10k moving", name, (spp, seconds / n), (error / n, mean / n), &mut bvh_efficiency);
     }
 }
