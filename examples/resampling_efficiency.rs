@@ -74,15 +74,18 @@ fn restir(candidates: u32, spatial: u32, temporal: bool, weights: ReuseWeights) 
     LightSelection::Restir(Restir { candidates, spatial, radius: 8, temporal, weights, ..Default::default() })
 }
 
-fn print_row(scene: &str, name: &str, spp: u32, seconds: f64, error: f64, bvh: &mut f64) {
+/// One table row; `mean` is the estimate's sum over the reference's (1 when unbiased).
+fn print_row(scene: &str, name: &str, (spp, seconds): (u32, f64), (error, mean): (f64, f64), bvh: &mut f64) {
     let efficiency = 1.0 / (error * seconds);
     if *bvh == 0.0 {
         *bvh = efficiency;
     }
-    println!(
-        "| {scene} | {name} | {spp} | {seconds:.4} | {error:.3e} | {efficiency:.3e} | {:.2}x |",
-        efficiency / *bvh
-    );
+    let vs = efficiency / *bvh;
+    println!("| {scene} | {name} | {spp} | {seconds:.4} | {mean:.3} | {error:.3e} | {efficiency:.3e} | {vs:.2}x |");
+}
+
+fn ratio(estimate: &[f64], exact: &[f64]) -> f64 {
+    estimate.iter().sum::<f64>() / exact.iter().sum::<f64>()
 }
 
 fn main() {
