@@ -168,9 +168,9 @@ fn main() {
 fn dynamic(rows: u32) {
     println!();
     println!(
-        "| dynamic: 10k lights, 1% moving per frame | method | spp | seconds per frame | relMSE | efficiency | vs BVH |"
+        "| dynamic: 10k lights, 1% moving | method | spp | seconds per frame | mean | relMSE | efficiency | vs BVH |"
     );
-    println!("|---|---|---:|---:|---:|---:|---:|");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|");
     let spp = 4;
     let methods = [
         ("light BVH", LightSelection::OneSampled),
