@@ -130,8 +130,7 @@ pub fn sample_direct_lighting(
     settings: Res<Settings>,
     mut out: ResMut<DirectLighting>,
     mut rays: ResMut<ShadowRays>,
-    mut reservoirs: ResMut<Reservoirs>,
-    mut report: ResMut<RunReport>,
+    (mut reservoirs, mut report): (ResMut<Reservoirs>, ResMut<RunReport>),
 ) {
     let n = batch.len();
     let k = entries_per_point(&settings, table.len());

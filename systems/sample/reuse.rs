@@ -81,7 +81,8 @@ impl Reservoirs {
     }
     /// Forgets the history (a camera cut).
     pub fn clear_history(&mut self) {
-        (self.past.clear(), self.past_points.clear());
+        self.past.clear();
+        self.past_points.clear();
     }
 }
 
@@ -402,9 +403,9 @@ mod tests {
         assert_eq!(neighbour(&layout, 16, 0, 2, 0), Some(6));
         assert_eq!(neighbour(&layout, 16, 0, 3, 0), None, "past the row's end");
         assert_eq!(neighbour(&layout, 16, 0, -1, 0), None, "before the batch");
-        assert_eq!(neighbour(&layout, 16, 0, 0, 1), None, "pixel 7 = slot 22, past the batch");
-        assert_eq!(neighbour(&layout, 32, 0, 0, 1), Some(15));
-        assert_eq!(neighbour(&layout, 32, 0, 0, -1), None, "above the image");
+        assert_eq!(neighbour(&layout, 16, 0, 0, 1), Some(15), "pixel 7, sample 1 = slot 22");
+        assert_eq!(neighbour(&layout, 15, 0, 0, 1), None, "past a batch of 15 slots");
+        assert_eq!(neighbour(&layout, 16, 0, 0, -1), None, "above the image");
         let huge = ImageLayout { width: u32::MAX, samples_per_pixel: u32::MAX, first: u64::MAX };
         assert_eq!(neighbour(&huge, 4, 3, 1, 1), None);
     }
