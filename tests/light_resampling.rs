@@ -268,7 +268,7 @@ fn temporal_reuse_follows_moving_lights_and_forgets_removed_ones() {
             for e in (0..lighting.len()).filter(|&e| lighting.pdf[e] > 0.0) {
                 *counts.entry(table.owner(lighting.light[e])).or_insert(0) += 1;
             }
-            let (&most, &n) = counts.iter().max_by_key(|(_, n)| **n).expect("lit entries");
+            let (&most, &n) = counts.iter().max_by_key(|(e, n)| (**n, e.to_bits())).expect("lit entries");
             assert!(n >= 2, "a light several reservoirs hold");
             world.despawn(most);
             (removed, held) = (Some(most), n);
