@@ -43,6 +43,58 @@ pub enum LightSelection {
     /// ray. The entry's pdf is then the estimator's 1/W, which no BSDF sample can know: a
     /// renderer weighs such entries 1 and gives BSDF samples that find emitters weight 0.
     Resampled { candidates: u32 },
+    /// Reservoir reuse after RIS (Bitterli et al. 2020, "Spatiotemporal reservoir resampling",
+    /// ReSTIR): each entry's RIS reservoir is combined with last run's reservoir at the same
+    /// surface point (`ShadingBatch::previous`) and then with neighbours' in the batch's image
+    /// (`ShadingBatch::layout`). Entries are weighed as `Resampled` ones (pdf = 1/W).
+    Restir(Restir),
+}
+
+/// The knobs of [`LightSelection::Restir`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Restir {
+    /// RIS candidates per entry (M of the initial reservoir).
+    pub candidates: u32,
+    /// Neighbours combined per entry (k; 0: no spatial reuse). Needs `ShadingBatch::layout`.
+    pub spatial: u32,
+    /// Radius of the neighbourhood, pixels.
+    pub radius: u32,
+    /// Combine with the previous run's reservoirs (needs `ShadingBatch::previous`).
+    pub temporal: bool,
+    /// The previous reservoir's M is capped at `history_cap` x `candidates` (the paper's 20), so
+    /// stale history cannot dominate.
+    pub history_cap: u32,
+    /// How the combined reservoirs are weighed.
+    pub weights: ReuseWeights,
+}
+
+impl Default for Restir {
+    fn default() -> Self {
+        Self { candidates: 8, spatial: 4, radius: 16, temporal: true, history_cap: 20, weights: ReuseWeights::Unbiased }
+    }
+}
+
+/// MIS weights of a reservoir combination.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ReuseWeights {
+    /// Balance heuristic over the combined reservoirs' targets and M (the paper's Sec. 4.3
+    /// weight p_hat_s(y) / sum_j M_j p_hat_j(y)): unbiased, one target evaluation per source
+    /// for the chosen sample.
+    #[default]
+    Unbiased,
+    /// 1 / sum M (the paper's Algorithm 4): no extra target evaluations, biased (darker) where a
+    /// neighbour's target is zero for a sample the point's is not.
+    Biased,
+}
+
+/// The batch's points as an image, for spatial reuse: global slot `first + i` of point `i` is
+/// sample `(first + i) % samples_per_pixel` of pixel `(first + i) / samples_per_pixel`, pixels
+/// row-major `width` to a row. Neighbours are the same sample of nearby pixels in the batch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageLayout {
+    pub width: u32,
+    pub samples_per_pixel: u32,
+    pub first: u64,
 }
 
 /// Floating-point precision of the light math where kelvin has both (point and spot Sample_Li:
@@ -116,7 +168,15 @@ pub struct ShadingBatch {
     /// ray hit tells it. Shadow rays then pass through their own flat primitive (see
     /// `SceneBvh::occluded_from`), which no rounding can make shadow itself.
     pub geometry: Vec<GeometryId>,
+    /// For spatial reuse ([`LightSelection::Restir`]): where the points lie in an image.
+    pub layout: Option<ImageLayout>,
+    /// Empty, or per point its index in the previous run's batch ([`NO_PREVIOUS`] for none), for
+    /// temporal reuse: a fixed set of points passes `i`, a renderer its reprojection.
+    pub previous: Vec<u32>,
 }
+
+/// A point with no previous point (see `ShadingBatch::previous`).
+pub const NO_PREVIOUS: u32 = u32::MAX;
 
 impl ShadingBatch {
     /// Number of points.
@@ -137,6 +197,8 @@ impl ShadingBatch {
         self.sample.clear();
         self.wavelengths.clear();
         self.geometry.clear();
+        self.previous.clear();
+        self.layout = None;
     }
     /// Sizes every column but `wavelengths` (which it empties) to `n` points, `geometry` included,
     /// keeping whatever values they held (new slots of `geometry` are `GeometryId::NONE`): for a
@@ -144,6 +206,9 @@ impl ShadingBatch {
     pub fn set_len(&mut self, n: usize) {
         self.wavelengths.clear();
         self.geometry.resize(n, GeometryId::NONE);
+        if !self.previous.is_empty() {
+            self.previous.resize(n, NO_PREVIOUS);
+        }
         self.position.resize(n, Vec3::ZERO);
         self.position_error.resize(n, Vec3::ZERO);
         self.normal.resize(n, Vec3::ZERO);
@@ -176,6 +241,9 @@ impl ShadingBatch {
         self.sample.push(sample);
         if !self.geometry.is_empty() {
             self.geometry.push(GeometryId::NONE);
+        }
+        if !self.previous.is_empty() {
+            self.previous.push(NO_PREVIOUS);
         }
     }
 

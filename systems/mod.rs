@@ -26,7 +26,7 @@ use crate::shading::{DirectLighting, RunReport, SceneBounds, Settings, ShadingBa
 pub use env_tables::{EnvTables, build_env_tables, plan_env_tables};
 pub use geometry::{BvhWork, GeometryIndex, plan_bvh, update_scene_bvh};
 pub use plan::Work;
-pub use sample::{ShadowRays, ShadowTarget, sample_direct_lighting};
+pub use sample::{MAX_NEIGHBOURS, Reservoirs, ShadowRays, ShadowTarget, sample_direct_lighting};
 pub use shadows::trace_shadow_rays;
 pub use sync_lights::{
     remove_lights, sync_area_lights, sync_distant_lights, sync_goniometric_lights, sync_image_infinite_lights,
@@ -93,6 +93,7 @@ fn init_resources(world: &mut World) {
     world.init_resource::<ShadingBatch>();
     world.init_resource::<DirectLighting>();
     world.init_resource::<ShadowRays>();
+    world.init_resource::<Reservoirs>();
     world.init_resource::<RunReport>();
     world.init_resource::<Work>();
     world.init_resource::<SceneBounds>();

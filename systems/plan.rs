@@ -83,6 +83,9 @@ pub fn plan_sampling(
             crate::shading::LightSelection::Resampled { candidates } => {
                 format!(", resampled (RIS) from {} candidates", candidates.max(1))
             }
+            crate::shading::LightSelection::Restir(r) => {
+                format!(", resampled (ReSTIR) from {} candidates with reuse", r.candidates.max(1))
+            }
         };
         (true, format!("{} points x {} lights, {mode} mode{selection}", batch.len(), table.len()))
     };

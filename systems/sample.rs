@@ -11,7 +11,9 @@ use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSa
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
 use crate::shading::{ColorMode, DirectLighting, LightPrecision, LightSelection, RunReport, Settings, ShadingBatch};
+
 use crate::spectrum::SampledSpectrum;
+pub use reuse::{MAX_NEIGHBOURS, Reservoirs};
 
 /// Points per parallel task.
 const CHUNK: usize = 1024;
@@ -114,7 +116,7 @@ pub fn update_light_sampler(
 fn entries_per_point(settings: &Settings, n_lights: usize) -> usize {
     let spp = settings.samples_per_point.max(1) as usize;
     match settings.selection {
-        LightSelection::OneSampled | LightSelection::Resampled { .. } => spp,
+        LightSelection::OneSampled | LightSelection::Resampled { .. } | LightSelection::Restir(_) => spp,
         LightSelection::All => spp * n_lights,
     }
 }
@@ -128,6 +130,7 @@ pub fn sample_direct_lighting(
     settings: Res<Settings>,
     mut out: ResMut<DirectLighting>,
     mut rays: ResMut<ShadowRays>,
+    (mut reservoirs, mut report): (ResMut<Reservoirs>, ResMut<RunReport>),
 ) {
     let n = batch.len();
     let k = entries_per_point(&settings, table.len());
@@ -160,13 +163,22 @@ pub fn sample_direct_lighting(
         all_ids: &all_ids,
         k,
         spp: settings.samples_per_point.max(1),
+        reservoirs: &[],
     };
     // Point lights sampled one per entry (or resampled from candidates) in RGB f32 go through
     // the lane kernel.
-    let lanes = matches!(settings.selection, LightSelection::OneSampled | LightSelection::Resampled { .. })
-        && settings.color_mode == ColorMode::Rgb
+    let lane_kernel = settings.color_mode == ColorMode::Rgb
         && settings.light_precision == LightPrecision::F32
         && !table.points.is_empty();
+    let lanes =
+        lane_kernel && matches!(settings.selection, LightSelection::OneSampled | LightSelection::Resampled { .. });
+    // ReSTIR builds every entry's final reservoir first; the entries are then written from them.
+    let reservoirs = &mut *reservoirs;
+    if let LightSelection::Restir(restir) = settings.selection {
+        sampling.build_reservoirs(&restir, reservoirs, m, lane_kernel);
+        report.record_count("reuse_reservoirs", true, reuse::summary(&restir, &batch, reservoirs), m as u64, "entries");
+    }
+    let sampling = Sampling { reservoirs: &reservoirs.next, ..sampling };
     let chunk = CHUNK * k.max(1);
     let rays = &mut *rays;
     rays.rays = (
@@ -207,6 +219,12 @@ pub fn sample_direct_lighting(
             }
         })
         .sum();
+    // Other selections leave the history as it is (an app may interleave a reference run).
+    match settings.selection {
+        LightSelection::Restir(r) if r.temporal => reservoirs.keep_history(&batch, &table, k),
+        LightSelection::Restir(_) => reservoirs.clear_history(),
+        _ => {}
+    }
 }
 
 /// A light chosen for an entry, its Sample_Li, pmf and flags.
@@ -224,6 +242,8 @@ struct Sampling<'a> {
     k: usize,
     /// Light samples per point.
     spp: u32,
+    /// Under `LightSelection::Restir`, each entry's final reservoir (else empty).
+    reservoirs: &'a [reuse::Stored],
 }
 
 impl Sampling<'_> {
@@ -234,7 +254,7 @@ impl Sampling<'_> {
         // One entry per point is the common case; it spares a 64-bit division per entry.
         let (i, slot) = if self.k == 1 { (e, 0) } else { (e / self.k, e % self.k) };
         let s = match self.settings.selection {
-            LightSelection::OneSampled | LightSelection::Resampled { .. } => slot,
+            LightSelection::OneSampled | LightSelection::Resampled { .. } | LightSelection::Restir(_) => slot,
             LightSelection::All => slot / self.all_ids.len(),
         };
         (i, slot, self.batch.sample[i] * self.spp + s as u32)
@@ -268,6 +288,10 @@ impl Sampling<'_> {
                 let (light, sampled) = self.resampled(i, stream, &ctx, candidates);
                 return self.write(cols, e, light, sampled);
             }
+            LightSelection::Restir(_) => {
+                let (light, sampled) = self.reservoir_sample(i, first + e, &ctx);
+                return self.write(cols, e, light, sampled);
+            }
         };
         let sampled = chosen.and_then(|c| self.evaluate(i, stream, dim, &ctx, c));
         self.write(cols, e, chosen.map_or(NO_LIGHT, |(id, _)| id), sampled)
@@ -283,23 +307,33 @@ impl Sampling<'_> {
         ctx: &LightSampleContext,
         (id, pmf): (LightId, f32),
     ) -> Option<Sampled> {
-        let query = match self.settings.color_mode {
-            ColorMode::Rgb => ColorQuery::Rgb,
-            ColorMode::Spectral => ColorQuery::Spectral(&self.batch.wavelengths[i]),
-        };
-        let flags = self.table.flags(id);
-        // Lights at a point ignore u: skip drawing it (the streams are counter based, so no
-        // other number changes).
-        let u = if flags.contains(LightFlags::DELTA_POSITION) {
+        self.evaluate_at(i, ctx, (id, pmf), self.light_u(i, stream, dim, id))
+    }
+
+    /// The u of light `id`'s Sample_Li for batch point `i`: dimension `dim` of sample
+    /// `stream`'s random stream. Lights at a point ignore u: it is not drawn (the streams are
+    /// counter based, so no other number changes) and is zero.
+    #[inline]
+    fn light_u(&self, i: usize, stream: u32, dim: u32, id: LightId) -> Vec2 {
+        if self.table.flags(id).contains(LightFlags::DELTA_POSITION) {
             Vec2::ZERO
         } else {
             SampleStream::new(self.settings.seed, self.batch.pixel[i], stream).at_dimension(dim).next_2d()
+        }
+    }
+
+    /// Sample_Li of light `id` (chosen with `pmf`) at `u` from `ctx`, in batch point `i`'s colour
+    /// query (its wavelengths); None for a failed sample.
+    fn evaluate_at(&self, i: usize, ctx: &LightSampleContext, (id, pmf): (LightId, f32), u: Vec2) -> Option<Sampled> {
+        let query = match self.settings.color_mode {
+            ColorMode::Rgb => ColorQuery::Rgb,
+            ColorMode::Spectral => ColorQuery::Spectral(self.batch.wavelengths.get(i)?),
         };
         let ls = match self.settings.light_precision {
             LightPrecision::F32 => self.table.sample_li(id, ctx, u, query),
             LightPrecision::F64 => self.table.sample_li_f64(id, ctx, u, query),
         }?;
-        (ls.pdf > 0.0 && ls.radiance.is_finite()).then_some((ls, pmf, flags))
+        (ls.pdf > 0.0 && ls.radiance.is_finite()).then_some((ls, pmf, self.table.flags(id)))
     }
 
     /// Writes entry `e` (chosen light `light`; a failed sample leaves a zero entry that keeps
@@ -490,5 +524,6 @@ pub fn apply_visibility(rays: Res<ShadowRays>, mut out: ResMut<DirectLighting>) 
 }
 
 mod resampled;
+mod reuse;
 #[cfg(test)]
 mod tests;

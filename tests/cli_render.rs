@@ -188,3 +188,31 @@ fn bad_frame_requests_are_clear_errors() {
     }
     assert!(!std::path::Path::new("never_0.exr").exists());
 }
+
+/// `--light-sampler restir`: the renderer's camera batches carry their image layout, so spatial
+/// reuse runs (the report says so, with M and k), and the image's mean matches RIS's (both
+/// unbiased; the default scene, direct lighting). `--biased-reuse` runs too.
+#[test]
+fn restir_reuses_neighbours_in_a_render() {
+    let dir = std::env::temp_dir().join(format!("kelvin-cli-restir-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mean = |sampler: &[&str]| {
+        let out = dir.join(format!("{}.exr", sampler.join("")));
+        let mut args = vec!["render", "-o", out.to_str().unwrap(), "--size", "64x48", "--spp", "16", "--report"];
+        args.extend(["--integrator", "direct", "--light-sampler"]);
+        args.extend(sampler);
+        let output = kelvin(&args);
+        let stderr = String::from_utf8_lossy(&output.stderr).to_string();
+        assert!(output.status.success(), "{stderr}");
+        let (_, _, pixels) = kelvin::render::film_io::read_exr(&out).unwrap();
+        (pixels.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>() / pixels.len() as f64, stderr)
+    };
+    let (ris, _) = mean(&["ris"]);
+    let (restir, report) = mean(&["restir", "--neighbours", "4", "--radius", "8"]);
+    assert!(report.contains("ReSTIR: RIS M=8; temporal off; spatial: k=4 within 8 px"), "{report}");
+    let (biased, report) = mean(&["restir", "--biased-reuse"]);
+    assert!(report.contains("biased 1/sum M"), "{report}");
+    eprintln!("image mean: RIS {ris:.4}, ReSTIR {restir:.4}, biased {biased:.4}");
+    assert!(ris > 0.0 && (restir / ris - 1.0).abs() < 0.05, "ReSTIR {restir} vs RIS {ris}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -69,10 +69,13 @@ struct CameraSpec {
 struct SettingsSpec {
     /// rgb or spectral.
     color: Option<String>,
-    /// uniform, power, bvh or ris.
+    /// uniform, power, bvh, ris or restir.
     light_sampler: Option<String>,
-    /// Light samples per resampled one (light_sampler ris).
+    /// Light samples per resampled one (light_sampler ris or restir).
     candidates: Option<u32>,
+    /// Neighbour reservoirs per pixel and their radius, pixels (light_sampler restir).
+    neighbours: Option<u32>,
+    radius: Option<u32>,
     /// path or direct.
     integrator: Option<String>,
     max_depth: Option<u32>,
@@ -224,8 +227,13 @@ fn resolve(job: serde_json::Value, frame: Option<u32>, base: &Path) -> Result<(V
         push("--environment-at", format!("{x},{y},{z}"));
     }
     let s = spec.settings;
-    let numbers =
-        [("--candidates", s.candidates), ("--max-depth", s.max_depth), ("--roulette-depth", s.roulette_depth)];
+    let numbers = [
+        ("--candidates", s.candidates),
+        ("--neighbours", s.neighbours),
+        ("--radius", s.radius),
+        ("--max-depth", s.max_depth),
+        ("--roulette-depth", s.roulette_depth),
+    ];
     let words =
         [("--color", s.color), ("--light-sampler", s.light_sampler), ("--integrator", s.integrator), ("--sky", s.sky)];
     for (flag, value) in words.into_iter().chain(numbers.map(|(f, v)| (f, v.map(|n| n.to_string())))) {

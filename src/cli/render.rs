@@ -1,6 +1,7 @@
 //! `kelvin render [SCENE] [-o out.exr] [--spp N] [--time SECONDS] [--size WxH] [--env map [--env-intensity X]]
 //! [--sky LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY] [--sky-intensity X]] [--integrator path|direct] [--max-depth N]
-//! [--roulette-depth N] [--light-sampler uniform|power|bvh|ris [--candidates M]] [--color rgb|spectral] [--seed S]
+//! [--roulette-depth N] [--light-sampler uniform|power|bvh|ris|restir [--candidates M]
+//! [--neighbours K] [--radius PX] [--biased-reuse]] [--color rgb|spectral] [--seed S]
 //! [--threads T] [--report] [--crop X0,Y0,X1,Y1] [--frames FIRST..LAST [--fps F] [--animation NAME|INDEX]]`.
 
 use std::path::{Path, PathBuf};
@@ -14,7 +15,7 @@ use kelvin::render::path::PathDepth;
 use kelvin::render::renderer::{Integrator, RenderOptions, RenderStats, Strategy, render_with};
 use kelvin::render::tiles::Crop;
 use kelvin::scene::animate::{GltfAnimations, pose_gltf};
-use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, Settings};
+use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, Restir, ReuseWeights, Settings};
 use kelvin::systems::LightingPlugin;
 
 use super::CliError;
@@ -26,6 +27,7 @@ enum SamplerArg {
     Power,
     Bvh,
     Ris,
+    Restir,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -81,7 +83,8 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = PathDepth::DEFAULT.roulette_depth)]
     roulette_depth: u32,
     /// How a light is chosen per sample (ris: resampled importance sampling over --candidates
-    /// light-BVH samples, one shadow ray for the one it keeps).
+    /// light-BVH samples, one shadow ray for the one it keeps; restir: ris, then each pixel's
+    /// reservoir combined with --neighbours others' within --radius pixels).
     #[arg(long, value_enum, default_value = "bvh")]
     light_sampler: SamplerArg,
     /// Colour mode.
@@ -90,6 +93,15 @@ pub struct RenderArgs {
     /// Light samples drawn per resampled one (--light-sampler ris).
     #[arg(long, default_value_t = 8)]
     candidates: u32,
+    /// Neighbour reservoirs combined per pixel (--light-sampler restir).
+    #[arg(long, default_value_t = 4)]
+    neighbours: u32,
+    /// Radius of the neighbourhood, pixels (--light-sampler restir).
+    #[arg(long, default_value_t = 16)]
+    radius: u32,
+    /// Weigh combined reservoirs 1/sum M: fewer target evaluations, biased (--light-sampler restir).
+    #[arg(long)]
+    biased_reuse: bool,
     /// Sample every light at every point instead of one chosen light.
     #[arg(long)]
     all_lights: bool,
@@ -195,11 +207,20 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule, Option<usize>), Cl
         light_sampler: match args.light_sampler {
             SamplerArg::Uniform => LightSamplerKind::Uniform,
             SamplerArg::Power => LightSamplerKind::Power,
-            SamplerArg::Bvh | SamplerArg::Ris => LightSamplerKind::Bvh,
+            SamplerArg::Bvh | SamplerArg::Ris | SamplerArg::Restir => LightSamplerKind::Bvh,
         },
         selection: match args.light_sampler {
             _ if args.all_lights => LightSelection::All,
             SamplerArg::Ris => LightSelection::Resampled { candidates: args.candidates.max(1) },
+            SamplerArg::Restir => LightSelection::Restir(Restir {
+                candidates: args.candidates.max(1),
+                spatial: args.neighbours,
+                radius: args.radius.max(1),
+                // One frame: no previous run to reuse.
+                temporal: false,
+                weights: if args.biased_reuse { ReuseWeights::Biased } else { ReuseWeights::Unbiased },
+                ..Restir::default()
+            }),
             _ => LightSelection::OneSampled,
         },
         seed: args.seed,

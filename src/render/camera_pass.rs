@@ -9,7 +9,7 @@ use super::camera::CameraModel;
 use crate::geometry::{GeometryId, Hit, HitSink, RAY_CHUNK, SceneBvh};
 use crate::lanes::LANES;
 use crate::rng::SampleStream;
-use crate::shading::ShadingBatch;
+use crate::shading::{ImageLayout, ShadingBatch};
 
 /// What shading needs of a camera sample's surface besides its `ShadingBatch` slot.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -177,6 +177,10 @@ pub(super) fn trace_camera_rays(
     camera: &CameraModel,
     range: SampleRange,
 ) {
+    // Slot i is sample (first + i) % spp of region pixel (first + i) / spp: an image, for
+    // spatial reservoir reuse.
+    let layout = ImageLayout { width: range.region.width(), samples_per_pixel: range.spp, first: range.first as u64 };
+    batch.layout = Some(layout);
     for_each_chunk(batch, columns, range.len, |c, chunk| {
         crate::lanes::widest(
             #[inline(always)]
@@ -198,6 +202,8 @@ pub(super) struct FoundSurface {
 /// Writes slot `i` of `batch` (resized, wavelengths left empty) and `columns` for surface `i`
 /// of `surfaces`, as the camera pass writes a hit: the path tracer's next bounce.
 pub(super) fn write_found_surfaces(batch: &mut ShadingBatch, columns: &mut CameraColumns, surfaces: &[FoundSurface]) {
+    // The surviving paths' surfaces are no image.
+    batch.layout = None;
     for_each_chunk(batch, columns, surfaces.len(), |c, chunk| {
         let first = c * RAY_CHUNK;
         for (i, s) in surfaces[first..first + chunk.pixel.len()].iter().enumerate() {

@@ -97,7 +97,7 @@ impl<'a> ShadeContext<'a> {
             seed,
             // A resampled light sample's density is not `pmf * pdf_li` (see `LightSelection`).
             strategy: match settings.selection {
-                LightSelection::Resampled { .. } => Strategy::LightOnly,
+                LightSelection::Resampled { .. } | LightSelection::Restir(_) => Strategy::LightOnly,
                 _ => strategy,
             },
             offset: settings.shadow_offset,

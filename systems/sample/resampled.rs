@@ -10,52 +10,83 @@
 //! f(y) / p_hat(y) * (1/M) sum w stays unbiased for opaque BSDFs; a BSDF that transmits light
 //! from behind the shading normal would be biased by it.
 
+use glam::Vec2;
+
 use super::{EntryColumns, NO_LIGHT, Sampled, Sampling};
 use crate::lanes::LANES;
 use crate::light::{LiSample, LightFlags, LightId, LightKind, LightSampleContext};
 use crate::rng::SampleStream;
 
-/// Weighted reservoir sampling over one point's candidates.
+/// A reservoir's kept sample: the light, its primary-sample-space point `u` (what Sample_Li
+/// drew; zero for lights at a point), Sample_Li at the reservoir's point, and which of the
+/// combined reservoirs it came from (0 for the point's own; see `reuse`).
 #[derive(Clone, Copy)]
-struct Reservoir {
-    kept: Option<(LightId, LiSample, LightFlags)>,
-    kept_target: f32,
-    weight_sum: f32,
+pub(super) struct Kept {
+    pub(super) light: LightId,
+    pub(super) u: Vec2,
+    pub(super) ls: LiSample,
+    pub(super) flags: LightFlags,
+    pub(super) source: u32,
+}
+
+/// Weighted reservoir sampling over one point's candidates (or over whole reservoirs, see
+/// `reuse`). Samples live in primary sample space (the light and its `u`), the one domain every
+/// point shares, so a sample moves between points by re-running Sample_Li with its `u`.
+#[derive(Clone, Copy)]
+pub(super) struct Reservoir {
+    pub(super) kept: Option<Kept>,
+    /// p_hat of the kept sample at the reservoir's point, in primary sample space ([`target`]).
+    pub(super) kept_target: f32,
+    pub(super) weight_sum: f32,
 }
 
 impl Reservoir {
-    const EMPTY: Self = Self { kept: None, kept_target: 0.0, weight_sum: 0.0 };
+    pub(super) const EMPTY: Self = Self { kept: None, kept_target: 0.0, weight_sum: 0.0 };
 
-    /// Offers candidate `light`'s sample (chosen with `pmf`); `u` decides whether it is kept.
+    /// Offers candidate `light`'s sample at `u` (chosen with `pmf`); `r` decides whether it is
+    /// kept. Its weight is p_hat / (pmf pdf), the pdf of u being the pmf alone.
     #[inline(always)]
-    fn offer(&mut self, ctx: &LightSampleContext, light: LightId, (ls, pmf, flags): Sampled, u: f32) {
-        let target = target(ctx, &ls);
-        if target <= 0.0 {
-            return;
-        }
-        let w = target / (pmf * ls.pdf);
-        if !w.is_finite() {
+    fn offer(&mut self, ctx: &LightSampleContext, light: LightId, u: Vec2, (ls, pmf, flags): Sampled, r: f32) {
+        let t = target(ctx, &ls);
+        self.offer_weighted(Kept { light, u, ls, flags, source: 0 }, t, t / pmf, r);
+    }
+
+    /// Offers `kept` (target `t` here) with resampling weight `w`, kept with probability
+    /// w / (sum so far): the survivor is offer j with probability w_j / sum over all.
+    #[inline(always)]
+    pub(super) fn offer_weighted(&mut self, kept: Kept, t: f32, w: f32, r: f32) {
+        if !(t > 0.0 && w > 0.0 && w.is_finite()) {
             return;
         }
         self.weight_sum += w;
-        // Kept with probability w / (sum so far): the survivor is candidate j with probability
-        // w_j / sum over all.
-        if u * self.weight_sum < w {
-            (self.kept, self.kept_target) = (Some((light, ls, flags)), target);
+        if r * self.weight_sum < w {
+            (self.kept, self.kept_target) = (Some(kept), t);
         }
+    }
+
+    /// The unbiased contribution weight W of the kept sample, given the normalisation
+    /// `z` (M for RIS: W = sum w / (M p_hat(y))); 0 for an empty reservoir.
+    pub(super) fn contribution_weight(&self, z: f32) -> f32 {
+        let w = self.weight_sum / (z * self.kept_target);
+        if self.kept.is_some() && w.is_finite() && w > 0.0 { w } else { 0.0 }
     }
 
     /// The survivor of `m` candidates and its sample, whose pdf is the estimator's 1/W with pmf 1.
     fn finish(self, m: u32) -> (LightId, Option<Sampled>) {
+        let w = self.contribution_weight(m as f32);
         match self.kept {
-            None => (NO_LIGHT, None),
-            Some((light, mut ls, flags)) => {
-                // 1 / W, W = sum w / (M p_hat(y)).
-                ls.pdf = m as f32 * self.kept_target / self.weight_sum;
-                (light, Some((ls, 1.0, flags)))
-            }
+            Some(k) if w > 0.0 => (k.light, Some(entry_sample(k, w))),
+            _ => (NO_LIGHT, None),
         }
     }
+}
+
+/// The entry of a kept sample of contribution weight `w` (primary sample space): Li cos / pdf
+/// must be f(u) W = (Li cos / pdf_li) W, so its pdf is pdf_li / W, with pmf 1.
+pub(super) fn entry_sample(k: Kept, w: f32) -> Sampled {
+    let mut ls = k.ls;
+    ls.pdf /= w;
+    (ls, 1.0, k.flags)
 }
 
 impl Sampling<'_> {
@@ -70,16 +101,28 @@ impl Sampling<'_> {
         ctx: &LightSampleContext,
         candidates: u32,
     ) -> (LightId, Option<Sampled>) {
+        self.resampled_reservoir(i, stream, ctx, candidates).finish(candidates.max(1))
+    }
+
+    /// The reservoir [`Self::resampled`] finishes.
+    pub(super) fn resampled_reservoir(
+        &self,
+        i: usize,
+        stream: u32,
+        ctx: &LightSampleContext,
+        candidates: u32,
+    ) -> Reservoir {
         let m = candidates.max(1);
         let rng = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream);
         let mut reservoir = Reservoir::EMPTY;
         for j in 0..m {
             let u = rng.at_dimension(3 * j).next_f32();
             let Some(chosen) = self.sampler.sample(ctx, u) else { continue };
-            let Some(sampled) = self.evaluate(i, stream, 3 * j + 1, ctx, chosen) else { continue };
-            reservoir.offer(ctx, chosen.0, sampled, rng.at_dimension(3 * m + j).next_f32());
+            let u = self.light_u(i, stream, 3 * j + 1, chosen.0);
+            let Some(sampled) = self.evaluate_at(i, ctx, chosen, u) else { continue };
+            reservoir.offer(ctx, chosen.0, u, sampled, rng.at_dimension(3 * m + j).next_f32());
         }
-        reservoir.finish(m)
+        reservoir
     }
 
     /// [`Self::resampled`] for entries `e..e + n` of the chunk starting at global entry `first`
@@ -95,6 +138,24 @@ impl Sampling<'_> {
         cols: &mut EntryColumns,
         candidates: u32,
     ) -> usize {
+        let reservoirs = self.resampled_block_reservoirs(first, e, n, candidates);
+        let mut traced = 0;
+        for (l, reservoir) in reservoirs.iter().enumerate().take(n) {
+            let (light, sampled) = reservoir.finish(candidates.max(1));
+            traced += self.write(cols, e + l, light, sampled) as usize;
+        }
+        traced
+    }
+
+    /// The reservoirs [`Self::resampled_block`] finishes (lanes `n..` empty).
+    #[inline(always)]
+    pub(super) fn resampled_block_reservoirs(
+        &self,
+        first: usize,
+        e: usize,
+        n: usize,
+        candidates: u32,
+    ) -> [Reservoir; LANES] {
         let m = candidates.max(1);
         let block = self.block(first, e, n);
         let rng: [SampleStream; LANES] =
@@ -116,28 +177,29 @@ impl Sampling<'_> {
                     continue;
                 }
                 let chosen = (choices.light[l], choices.pmf[l]);
-                let sampled = match &lit {
+                let (sampled, u) = match &lit {
                     Some(lit) if chosen.0.kind == LightKind::Point => {
-                        lit.li_sample(l).map(|ls| (ls, chosen.1, LightKind::Point.flags()))
+                        (lit.li_sample(l).map(|ls| (ls, chosen.1, LightKind::Point.flags())), Vec2::ZERO)
                     }
-                    _ => self.evaluate(block.point[l], block.stream[l], 3 * j + 1, &ctx[l], chosen),
+                    _ => {
+                        let u = self.light_u(block.point[l], block.stream[l], 3 * j + 1, chosen.0);
+                        (self.evaluate_at(block.point[l], &ctx[l], chosen, u), u)
+                    }
                 };
                 if let Some(sampled) = sampled {
-                    reservoirs[l].offer(&ctx[l], chosen.0, sampled, rng[l].at_dimension(3 * m + j).next_f32());
+                    reservoirs[l].offer(&ctx[l], chosen.0, u, sampled, rng[l].at_dimension(3 * m + j).next_f32());
                 }
             }
         }
-        let mut traced = 0;
-        for (l, reservoir) in reservoirs.iter().enumerate().take(n) {
-            let (light, sampled) = reservoir.finish(m);
-            traced += self.write(cols, e + l, light, sampled) as usize;
-        }
-        traced
+        reservoirs
     }
 }
 
-/// The resampling target of a light sample at `ctx` (see the module docs).
-fn target(ctx: &LightSampleContext, ls: &LiSample) -> f32 {
+/// The resampling target of a light sample at `ctx` (see the module docs), in primary sample
+/// space: the unshadowed contribution over Sample_Li's pdf (the Jacobian from u to the light
+/// point), so that targets of one sample at different points are densities on the same domain.
+pub(super) fn target(ctx: &LightSampleContext, ls: &LiSample) -> f32 {
     let sum: f32 = ls.radiance.0.iter().map(|c| c.max(0.0)).sum();
-    if ctx.ns == glam::Vec3::ZERO { sum } else { sum * ctx.ns.dot(ls.wi).max(0.0) }
+    let t = if ctx.ns == glam::Vec3::ZERO { sum } else { sum * ctx.ns.dot(ls.wi).max(0.0) };
+    t / ls.pdf
 }

@@ -121,7 +121,8 @@ fn lane_path_matches_entry_by_entry() {
             world.resource::<Settings>(),
         );
         let k = samples_per_point as usize;
-        let sampling = Sampling { batch, table, sampler, settings, all_ids: &[], k, spp: samples_per_point };
+        let sampling =
+            Sampling { batch, table, sampler, settings, all_ids: &[], k, spp: samples_per_point, reservoirs: &[] };
         let m = batch.len() * k;
         let (mut radiance, mut wi, mut pdf) = (vec![SampledSpectrum::default(); m], vec![Vec3::ZERO; m], vec![0.0; m]);
         let (mut light, mut delta, mut occluded) = (vec![NO_LIGHT; m], vec![false; m], vec![true; m]);
