@@ -1,15 +1,40 @@
-//! Resampled importance sampling of lights (`LightSelection::Resampled`) through the schedule:
-//! unbiased against the exact sum over every light on the 10,000-light scaling scene, with error
-//! falling as 1/spp and below the light BVH's alone at equal samples; a target that is zero where
-//! no light reflects (a light under the floor) adds no bias.
+//! Resampled importance sampling of lights (`LightSelection::Resampled`) and reservoir reuse
+//! (`LightSelection::Restir`) through the schedule: unbiased against the exact sum over every
+//! light on the 10,000-light scaling scene, with error falling as 1/spp and below the light BVH's
+//! (and RIS's) at equal samples; targets that are zero somewhere (a light under the floor, a
+//! back-facing panel) add no bias; temporal reuse follows moving lights and forgets removed ones;
+//! bad reuse input never panics.
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 use kelvin::geometry::{Rectangle, Transform};
 use kelvin::light::{LightSampleContext, PointLight};
 use kelvin::scenes::spawn_scaling_scene;
-use kelvin::shading::{DirectLighting, ImageLayout, LightSelection, Restir, ReuseWeights, Settings, ShadingBatch};
+use kelvin::shading::{
+    DirectLighting, ImageLayout, LightSamplerKind, LightSelection, Restir, ReuseWeights, Settings, ShadingBatch,
+};
 use kelvin::systems::LightingPlugin;
+
+/// A world with the light system's schedule and `settings`.
+fn world_with(settings: Settings) -> (World, Schedule) {
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    world.insert_resource(settings);
+    LightingPlugin::build(&mut world, &mut schedule);
+    (world, schedule)
+}
+
+/// A 10 x 10 m floor at y = 0 facing up.
+fn spawn_floor(world: &mut World) {
+    let up = Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z);
+    world.spawn((Rectangle { half_size: glam::Vec2::splat(5.0) }, up));
+}
+
+/// No entry of the last run has a direction from under the floor (its target is zero there).
+fn assert_no_sample_from_below(world: &World) {
+    let lighting = world.resource::<DirectLighting>();
+    assert!(lighting.wi.iter().zip(&lighting.pdf).all(|(w, &p)| p == 0.0 || w.y > 0.0), "no sample from below");
+}
 
 /// Per point, the cosine-weighted estimate sum Li cos / pdf over its entries, averaged over its
 /// samples (irradiance, RGB summed over channels), with shadows.
@@ -76,10 +101,7 @@ fn rel_mse(estimate: &[f64], exact: &[f64]) -> f64 {
 
 #[test]
 fn resampling_is_unbiased_on_ten_thousand_lights_and_beats_the_light_bvh_at_equal_samples() {
-    let mut world = World::new();
-    let mut schedule = Schedule::default();
-    world.insert_resource(Settings::default());
-    LightingPlugin::build(&mut world, &mut schedule);
+    let (mut world, mut schedule) = world_with(Settings::default());
     let scene = spawn_scaling_scene(&mut world, 10_000, 1);
     let points = scene.ground_points(64, 3);
     // `All` gives each light's exact (shadowed) contribution: the reference per point.
@@ -113,12 +135,9 @@ fn resampling_is_unbiased_on_ten_thousand_lights_and_beats_the_light_bvh_at_equa
 /// uniform sampler draws that light as often as the one above (the light BVH would not).
 #[test]
 fn a_light_behind_the_surface_has_zero_target_and_no_bias() {
-    let mut world = World::new();
-    let mut schedule = Schedule::default();
-    world.insert_resource(Settings { light_sampler: kelvin::shading::LightSamplerKind::Uniform, ..Default::default() });
-    LightingPlugin::build(&mut world, &mut schedule);
-    let up = Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z);
-    world.spawn((Rectangle { half_size: glam::Vec2::splat(5.0) }, up));
+    let (mut world, mut schedule) =
+        world_with(Settings { light_sampler: LightSamplerKind::Uniform, ..Default::default() });
+    spawn_floor(&mut world);
     world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.5, 2.0, 0.0))));
     world.spawn((PointLight::candela(5000.0), Transform::from_translation(Vec3::new(0.0, -1.0, 0.0))));
     let points: Vec<_> =
@@ -130,8 +149,7 @@ fn a_light_behind_the_surface_has_zero_target_and_no_bias() {
     let ratio = ris.iter().sum::<f64>() / exact.iter().sum::<f64>();
     eprintln!("RIS / exact with a light under the floor: {ratio:.4}");
     assert!((ratio - 1.0).abs() < 0.03, "{ratio}");
-    let lighting = world.resource::<DirectLighting>();
-    assert!(lighting.wi.iter().zip(&lighting.pdf).all(|(w, &p)| p == 0.0 || w.y > 0.0), "no sample from below");
+    assert_no_sample_from_below(&world);
 }
 
 /// A `width` x `width` image of ground points `spacing` m apart, centred at `centre`.
@@ -162,10 +180,7 @@ fn spatial(k: u32, weights: ReuseWeights) -> LightSelection {
 /// samples beats RIS alone (the reuse brings neighbours' candidates).
 #[test]
 fn spatial_reuse_is_unbiased_on_ten_thousand_lights() {
-    let mut world = World::new();
-    let mut schedule = Schedule::default();
-    world.insert_resource(Settings::default());
-    LightingPlugin::build(&mut world, &mut schedule);
+    let (mut world, mut schedule) = world_with(Settings::default());
     let scene = spawn_scaling_scene(&mut world, 10_000, 1);
     let centre = scene.ground_points(1, 5)[0].p;
     let points = image(centre, 16, 0.25);
@@ -200,12 +215,10 @@ fn spatial_reuse_is_unbiased_on_ten_thousand_lights() {
 /// produced the sample (no bias); 1/sum M counts them all, and is darker in front of the panel.
 #[test]
 fn a_back_facing_light_gives_spatial_reuse_no_bias() {
-    let mut world = World::new();
-    let mut schedule = Schedule::default();
-    world.insert_resource(Settings { light_sampler: kelvin::shading::LightSamplerKind::Uniform, ..Default::default() });
-    LightingPlugin::build(&mut world, &mut schedule);
-    let up = Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z);
-    world.spawn((Rectangle { half_size: glam::Vec2::splat(5.0) }, up));
+    // The uniform sampler draws the light under the floor as often as any (the light BVH would not).
+    let (mut world, mut schedule) =
+        world_with(Settings { light_sampler: LightSamplerKind::Uniform, ..Default::default() });
+    spawn_floor(&mut world);
     let facing_x = Transform::from_translation(Vec3::new(0.0, 0.35, 0.0)).looking_to(Vec3::NEG_X, Vec3::Y);
     world.spawn((kelvin::light::AreaLight::default(), Rectangle { half_size: glam::Vec2::splat(0.3) }, facing_x));
     world.spawn((PointLight::candela(20.0), Transform::from_translation(Vec3::new(-0.5, 2.0, 0.0))));
@@ -225,8 +238,7 @@ fn a_back_facing_light_gives_spatial_reuse_no_bias() {
     assert!((ratio - 1.0).abs() < 0.02, "unbiased weights in front of the panel: {ratio}");
     assert!((ratio_behind - 1.0).abs() < 0.02, "unbiased weights behind the panel: {ratio_behind}");
     assert!(ratio_biased < ratio - 0.02, "the case is hard: 1/sum M is biased here ({ratio_biased} vs {ratio})");
-    let lighting = world.resource::<DirectLighting>();
-    assert!(lighting.wi.iter().zip(&lighting.pdf).all(|(w, &p)| p == 0.0 || w.y > 0.0), "no sample from below");
+    assert_no_sample_from_below(&world);
 }
 
 /// Temporal reuse on a fixed set of points (`previous[i] = i`) while 1% of 10,000 lights move
@@ -236,10 +248,7 @@ fn a_back_facing_light_gives_spatial_reuse_no_bias() {
 /// despawned, exactly the reservoirs that held it lose their history and no entry returns it.
 #[test]
 fn temporal_reuse_follows_moving_lights_and_forgets_removed_ones() {
-    let mut world = World::new();
-    let mut schedule = Schedule::default();
-    world.insert_resource(Settings::default());
-    LightingPlugin::build(&mut world, &mut schedule);
+    let (mut world, mut schedule) = world_with(Settings::default());
     let scene = spawn_scaling_scene(&mut world, 10_000, 1);
     let points = scene.ground_points(64, 3);
     let restir = LightSelection::Restir(Restir {
@@ -316,10 +325,7 @@ fn temporal_reuse_follows_moving_lights_and_forgets_removed_ones() {
 /// point changing between runs (the history no longer fits).
 #[test]
 fn bad_reuse_input_never_panics() {
-    let mut world = World::new();
-    let mut schedule = Schedule::default();
-    world.insert_resource(Settings::default());
-    LightingPlugin::build(&mut world, &mut schedule);
+    let (mut world, mut schedule) = world_with(Settings::default());
     world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.0, 2.0, 0.0))));
     let selection = LightSelection::Restir(Restir { spatial: 16, radius: 1000, ..Default::default() });
     let layouts = [

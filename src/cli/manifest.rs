@@ -204,9 +204,12 @@ fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Pat
 /// for one `frame` of a job with frames.
 fn resolve(job: serde_json::Value, frame: Option<u32>, base: &Path) -> Result<(Vec<String>, (u32, u32)), String> {
     let spec: JobSpec = serde_json::from_value(job).map_err(|e| e.to_string())?;
+    let output = match frame {
+        Some(k) => frame_path(&base.join(&spec.output), k)?,
+        None => base.join(&spec.output),
+    };
     let mut args = Vec::new();
     if let Some(k) = frame {
-        frame_path(&spec.output, k)?;
         args.extend(["--frames".to_owned(), k.to_string()]);
         if let Some(fps) = spec.fps {
             args.extend(["--fps".to_owned(), fps.to_string()]);
@@ -270,10 +273,6 @@ fn resolve(job: serde_json::Value, frame: Option<u32>, base: &Path) -> Result<(V
         }
         args.push(scene.display().to_string());
     }
-    let output = match frame {
-        Some(k) => frame_path(&base.join(&spec.output), k)?,
-        None => base.join(&spec.output),
-    };
     let parsed = parse_render_args(&args, &output)?;
     Ok((args, parsed.size()))
 }

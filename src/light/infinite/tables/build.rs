@@ -497,12 +497,16 @@ mod tests {
             let image = RgbImage { width: w, height: 1, pixels };
             let want: Vec<u64> = image.pixels.iter().map(|&t| texel_lum(t).to_bits()).collect();
             let want_bad = image.pixels.iter().filter(|t| !t.is_finite()).count();
+            let mut ran = 0;
             for &level in lanes::Level::ALL {
                 let mut out = vec![f64::NAN; w];
                 let Some(bad) = lanes::at_level(level, || lum_row(&image, 0, &mut out)) else { continue };
                 let got: Vec<u64> = out.iter().map(|v| v.to_bits()).collect();
                 assert_eq!((got, bad), (want.clone(), want_bad), "width {w}, {level:?}");
+                ran += 1;
             }
+            // At least the baseline, and the level `widest` uses.
+            assert!(ran >= 1 + usize::from(lanes::level() != lanes::Level::Baseline), "{ran} levels ran");
         }
     }
 }
