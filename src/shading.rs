@@ -50,6 +50,14 @@ pub enum LightSelection {
     Restir(Restir),
 }
 
+impl LightSelection {
+    /// Whether entries are resampled (`Resampled`, `Restir`): their pdf is an estimator's 1/W,
+    /// not a density a BSDF sample can know, so they take no MIS.
+    pub fn is_resampled(&self) -> bool {
+        matches!(self, Self::Resampled { .. } | Self::Restir(_))
+    }
+}
+
 /// The knobs of [`LightSelection::Restir`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Restir {
@@ -120,13 +128,23 @@ pub struct Settings {
     /// Seed of the counter-based random numbers.
     pub seed: u64,
     /// The caller combines light samples with BSDF samples by MIS, so image lights may sample
-    /// their MIS-compensated tables. Set false when light samples are used alone.
+    /// their MIS-compensated tables. Set false when light samples are used alone. Resampled
+    /// selections take no MIS, so under them the tables are never compensated (see
+    /// [`Settings::compensates_image_lights`]).
     pub mis: bool,
     /// How shadow rays leave the shading point (and area-light points). Defaults to the
     /// error-bound offset.
     pub shadow_offset: crate::geometry::ShadowOffset,
     /// Precision of point and spot light sampling. Defaults to f32.
     pub light_precision: LightPrecision,
+}
+
+impl Settings {
+    /// Whether image lights sample their MIS-compensated tables (density of max(0, L - mean)):
+    /// only where BSDF samples weighted by MIS cover the texels those tables skip.
+    pub fn compensates_image_lights(&self) -> bool {
+        self.mis && !self.selection.is_resampled()
+    }
 }
 
 impl Default for Settings {

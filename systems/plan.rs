@@ -34,8 +34,9 @@ pub fn begin_update(
     report.entries.clear();
     report.warnings.clear();
     *work = Work::default();
-    if table.mis_compensation != settings.mis {
-        table.mis_compensation = settings.mis;
+    let compensate = settings.compensates_image_lights();
+    if table.mis_compensation != compensate {
+        table.mis_compensation = compensate;
     }
 }
 

@@ -96,10 +96,7 @@ impl<'a> ShadeContext<'a> {
             uniform_bsdfs: &materials.uniform_bsdfs,
             seed,
             // A resampled light sample's density is not `pmf * pdf_li` (see `LightSelection`).
-            strategy: match settings.selection {
-                LightSelection::Resampled { .. } | LightSelection::Restir(_) => Strategy::LightOnly,
-                _ => strategy,
-            },
+            strategy: if settings.selection.is_resampled() { Strategy::LightOnly } else { strategy },
             offset: settings.shadow_offset,
             all_lights: settings.selection == LightSelection::All,
             escape_ids: table.escape_lights().collect(),
