@@ -145,20 +145,12 @@ fn move_lights(
     }
 }
 
-/// The light system's illuminance estimate (lx) at query point `i` with normal `n`: the mean over
-/// its samples of Y(Li) cos(theta) / pdf.
-pub fn estimated_lux(lighting: &DirectLighting, i: usize, n: Vec3, samples_per_point: u32) -> f32 {
-    let sum: f32 = lighting
-        .entries(i)
-        .filter(|&e| lighting.pdf[e] > 0.0)
-        .map(|e| {
-            let li = lighting.radiance[e].0;
-            // Luminance of photometric linear sRGB (ITU-R BT.709 Y row).
-            let y = 0.2126 * li[0] + 0.7152 * li[1] + 0.0722 * li[2];
-            y * n.dot(lighting.wi[e]).max(0.0) / lighting.pdf[e]
-        })
-        .sum();
-    sum / samples_per_point as f32
+/// The light system's illuminance estimate (lx) at query point `i` with normal `n`: the sum over
+/// its entries of Y(Li) cos(theta) / pdf (each pdf carries the samples per point).
+pub fn estimated_lux(lighting: &DirectLighting, i: usize, n: Vec3) -> f32 {
+    let li = lighting.irradiance(i, n).0;
+    // Luminance of photometric linear sRGB (ITU-R BT.709 Y row).
+    0.2126 * li[0] + 0.7152 * li[1] + 0.0722 * li[2]
 }
 
 /// The closed form (lx) at `p` with normal `n`: the sum over lights of I falloff cos(theta) / d^2,
@@ -215,7 +207,7 @@ fn main() {
         let world = app.world_mut();
         let mut line = format!("frame {frame:3}: {ms:6.2} ms");
         for &k in &probes {
-            let estimate = estimated_lux(world.resource::<DirectLighting>(), k, Vec3::Y, demo.samples_per_point);
+            let estimate = estimated_lux(world.resource::<DirectLighting>(), k, Vec3::Y);
             let exact = exact_lux(world, points[k], Vec3::Y);
             line += &format!("  | point {k}: {estimate:7.2} lx (exact {exact:7.2})");
         }

@@ -123,7 +123,8 @@ pub struct Settings {
     pub selection: LightSelection,
     /// Trace shadow rays (when there is geometry that can occlude).
     pub shadows: bool,
-    /// Light samples per point per update.
+    /// Light samples per point per update (k). Each entry's pdf carries k (see
+    /// `DirectLighting::pdf`), so summing a point's entries gives the estimate.
     pub samples_per_point: u32,
     /// Seed of the counter-based random numbers.
     pub seed: u64,
@@ -282,7 +283,11 @@ pub struct DirectLighting {
     pub radiance: Vec<SampledSpectrum>,
     /// Unit direction toward the light.
     pub wi: Vec<Vec3>,
-    /// Solid-angle pdf times the light's selection probability (delta lights: the pmf alone).
+    /// The density of the point's samples of this light together: solid-angle pdf times the
+    /// light's selection probability times `Settings::samples_per_point` = k (delta lights: the
+    /// pmf times k; under `All` the pmf is 1; resampled entries: k / W). So the sum over a
+    /// point's entries of f Li cos / pdf is its estimate (no division by k), and MIS weighs an
+    /// entry against a BSDF sample with this pdf as it stands (Veach's n_i p_i).
     pub pdf: Vec<f32>,
     /// Which light.
     pub light: Vec<LightId>,
@@ -298,7 +303,7 @@ impl DirectLighting {
         self.offsets[i] as usize..self.offsets[i + 1] as usize
     }
     /// The irradiance estimate at point `i` of normal `n`: the sum over its entries of
-    /// Li max(0, n . wi) / pdf (visibility applied), not divided by the entries' count.
+    /// Li max(0, n . wi) / pdf (visibility applied; each pdf carries the samples per point).
     pub fn irradiance(&self, i: usize, n: Vec3) -> SampledSpectrum {
         self.entries(i).filter(|&e| self.pdf[e] > 0.0).fold(SampledSpectrum::default(), |sum, e| {
             sum.add(self.radiance[e].scale(n.dot(self.wi[e]).max(0.0) / self.pdf[e]))

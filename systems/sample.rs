@@ -348,7 +348,8 @@ impl Sampling<'_> {
                 (SampledSpectrum::default(), Vec3::ZERO, 0.0, false);
             return false;
         };
-        let pdf = ls.pdf * pmf;
+        // The density of the point's `spp` samples together (see `DirectLighting::pdf`).
+        let pdf = ls.pdf * pmf * self.spp as f32;
         (cols.radiance[e], cols.wi[e], cols.pdf[e], cols.delta[e]) = (ls.radiance, ls.wi, pdf, flags.is_delta());
         if !self.wants_shadow_ray(pdf, &ls.radiance, light) {
             return false;
@@ -390,9 +391,10 @@ impl Sampling<'_> {
         let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
         let radiance = SampledSpectrum([lit.radiance[0][l], lit.radiance[1][l], lit.radiance[2][l], 0.0]);
         (cols.light[e], cols.occluded[e]) = (light, false);
-        (cols.radiance[e], cols.wi[e], cols.pdf[e]) = (radiance, v(&lit.wi), pmf);
+        let pdf = pmf * self.spp as f32;
+        (cols.radiance[e], cols.wi[e], cols.pdf[e]) = (radiance, v(&lit.wi), pdf);
         cols.delta[e] = LightKind::Point.flags().is_delta();
-        let ray = self.wants_shadow_ray(pmf, &radiance, light);
+        let ray = self.wants_shadow_ray(pdf, &radiance, light);
         cols.ray_kind[e] = if ray { ShadowTarget::Point } else { ShadowTarget::None };
         if ray {
             cols.target[e] = v(&lit.target);

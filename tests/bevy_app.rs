@@ -28,7 +28,7 @@ fn example_lux_matches_the_closed_form_every_frame() {
         assert_eq!(world.resource::<DirectLighting>().len(), demo.lights * points.len(), "frame {frame}");
         let mut now = Vec::new();
         for k in [0, 45, 99] {
-            let estimate = demo::estimated_lux(world.resource::<DirectLighting>(), k, Vec3::Y, 1);
+            let estimate = demo::estimated_lux(world.resource::<DirectLighting>(), k, Vec3::Y);
             let exact = demo::exact_lux(world, points[k], Vec3::Y);
             assert!(exact > 1.0, "frame {frame}, point {k}: only {exact} lx reaches the floor");
             let err = (estimate - exact).abs() / exact;
@@ -52,8 +52,7 @@ fn example_light_bvh_estimate_is_unbiased_over_the_grid() {
     let world = app.world_mut();
     let (mut estimate, mut exact) = (0.0f64, 0.0f64);
     for (k, &p) in points.iter().enumerate().step_by(7) {
-        estimate +=
-            f64::from(demo::estimated_lux(world.resource::<DirectLighting>(), k, Vec3::Y, demo.samples_per_point));
+        estimate += f64::from(demo::estimated_lux(world.resource::<DirectLighting>(), k, Vec3::Y));
         exact += f64::from(demo::exact_lux(world, p, Vec3::Y));
     }
     let err = (estimate - exact).abs() / exact;
@@ -77,7 +76,7 @@ fn geometry_placed_by_a_propagated_parent_transform_casts_its_shadow() {
 
     let lux = |app: &mut App| {
         app.update();
-        demo::estimated_lux(app.world().resource::<DirectLighting>(), 0, Vec3::Y, 1)
+        demo::estimated_lux(app.world().resource::<DirectLighting>(), 0, Vec3::Y)
     };
     assert!(app.world().get::<Transform>(light).is_some(), "the light got no required Transform");
     assert_eq!(lux(&mut app), 0.0, "the sphere at the parent's place should block the light");

@@ -88,9 +88,8 @@ fn irradiance_of(
     let lighting = world.resource::<DirectLighting>();
     (0..points.len())
         .map(|i| {
-            let sum: f64 = lighting.irradiance(i, points[i].n).0.iter().map(|&c| c as f64).sum();
-            // Under `All` each of the spp samples has an entry per light.
-            sum / spp as f64
+            // Each entry's pdf carries the spp samples: the sum is the estimate.
+            lighting.irradiance(i, points[i].n).0.iter().map(|&c| c as f64).sum::<f64>()
         })
         .collect()
 }

@@ -211,3 +211,56 @@ fn rectangle_area_light_matches_the_view_factor() {
     eprintln!("rectangle light: {mean:.4} +- {se:.4} cd/m^2, view factor gives {want:.4}");
     assert!((mean - want).abs() <= 3.0 * se + 2e-3 * want, "{mean} +- {se} vs {want}");
 }
+
+/// `Settings::samples_per_point` = k light samples per point, combined by MIS with the one BSDF
+/// sample: each entry's pdf carries k, so the pixel is the closed form at any k (it was k times
+/// too bright: the renderer summed k entries of the one-sample density). A point light (exact at
+/// any spp), a disk area light above (E = pi L r^2 / (h^2 + r^2)) and an image light whose
+/// rows are two levels (E = sum over rows of pi L (sin^2 theta1 - sin^2 theta0); its
+/// MIS-compensated table samples only the bright rows, so the BSDF weights must match).
+#[test]
+fn light_samples_per_point_keep_direct_light_at_the_closed_form() {
+    use kelvin::geometry::Disk;
+    use kelvin::light::{AreaLight, ImageInfiniteLight};
+    use kelvin::scene::image::RgbImage;
+    use std::f64::consts::PI;
+    let rho = 0.5f32;
+    let (height, rows) = (8usize, [40.0f32, 40.0, 2.0, 2.0, 0.0, 0.0, 0.0, 0.0]);
+    let image_e: f64 = (0..height / 2)
+        .map(|y| {
+            let (t0, t1) = (PI * y as f64 / height as f64, PI * (y + 1) as f64 / height as f64);
+            PI * rows[y] as f64 * (t1.sin().powi(2) - t0.sin().powi(2))
+        })
+        .sum();
+    let (disk_l, r, h) = (300.0f32, 0.5f64, 2.0f64);
+    let cases: [(&str, f64); 3] =
+        [("point", 100.0 / (2.0 * 2.0)), ("disk", PI * disk_l as f64 * r * r / (h * h + r * r)), ("image", image_e)];
+    for (name, e) in cases {
+        let want = rho as f64 / PI * e;
+        for k in [1, 2, 4] {
+            let (mut world, mut schedule) = floor_scene(ColorMode::Rgb, rho);
+            world.resource_mut::<Settings>().samples_per_point = k;
+            match name {
+                "point" => {
+                    world.spawn((PointLight::candela(100.0), Transform::from_translation(Vec3::new(0.0, 2.0, 0.0))));
+                }
+                "disk" => {
+                    let down = Transform::from_translation(Vec3::new(0.0, h as f32, 0.0)).looking_to(Vec3::Y, Vec3::Z);
+                    world.spawn((
+                        Disk { radius: r as f32, inner_radius: 0.0 },
+                        down,
+                        AreaLight { amount: Amount::Nits(disk_l), ..Default::default() },
+                    ));
+                }
+                _ => {
+                    let pixels = (0..height).flat_map(|y| [Vec3::splat(rows[y]); 16]).collect();
+                    let image = RgbImage { width: 16, height, pixels };
+                    world.spawn((ImageInfiniteLight::new(std::sync::Arc::new(image)), Transform::IDENTITY));
+                }
+            }
+            let (mean, se) = centre_stats(&mut world, &mut schedule, 8, 256, 3, Strategy::Mis);
+            eprintln!("{name} k={k}: {mean:.4} +- {se:.4} cd/m^2, closed form {want:.4}");
+            assert!((mean - want).abs() <= 3.0 * se + 2e-3 * want, "{name} k={k}: {mean} +- {se} vs {want}");
+        }
+    }
+}

@@ -69,6 +69,9 @@ pub(super) struct ShadeContext<'a> {
     pub(super) offset: ShadowOffset,
     /// Every light is sampled for every point (pmf 1) rather than one chosen by the sampler.
     all_lights: bool,
+    /// Light samples per point (`Settings::samples_per_point`): a BSDF sample's MIS weight is
+    /// against their density together, as the entries' pdfs are.
+    light_samples: f32,
     /// The infinite lights, which rays that hit nothing see.
     pub(super) escape_ids: Vec<LightId>,
 }
@@ -99,6 +102,7 @@ impl<'a> ShadeContext<'a> {
             strategy: if settings.selection.is_resampled() { Strategy::LightOnly } else { strategy },
             offset: settings.shadow_offset,
             all_lights: settings.selection == LightSelection::All,
+            light_samples: settings.samples_per_point.max(1) as f32,
             escape_ids: table.escape_lights().collect(),
         }
     }
@@ -211,7 +215,7 @@ impl<'a> ShadeContext<'a> {
         hit: Option<&Hit>,
         query: ColorQuery,
     ) -> SampledSpectrum {
-        let pmf = |id| if self.all_lights { 1.0 } else { self.sampler.pmf(from, id) };
+        let pmf = |id| self.light_samples * if self.all_lights { 1.0 } else { self.sampler.pmf(from, id) };
         match hit {
             Some(h) => self.emitted(h, -wi, query).map_or(SampledSpectrum::default(), |(id, le)| {
                 le.scale(self.strategy.bsdf_weight(bsdf_pdf, pmf(id) * self.table.pdf_li(id, from, wi)))

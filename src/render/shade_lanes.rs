@@ -230,4 +230,28 @@ mod tests {
             assert_eq!(bits(&lanes), bits(&one_at_a_time), "{strategy:?}");
         }
     }
+
+    /// The lane path against the closed form, not only against the one-at-a-time path: a point
+    /// light of I cd at height h over a Lambertian floor gives rho/pi I/h^2 in every pixel it
+    /// lights straight down, at k = 1, 2 and 4 light samples per point (each entry's pdf carries k).
+    #[test]
+    fn lane_shading_meets_the_closed_form_at_any_samples_per_point() {
+        let (rho, i, h) = (0.5f32, 100.0f32, 2.0f32);
+        let want = rho / std::f32::consts::PI * i / (h * h);
+        for k in [1, 2, 4] {
+            let mut world = World::new();
+            let mut schedule = Schedule::default();
+            world.insert_resource(Settings { samples_per_point: k, ..Default::default() });
+            LightingPlugin::build(&mut world, &mut schedule);
+            let up = Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z);
+            world.spawn((Rectangle { half_size: Vec2::splat(50.0) }, up, Material::lambertian(Vec3::splat(rho))));
+            world.spawn((PointLight::candela(i), Transform::from_translation(Vec3::new(0.0, h, 0.0))));
+            let cam = Transform::from_translation(Vec3::new(0.0, 1.0, 0.0)).looking_to(Vec3::NEG_Y, Vec3::Z);
+            world.spawn((Camera { yfov: 0.01 }, cam));
+            let opts = RenderOptions { integrator: Integrator::Direct, ..RenderOptions::direct(5, 5, 16) };
+            let c = render(&mut world, &mut schedule, &opts, |_| {}).0.pixel(2, 2);
+            let got = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+            assert!((got / want - 1.0).abs() < 1e-3, "k = {k}: {got} vs {want}");
+        }
+    }
 }

@@ -551,14 +551,14 @@ fn cornell_box_glb_emissive_quad_on_the_tall_box() {
     let r = Receiver::on(&hit, Vec3::Y);
     let entries = scene.entries(&r);
     assert_eq!(entries.len(), 2 * SPP as usize, "{what}: one entry per triangle and sample");
-    // Entries run sample by sample, each with one entry per light row: their sum is one estimate.
+    // Entries run sample by sample, each with one entry per light row. A pdf carries all SPP
+    // samples (`DirectLighting::pdf`): one sample's own estimate is its pair's sum times SPP.
     let mut stats = Stats::default();
     for pair in entries.chunks(2) {
-        stats.add(
-            pair.iter()
-                .map(|&(l, wi, pdf, _)| if pdf > 0.0 { l * r.n.dot(wi).max(0.0) as f64 / pdf as f64 } else { 0.0 })
-                .sum(),
-        );
+        let one_sample = |&(l, wi, pdf, _): &(f64, Vec3, f32, bool)| {
+            if pdf > 0.0 { l * r.n.dot(wi).max(0.0) as f64 / (pdf / SPP as f32) as f64 } else { 0.0 }
+        };
+        stats.add(pair.iter().map(one_sample).sum());
     }
     let expected = common::area::lambert(r.p, r.n, &quad, 100.0);
     stats.check(&format!("CornellBox.glb, {what}"), expected, 1e-4 * expected);
