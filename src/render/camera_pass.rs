@@ -110,7 +110,9 @@ fn write_slot(batch: &mut BatchChunk, i: usize, dir: Vec3, hit: Option<Hit>) {
     // Normals face the viewer.
     let flipped = h.ng.dot(dir) > 0.0;
     let flip = if flipped { -1.0 } else { 1.0 };
-    let ns = if h.ns.dot(h.ng) * flip < 0.0 { h.ng * flip } else { h.ns * flip };
+    // The shading normal goes to the geometric one's side (`ns . ng` does not change sign when
+    // both turn): one whose file disagrees with the winding is turned over, not flattened.
+    let ns = if h.ns.dot(h.ng) < 0.0 { -h.ns * flip } else { h.ns * flip };
     (batch.position[i], batch.position_error[i]) = (h.p, h.p_error);
     (batch.normal[i], batch.shading_normal[i]) = (h.ng * flip, ns);
     batch.geometry[i] = h.id;
