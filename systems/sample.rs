@@ -425,9 +425,11 @@ impl Sampling<'_> {
                 (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
             }
         }
+        // The shading normals, which the light BVH ranks clusters by (as the BSDF and RIS's target
+        // weigh light).
         let mut normal = [[0.0f32; LANES]; 3];
         for l in 0..n {
-            let v = self.batch.normal[point[l]];
+            let v = self.batch.shading_normal[point[l]];
             (normal[0][l], normal[1][l], normal[2][l]) = (v.x, v.y, v.z);
         }
         Block { point, pixel, stream, p, normal }
@@ -488,6 +490,7 @@ struct Block {
     pixel: [u32; LANES],
     stream: [u32; LANES],
     p: [[f32; LANES]; 3],
+    /// Shading normals.
     normal: [[f32; LANES]; 3],
 }
 

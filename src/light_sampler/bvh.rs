@@ -390,7 +390,9 @@ impl BvhSampler {
         if self.nodes.is_empty() { if n > 0.0 { 1.0 } else { 0.0 } } else { n / (n + 1.0) }
     }
 
-    /// A light and the probability of choosing it at `ctx`, or None when no light can reach it.
+    /// A light and the probability of choosing it at `ctx` (clusters ranked with its shading
+    /// normal, as the BSDF weighs light; two-sided, so no light that reaches the point gets pmf 0),
+    /// or None when no light can reach it.
     pub fn sample(&self, ctx: &LightSampleContext, u: f32) -> Option<(LightId, f32)> {
         let p_inf = self.infinite_probability();
         if u < p_inf {
@@ -405,12 +407,12 @@ impl BvhSampler {
         let mut pmf = 1.0 - p_inf;
         let root = &self.nodes[0];
         if let Some(id) = root.light() {
-            return (root.query.importance(ctx.p, ctx.n) > 0.0).then_some((id, pmf));
+            return (root.query.importance(ctx.p, ctx.ns) > 0.0).then_some((id, pmf));
         }
         let mut w = 0;
         loop {
             let node = &self.wide.nodes[w];
-            let (lane, p, remapped) = choose_lane(node.importance(ctx.p, ctx.n), u)?;
+            let (lane, p, remapped) = choose_lane(node.importance(ctx.p, ctx.ns), u)?;
             (pmf, u) = (pmf * p, remapped);
             match node.light(lane) {
                 Some(id) => return Some((id, pmf)),
@@ -430,12 +432,12 @@ impl BvhSampler {
         };
         let mut pmf = 1.0 - self.infinite_probability();
         if leaf == 0 {
-            return if self.nodes[0].query.importance(ctx.p, ctx.n) > 0.0 { pmf } else { 0.0 };
+            return if self.nodes[0].query.importance(ctx.p, ctx.ns) > 0.0 { pmf } else { 0.0 };
         }
         let slot = self.wide.slot_of[leaf] as usize;
         let (mut w, mut lane) = (slot / 4, slot % 4);
         loop {
-            pmf *= lane_probability(self.wide.nodes[w].importance(ctx.p, ctx.n), lane);
+            pmf *= lane_probability(self.wide.nodes[w].importance(ctx.p, ctx.ns), lane);
             match self.wide.parent_slot(w) {
                 Some(up) => (w, lane) = up,
                 None => return pmf,
@@ -455,14 +457,14 @@ impl BvhSampler {
         }
         let Some(root) = self.nodes.first() else { return };
         if let Some(id) = root.light() {
-            let reachable = root.query.importance(ctx.p, ctx.n) > 0.0;
+            let reachable = root.query.importance(ctx.p, ctx.ns) > 0.0;
             f(id, if reachable { 1.0 - p_inf } else { 0.0 });
             return;
         }
         let mut stack = vec![(0usize, 1.0 - p_inf)];
         while let Some((w, pmf)) = stack.pop() {
             let node = &self.wide.nodes[w];
-            let weights = node.importance(ctx.p, ctx.n);
+            let weights = node.importance(ctx.p, ctx.ns);
             for lane in (0..4).rev() {
                 let q = pmf * lane_probability(weights, lane);
                 match node.light(lane) {
