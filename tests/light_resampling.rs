@@ -2,8 +2,9 @@
 //! (`LightSelection::Restir`) through the schedule: unbiased against the exact sum over every
 //! light on the 10,000-light scaling scene, with error falling as 1/spp and below the light BVH's
 //! (and RIS's) at equal samples; targets that are zero somewhere (a light under the floor, a
-//! back-facing panel) add no bias; temporal reuse follows moving lights and forgets removed ones;
-//! bad reuse input never panics.
+//! back-facing panel) add no bias; temporal reuse (light_resampling/temporal.rs) follows moving
+//! lights, removed lights and moving points, alone and with spatial reuse; bad reuse input never
+//! panics.
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
@@ -14,6 +15,9 @@ use kelvin::shading::{
     DirectLighting, ImageLayout, LightSamplerKind, LightSelection, Restir, ReuseWeights, Settings, ShadingBatch,
 };
 use kelvin::systems::LightingPlugin;
+
+#[path = "light_resampling/temporal.rs"]
+mod temporal;
 
 /// A world with the light system's schedule and `settings`.
 fn world_with(settings: Settings) -> (World, Schedule) {
@@ -48,14 +52,18 @@ fn irradiance(
     irradiance_of(world, schedule, points, selection, spp, Frame::default())
 }
 
-/// How a batch sits among others: its points' image width (for spatial reuse), whether they are
-/// last run's points in the same order (temporal reuse), and the sample index (the frame).
+/// How a batch sits among others: its points' image width (for spatial reuse), each point's
+/// index in last run's batch (temporal reuse; `SAME` for the same points in the same order), and
+/// the sample index (the frame).
 #[derive(Clone, Copy, Default)]
-struct Frame {
+struct Frame<'a> {
     width: Option<u32>,
-    same_points: bool,
+    previous: Option<&'a [u32]>,
     sample: u32,
 }
+
+/// `Frame::previous` for last run's points in the same order.
+const SAME: &[u32] = &[];
 
 fn irradiance_of(
     world: &mut World,
@@ -63,7 +71,7 @@ fn irradiance_of(
     points: &[LightSampleContext],
     selection: LightSelection,
     spp: u32,
-    frame: Frame,
+    frame: Frame<'_>,
 ) -> Vec<f64> {
     let light_sampler = world.resource::<Settings>().light_sampler;
     world.insert_resource(Settings {
@@ -80,8 +88,10 @@ fn irradiance_of(
             batch.push(p.p, p.n, i as u32, frame.sample);
         }
         batch.layout = frame.width.map(|width| ImageLayout { width, samples_per_pixel: 1, first: 0 });
-        if frame.same_points {
-            batch.previous = (0..points.len() as u32).collect();
+        match frame.previous {
+            Some(SAME) => batch.previous = (0..points.len() as u32).collect(),
+            Some(previous) => batch.previous = previous.to_vec(),
+            None => {}
         }
     }
     schedule.run(world);
@@ -238,84 +248,6 @@ fn a_back_facing_light_gives_spatial_reuse_no_bias() {
     assert!((ratio_behind - 1.0).abs() < 0.02, "unbiased weights behind the panel: {ratio_behind}");
     assert!(ratio_biased < ratio - 0.02, "the case is hard: 1/sum M is biased here ({ratio_biased} vs {ratio})");
     assert_no_sample_from_below(&world);
-}
-
-/// Temporal reuse on a fixed set of points (`previous[i] = i`) while 1% of 10,000 lights move
-/// every frame, for 200 frames: the mean over frames of the error against the exact per-frame sum
-/// stays within 2% (history is re-evaluated against the moved lights; M is capped at 20x), the
-/// error is below RIS alone with the same candidates, and once the light most reservoirs chose is
-/// despawned, exactly the reservoirs that held it lose their history and no entry returns it.
-#[test]
-fn temporal_reuse_follows_moving_lights_and_forgets_removed_ones() {
-    let (mut world, mut schedule) = world_with(Settings::default());
-    let scene = spawn_scaling_scene(&mut world, 10_000, 1);
-    let points = scene.ground_points(64, 3);
-    let restir = LightSelection::Restir(Restir {
-        candidates: 4,
-        spatial: 0,
-        temporal: true,
-        history_cap: 20,
-        weights: ReuseWeights::Unbiased,
-        ..Default::default()
-    });
-    let ris = LightSelection::Resampled { candidates: 4 };
-    let mut rng = kelvin::rng::SplitMix64::new(11);
-    let (mut removed, mut held, mut errors, mut err_restir, mut err_ris) = (None, 0, Vec::new(), 0.0, 0.0);
-    for frame in 0..200u32 {
-        for _ in 0..100 {
-            let e = scene.lights[rng.below(scene.lights.len())];
-            let step = Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0));
-            if let Some(mut t) = world.get_mut::<Transform>(e) {
-                t.translation += step;
-            }
-        }
-        if frame == 105 {
-            // The light most entries chose last frame (a frame without reference runs).
-            let (table, lighting) = (world.resource::<kelvin::light::LightTable>(), world.resource::<DirectLighting>());
-            let mut counts = std::collections::HashMap::new();
-            for e in (0..lighting.len()).filter(|&e| lighting.pdf[e] > 0.0) {
-                *counts.entry(table.owner(lighting.light[e])).or_insert(0) += 1;
-            }
-            let (&most, &n) = counts.iter().max_by_key(|(e, n)| (**n, e.to_bits())).expect("lit entries");
-            assert!(n >= 2, "a light several reservoirs hold");
-            world.despawn(most);
-            (removed, held) = (Some(most), n);
-        }
-        let frame_of = Frame { same_points: true, sample: frame, ..Default::default() };
-        let estimate = irradiance_of(&mut world, &mut schedule, &points, restir, 4, frame_of);
-        if let Some(gone) = removed {
-            let (table, lighting) = (world.resource::<kelvin::light::LightTable>(), world.resource::<DirectLighting>());
-            let returned = (0..lighting.len()).any(|e| lighting.pdf[e] > 0.0 && table.owner(lighting.light[e]) == gone);
-            assert!(!returned, "frame {frame}: an entry returned the removed light");
-        }
-        // Every other entry found its history; the reservoirs that held the removed light lost theirs.
-        let hits = world.resource::<kelvin::systems::Reservoirs>().temporal_hits;
-        assert_eq!(
-            hits,
-            if frame == 105 {
-                256 - held
-            } else if frame > 0 {
-                256
-            } else {
-                0
-            },
-            "frame {frame}"
-        );
-        if frame == 1 {
-            let report = format!("{:?}", world.resource::<kelvin::shading::RunReport>());
-            assert!(report.contains("temporal: 256 entries reused history (M capped at 20x4)"), "{report}");
-        }
-        if frame % 10 == 9 {
-            let exact = irradiance(&mut world, &mut schedule, &points, LightSelection::All, 1);
-            let alone = irradiance_of(&mut world, &mut schedule, &points, ris, 4, frame_of);
-            errors.push(estimate.iter().sum::<f64>() / exact.iter().sum::<f64>() - 1.0);
-            (err_restir, err_ris) = (err_restir + rel_mse(&estimate, &exact), err_ris + rel_mse(&alone, &exact));
-        }
-    }
-    let mean_error = errors.iter().sum::<f64>() / errors.len() as f64;
-    eprintln!("temporal: mean error over frames {mean_error:+.4}; relMSE ReSTIR {err_restir:.3e} vs RIS {err_ris:.3e}");
-    assert!(mean_error.abs() < 0.02, "mean error {mean_error} ({errors:?})");
-    assert!(err_restir < err_ris, "temporal reuse {err_restir} vs RIS alone {err_ris}");
 }
 
 /// Bad input to reuse never panics and never makes a non-finite entry: previous indices out of

@@ -15,7 +15,7 @@
 //! shadow ray per neighbour, at the price that reuse does not learn occlusion: a shadowed point
 //! keeps resampling lights it cannot see. Light sources move between runs: a previous sample is
 //! re-evaluated against the current light table (its light found again by entity), and one whose
-//! light was removed is dropped with its M. The previous point's p_hat is evaluated under the
+//! light was removed keeps its M with no sample. The previous point's p_hat is evaluated under the
 //! current lights too, so a moved light biases temporal reuse slightly (as in the paper).
 
 use bevy_ecs::entity::Entity;
@@ -317,7 +317,9 @@ fn neighbour(layout: &ImageLayout, len: usize, i: usize, dx: i64, dy: i64) -> Op
 
 impl Reservoirs {
     /// The past reservoir of point `i`'s sample slot `slot`, through `batch.previous`, with its
-    /// light found in the current `table`; None without one, or when its light was removed.
+    /// light found in the current `table`; None without one. A reservoir whose light was removed
+    /// keeps its M with no sample (as Bitterli et al.): dropping exactly the reservoirs that held
+    /// it would leave the others' history over-represented, biasing the frame bright.
     fn find(&self, batch: &ShadingBatch, table: &LightTable, i: usize, slot: usize, k: usize) -> Option<Found> {
         if k != self.past_entries_per_point {
             return None;
@@ -325,13 +327,10 @@ impl Reservoirs {
         let p = *batch.previous.get(i)? as usize;
         let ctx = *self.past_points.get(p)?;
         let past = self.past.get(p.checked_mul(k)?.checked_add(slot)?)?;
-        let light = match past.light {
-            None => None,
-            Some((entity, primitive)) => Some(match primitive {
-                u32::MAX => table.rows_of(entity).first().copied().filter(|id| id.kind != LightKind::Area)?,
-                _ => table.area_light_at(entity, primitive)?,
-            }),
-        };
+        let light = past.light.and_then(|(entity, primitive)| match primitive {
+            u32::MAX => table.rows_of(entity).first().copied().filter(|id| id.kind != LightKind::Area),
+            _ => table.area_light_at(entity, primitive),
+        });
         Some(Found { light, u: past.u, w: past.w, m: past.m, ctx })
     }
 
