@@ -87,6 +87,7 @@ fn random_transform(rng: &mut SplitMix64) -> Transform {
         translation: point_in_box(rng, LO + Vec3::Y, HI),
         rotation: Quat::from_euler(EulerRot::XYZ, rng.range(0.0, tau), rng.range(0.0, tau), 0.0),
         scale: Vec3::splat(rng.range(0.3, 1.5)),
+        shear: Vec3::ZERO,
     }
 }
 

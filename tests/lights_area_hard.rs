@@ -190,6 +190,7 @@ fn transforms_place_shapes_and_mirrors_keep_the_emitting_side() {
         translation: Vec3::new(1.0, 2.0, 3.0),
         rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
         scale: Vec3::new(2.0, 3.0, 1.0),
+        shear: glam::Vec3::ZERO,
     };
     // Local +Z turned to world +Y.
     let r = l.resolve_rectangle(1.0, 1.0, &t).unwrap();

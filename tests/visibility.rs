@@ -49,6 +49,7 @@ fn random_scene<'a>(rng: &mut SplitMix64, meshes: &'a [Mesh]) -> Vec<GeometryIns
             translation: uniform_vec3(rng, -4.0, 4.0),
             rotation: random_rotation(rng),
             scale: uniform_vec3(rng, 0.5, 1.5),
+            shear: glam::Vec3::ZERO,
         };
         out.push(instance(GeometryRef::Mesh(m), t, out.len() as u32));
     }
@@ -67,7 +68,12 @@ fn random_scene<'a>(rng: &mut SplitMix64, meshes: &'a [Mesh]) -> Vec<GeometryIns
         } else {
             uniform_vec3(rng, 0.5, 2.0)
         };
-        let t = Transform { translation: uniform_vec3(rng, -6.0, 6.0), rotation: random_rotation(rng), scale };
+        let t = Transform {
+            translation: uniform_vec3(rng, -6.0, 6.0),
+            rotation: random_rotation(rng),
+            scale,
+            shear: glam::Vec3::ZERO,
+        };
         out.push(instance(GeometryRef::Shape(shape), t, out.len() as u32));
     }
     out
@@ -210,7 +216,7 @@ fn segments_ending_on_area_lights_are_unoccluded() {
     for offset in [Vec3::ZERO, Vec3::new(1e5, 2e3, -1e5)] {
         for (k, &(geometry, p, rotation, scale)) in lights.iter().enumerate() {
             let floor = Transform::from_translation(offset);
-            let light = Transform { translation: offset + p, rotation, scale };
+            let light = Transform { translation: offset + p, rotation, scale, shear: glam::Vec3::ZERO };
             let bvh =
                 SceneBvh::build(&[instance(GeometryRef::Mesh(&floor_mesh), floor, 0), instance(geometry, light, 1)]);
             let mut rng = SplitMix64::new(42 + k as u64);
@@ -310,6 +316,7 @@ fn closest_hit_reports_normals_uvs_and_ids() {
         translation: Vec3::new(0.0, 0.0, -5.0),
         rotation: Quat::from_rotation_y(0.5),
         scale: Vec3::splat(2.0),
+        shear: glam::Vec3::ZERO,
     };
     let disk_t = Transform::from_translation(Vec3::new(10.0, 0.0, 0.0)).looking_to(Vec3::X, Vec3::Y);
     let bvh = SceneBvh::build(&[

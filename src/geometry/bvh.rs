@@ -154,7 +154,11 @@ fn affine(t: &Transform) -> Affine3A {
 }
 
 pub(crate) fn mesh_transform_ok(t: &Transform) -> bool {
-    t.translation.is_finite() && t.scale.is_finite() && t.rotation.is_finite() && t.rotation.length_squared() > 0.0
+    t.translation.is_finite()
+        && t.scale.is_finite()
+        && t.shear.is_finite()
+        && t.rotation.is_finite()
+        && t.rotation.length_squared() > 0.0
 }
 
 impl SceneBvh {

@@ -45,6 +45,8 @@ pub enum GeometryError {
     AttributeLength { attribute: &'static str, len: usize, expected: usize },
     #[error("invalid {} size: {shape:?} (sizes must be finite and positive, inner radius below radius)", shape.name())]
     InvalidShape { shape: Shape },
+    #[error("a {} cannot be sheared (shear {shear}): only meshes follow a shearing transform", shape.name())]
+    ShearedShape { shape: Shape, shear: Vec3 },
     #[error("a sphere needs a uniform scale, got {scale}")]
     NonUniformSphereScale { scale: Vec3 },
     #[error("transform is not finite or not invertible: {transform:?}")]

@@ -293,6 +293,7 @@ mod tests {
             translation: Vec3::new(0.3, -0.2, 0.1),
             rotation: Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0).normalize(), 0.7),
             scale: Vec3::new(1.0, 1.5, 0.8),
+            shear: glam::Vec3::ZERO,
         };
         let instance = |geometry, transform, entity_index| GeometryInstance {
             geometry,

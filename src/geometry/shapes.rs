@@ -281,6 +281,11 @@ impl PlacedShape {
         if !shape.is_flat() && !uniform {
             return Err(GeometryError::NonUniformSphereScale { scale: transform.scale });
         }
+        // A flat shape lies at local z = 0, where only the xy shear acts.
+        let shear = if shape.is_flat() { transform.shear.x.abs() } else { transform.shear.abs().max_element() };
+        if shear > 1e-5 {
+            return Err(GeometryError::ShearedShape { shape, shear: transform.shear });
+        }
         let to_world = DAffine3::from_scale_rotation_translation(
             scale,
             transform.rotation.as_dquat().normalize(),
@@ -481,6 +486,7 @@ mod tests {
             translation: Vec3::new(1e5, -3e3, 20.0),
             rotation: Quat::from_euler(glam::EulerRot::XYZ, 0.3, 1.1, -0.4),
             scale: Vec3::new(1.5, 0.5, 1.0),
+            shear: glam::Vec3::ZERO,
         };
         for shape in
             [Shape::Disk(Disk { radius: 2.0, inner_radius: 0.5 }), Shape::Rectangle(Rectangle::from_size(Vec2::ONE))]

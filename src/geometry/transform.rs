@@ -1,10 +1,10 @@
 //! `Transform`: where an entity sits in the world (glTF's TRS, right-handed, +Y up, metres).
 
 use bevy_ecs::component::Component;
-use glam::{Affine3A, Mat3, Quat, Vec3};
+use glam::{Affine3A, DVec3, Mat3, Quat, Vec3};
 
-/// Translation, rotation and scale, applied as scale, then rotation, then translation.
-/// Defaults to the identity.
+/// Translation, rotation, scale and shear, applied as shear, then scale, then rotation, then
+/// translation: any affine map (`from_affine` keeps all of it). Defaults to the identity.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub struct Transform {
     /// Position in metres.
@@ -13,6 +13,10 @@ pub struct Transform {
     pub rotation: Quat,
     /// Per-axis scale; lights ignore it except area-light shapes.
     pub scale: Vec3,
+    /// The shear applied first, as the unit upper-triangular matrix [[1, x, y], [0, 1, z],
+    /// [0, 0, 1]]: x' = x + shear.x y + shear.y z, y' = y + shear.z z. Zero for a plain TRS
+    /// transform. Meshes follow it; lights ignore it (as scale), and analytic shapes refuse it.
+    pub shear: Vec3,
 }
 
 impl Default for Transform {
@@ -23,17 +27,52 @@ impl Default for Transform {
 
 impl Transform {
     /// No translation, rotation or scale.
-    pub const IDENTITY: Self = Self { translation: Vec3::ZERO, rotation: Quat::IDENTITY, scale: Vec3::ONE };
+    pub const IDENTITY: Self =
+        Self { translation: Vec3::ZERO, rotation: Quat::IDENTITY, scale: Vec3::ONE, shear: Vec3::ZERO };
 
     /// A pure translation.
     pub const fn from_translation(translation: Vec3) -> Self {
-        Self { translation, rotation: Quat::IDENTITY, scale: Vec3::ONE }
+        Self { translation, ..Self::IDENTITY }
     }
 
-    /// From an affine matrix (e.g. a glTF node's world matrix).
+    /// From an affine matrix (e.g. a glTF node's world matrix), exactly: its linear part as
+    /// rotation x scale x shear (a QR factorisation, Gram-Schmidt on the columns in f64), so a
+    /// rotated node with non-uniform scale keeps its shear. A mirror makes `scale.z` negative; a
+    /// singular matrix gives a zero scale and no shear along the lost axes.
     pub fn from_affine(m: Affine3A) -> Self {
-        let (scale, rotation, translation) = m.to_scale_rotation_translation();
-        Self { translation, rotation, scale }
+        let c = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis].map(|v| v.as_dvec3());
+        let unit = |v: DVec3, fallback: DVec3| if v.length() > 0.0 { v.normalize() } else { fallback };
+        let s0 = c[0].length();
+        let q0 = unit(c[0], DVec3::X);
+        let u01 = q0.dot(c[1]);
+        let r1 = c[1] - u01 * q0;
+        let s1 = r1.length();
+        let q1 = unit(r1, q0.any_orthonormal_vector());
+        let (u02, u12) = (q0.dot(c[2]), q1.dot(c[2]));
+        let r2 = c[2] - u02 * q0 - u12 * q1;
+        let mut s2 = r2.length();
+        let q2 = q0.cross(q1);
+        if q2.dot(r2) < 0.0 {
+            s2 = -s2;
+        }
+        let ratio = |u: f64, s: f64| if s != 0.0 { (u / s) as f32 } else { 0.0 };
+        Self {
+            translation: m.translation.into(),
+            rotation: Quat::from_mat3(&Mat3::from_cols(q0.as_vec3(), q1.as_vec3(), q2.as_vec3())).normalize(),
+            scale: DVec3::new(s0, s1, s2).as_vec3(),
+            shear: Vec3::new(ratio(u01, s0), ratio(u02, s0), ratio(u12, s1)),
+        }
+    }
+
+    /// The shear as a matrix (see [`Transform::shear`]).
+    fn shear_matrix(&self) -> Mat3 {
+        let h = self.shear;
+        Mat3::from_cols(Vec3::X, Vec3::new(h.x, 1.0, 0.0), Vec3::new(h.y, h.z, 1.0))
+    }
+
+    /// Whether the transform shears (beyond f32 rounding of a plain TRS matrix).
+    pub fn is_sheared(&self) -> bool {
+        self.shear.abs().max_element() > 1e-5
     }
 
     /// This transform with its local -Z axis (glTF's light and camera forward) turned to `dir`.
@@ -52,7 +91,8 @@ impl Transform {
 
     /// The affine matrix of this transform.
     pub fn to_affine(&self) -> Affine3A {
-        Affine3A::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+        let linear = Mat3::from_quat(self.rotation) * Mat3::from_diagonal(self.scale) * self.shear_matrix();
+        Affine3A::from_mat3_translation(linear, self.translation)
     }
 
     /// The local -Z axis in world space (the forward direction of spot, distant and projection
@@ -63,12 +103,20 @@ impl Transform {
 
     /// A point from local to world space.
     pub fn transform_point(&self, p: Vec3) -> Vec3 {
-        self.translation + self.rotation * (self.scale * p)
+        self.translation + self.transform_vector(p)
     }
 
     /// A direction from local to world space (scaled, not normalised).
     pub fn transform_vector(&self, v: Vec3) -> Vec3 {
-        self.rotation * (self.scale * v)
+        self.rotation * (self.scale * (self.shear_matrix() * v))
+    }
+
+    /// A surface normal from local to world space (by the inverse transpose; not normalised):
+    /// rotation (n / scale) with the shear's inverse transpose applied first.
+    pub fn transform_normal(&self, n: Vec3) -> Vec3 {
+        let h = self.shear;
+        let unsheared = Vec3::new(n.x, n.y - h.x * n.x, n.z - h.z * n.y + (h.x * h.z - h.y) * n.x);
+        self.rotation * (unsheared / self.scale)
     }
 
     /// A world-space direction in this transform's local frame, ignoring scale (for lights,

@@ -338,7 +338,7 @@ impl SceneBvh {
             let idx = mesh.triangle_indices(id.primitive as usize).map(|k| k as usize);
             if let Some(n) = mesh.normals() {
                 let tr = self.instances[instance as usize].transform;
-                normals = Some(([n[idx[0]], n[idx[1]], n[idx[2]]], tr.rotation, tr.scale));
+                normals = Some(([n[idx[0]], n[idx[1]], n[idx[2]]], tr));
             }
             uvs = mesh.uvs().map(|t| [t[idx[0]], t[idx[1]], t[idx[2]]]);
         }
@@ -347,12 +347,12 @@ impl SceneBvh {
 }
 
 /// A triangle's data that its hits share: world vertices and unit normal, the mesh's vertex
-/// normals (object space, with the instance's rotation and scale) and uvs, and its ids.
+/// normals (object space, with the instance's transform) and uvs, and its ids.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct TriangleAttributes {
     v: [Vec3; 3],
     ng: Vec3,
-    normals: Option<([Vec3; 3], glam::Quat, Vec3)>,
+    normals: Option<([Vec3; 3], crate::geometry::Transform)>,
     uvs: Option<[Vec2; 3]>,
     id: GeometryId,
     material: u32,
@@ -366,10 +366,9 @@ impl TriangleAttributes {
         let v = &self.v;
         let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
         let mut ns = self.ng;
-        if let Some((n, rotation, scale)) = self.normals {
+        if let Some((n, transform)) = self.normals {
             let local = b[0] * n[0] + b[1] * n[1] + b[2] * n[2];
-            // Normals map by the inverse transpose: rotation * (n / scale).
-            let world = (rotation * (local / scale)).normalize_or_zero();
+            let world = transform.transform_normal(local).normalize_or_zero();
             if world.is_finite() && world != Vec3::ZERO {
                 ns = world;
             }

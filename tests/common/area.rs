@@ -24,7 +24,12 @@ pub fn two_sided() -> AreaLight {
 }
 
 pub fn tilted(translation: Vec3) -> Transform {
-    Transform { translation, rotation: Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.7, 0.2), scale: Vec3::ONE }
+    Transform {
+        translation,
+        rotation: Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.7, 0.2),
+        scale: Vec3::ONE,
+        shear: glam::Vec3::ZERO,
+    }
 }
 
 pub fn sphere(l: &AreaLight) -> ResolvedArea {

@@ -202,7 +202,12 @@ mod tests {
     #[test]
     fn f32_plane_test_decides_as_the_f64_test() {
         let rotation = Quat::from_rotation_x(0.3) * Quat::from_rotation_z(0.2);
-        let transform = Transform { translation: Vec3::new(3.0, -2.0, 7.0), rotation, scale: Vec3::new(2.0, 3.0, 1.0) };
+        let transform = Transform {
+            translation: Vec3::new(3.0, -2.0, 7.0),
+            rotation,
+            scale: Vec3::new(2.0, 3.0, 1.0),
+            shear: glam::Vec3::ZERO,
+        };
         // Large, so that the rays here meet it far from its edges (where the f32 and f64
         // containment tests may differ).
         let shape = placed(Rectangle::from_size(Vec2::splat(2e4)), transform);

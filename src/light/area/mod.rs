@@ -157,11 +157,22 @@ fn bad_size(field: &'static str, value: f32) -> LightError {
 }
 
 fn check_transform(t: &Transform) -> Result<(), LightError> {
-    if t.translation.is_finite() && t.rotation.is_finite() && t.scale.is_finite() {
+    if t.translation.is_finite() && t.rotation.is_finite() && t.scale.is_finite() && t.shear.is_finite() {
         Ok(())
     } else {
         Err(LightError::Invalid { light: "AreaLight", msg: format!("transform is not finite: {t:?}") })
     }
+}
+
+/// An analytic shape's transform: finite and not shearing it (`shear` = the shear components
+/// that act on the shape; a flat one's lie at local z = 0, where only the xy shear does).
+fn check_shape_transform(t: &Transform, shape: &str, shear: f32) -> Result<(), LightError> {
+    check_transform(t)?;
+    if shear.abs() > 1e-5 {
+        let msg = format!("a {shape} cannot be sheared (shear {}): only meshes follow a shearing transform", t.shear);
+        return Err(LightError::Invalid { light: "AreaLight", msg });
+    }
+    Ok(())
 }
 
 /// True when the transform mirrors (negative determinant): glTF then reverses triangle winding.
@@ -206,7 +217,7 @@ impl AreaLight {
     /// A sphere of local `radius` (m) at the transform's translation; the radius scales by the
     /// largest scale component.
     pub fn resolve_sphere(&self, radius: f32, transform: &Transform) -> Result<ResolvedArea, LightError> {
-        check_transform(transform)?;
+        check_shape_transform(transform, "sphere", transform.shear.abs().max_element())?;
         let r = radius * transform.scale.abs().max_element();
         if !(radius > 0.0 && r > 0.0 && r.is_finite()) {
             return Err(bad_size("radius", radius));
@@ -218,7 +229,7 @@ impl AreaLight {
     /// A disk of local `radius` (m) in the local XY plane, normal +Z; the radius scales by the
     /// larger of the X and Y scales.
     pub fn resolve_disk(&self, radius: f32, transform: &Transform) -> Result<ResolvedArea, LightError> {
-        check_transform(transform)?;
+        check_shape_transform(transform, "disk", transform.shear.x)?;
         let r = radius * transform.scale.x.abs().max(transform.scale.y.abs());
         if !(radius > 0.0 && r > 0.0 && r.is_finite()) {
             return Err(bad_size("radius", radius));
@@ -236,7 +247,7 @@ impl AreaLight {
         height: f32,
         transform: &Transform,
     ) -> Result<ResolvedArea, LightError> {
-        check_transform(transform)?;
+        check_shape_transform(transform, "rectangle", transform.shear.x)?;
         if !(width > 0.0 && width.is_finite()) {
             return Err(bad_size("width", width));
         }

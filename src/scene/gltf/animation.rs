@@ -86,6 +86,17 @@ impl Keyframes {
         Ok(Self { times, values, interpolation })
     }
 
+    /// Rotation keys must be quaternions of non-zero length (the spec asks for unit ones; any
+    /// other length is normalised, but a zero one has no rotation and would pose NaN).
+    fn check_rotations(&self) -> Result<(), String> {
+        let cubic = self.interpolation == Interpolation::CubicSpline;
+        let keys = (0..self.times.len()).map(|k| if cubic { self.values[3 * k + 1] } else { self.values[k] });
+        match keys.enumerate().find(|(_, q)| q.length() < 1e-6) {
+            Some((k, q)) => Err(format!("rotation keyframe {k} is {q}, a quaternion of zero length")),
+            None => Ok(()),
+        }
+    }
+
     /// The last keyframe's time.
     pub fn end(&self) -> f32 {
         *self.times.last().expect("at least one keyframe")
@@ -272,6 +283,9 @@ fn read_channel(
         v.into_iter().map(|v| Vec3::from_array(v).extend(0.0)).collect()
     };
     let keys = Keyframes::new(times, values, interpolation).map_err(|e| format!("sampler {s}: {e}"))?;
+    if target == Target::Rotation {
+        keys.check_rotations().map_err(|e| format!("sampler {s}: {e}"))?;
+    }
     Ok(Some(Channel { node, target, keys }))
 }
 
