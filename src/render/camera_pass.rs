@@ -5,6 +5,7 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use super::bsdf::bent_shading_normal;
 use super::camera::CameraModel;
 use crate::geometry::{GeometryId, Hit, HitSink, RAY_CHUNK, SceneBvh};
 use crate::lanes::LANES;
@@ -113,6 +114,7 @@ fn write_slot(batch: &mut BatchChunk, i: usize, dir: Vec3, hit: Option<Hit>) {
     // The shading normal goes to the geometric one's side (`ns . ng` does not change sign when
     // both turn): one whose file disagrees with the winding is turned over, not flattened.
     let ns = if h.ns.dot(h.ng) < 0.0 { -h.ns * flip } else { h.ns * flip };
+    let ns = bent_shading_normal(ns, h.ng * flip, -dir);
     (batch.position[i], batch.position_error[i]) = (h.p, h.p_error);
     (batch.normal[i], batch.shading_normal[i]) = (h.ng * flip, ns);
     batch.geometry[i] = h.id;

@@ -86,6 +86,11 @@ impl Material {
         (r * r * self.specular).clamp(0.0, 1.0)
     }
 
+    /// Dielectric reflectance at grazing incidence: the specular factor (KHR_materials_specular).
+    pub fn dielectric_f90(&self) -> f32 {
+        self.specular.clamp(0.0, 1.0)
+    }
+
     /// The BSDF this material has at every point in RGB mode, apart from its frame (left as the
     /// identity), when nothing varies over the surface (no textures); None otherwise. Renderers
     /// work it out once per material and set the frame per hit.
@@ -117,6 +122,6 @@ impl Material {
                 SampledSpectrum(w.lambda.map(|l| rgb_reflectance(rgb, l as f64) as f32))
             }
         };
-        Bsdf::new(Frame::from_z(ns), base, metallic, roughness, self.dielectric_f0())
+        Bsdf::new(Frame::from_z(ns), base, metallic, roughness, self.dielectric_f0(), self.dielectric_f90())
     }
 }

@@ -6,13 +6,15 @@
 use glam::Vec2;
 use rayon::prelude::*;
 
+use super::bsdf::bent_shading_normal;
 use super::camera_pass::CameraColumns;
 use super::shade::Materials;
 use crate::geometry::{RAY_CHUNK, SceneBvh};
 use crate::shading::ShadingBatch;
 
 /// Replaces the shading normal of every slot of `batch` whose material has a normal texture.
-/// A mapped normal that would face away from the slot's geometric normal is not used.
+/// A mapped normal that would face away from the slot's geometric normal is not used; one the
+/// view would see from below is bent as the camera pass bends smooth normals.
 pub(super) fn apply_normal_maps(
     batch: &mut ShadingBatch,
     columns: &CameraColumns,
@@ -38,7 +40,7 @@ pub(super) fn apply_normal_maps(
         if let Some(mapped) = material.mapped_normal(uv, *ns * flip, dpdu, dpdv) {
             let mapped = mapped * flip;
             if mapped.dot(normal[i]) > 0.0 {
-                *ns = mapped;
+                *ns = bent_shading_normal(mapped, normal[i], -columns.dir(i));
             }
         }
     });

@@ -3,7 +3,9 @@
 #![allow(dead_code)]
 
 pub mod area;
+pub mod chi_square;
 pub mod files;
+pub mod lobe_grid;
 
 use kelvin::light::ColorQuery;
 use kelvin::spectrum::SampledSpectrum;
