@@ -90,14 +90,8 @@ fn a_normal_map_on_uvs_of_zero_area_is_read_and_leaves_the_normals_as_they_are()
                 m.normal_texture = None;
             }
         }
-        if world.query::<&kelvin::light::PointLight>().iter(&world).next().is_none() {
-            // The file brings no light of its own.
-            world.spawn((kelvin::light::UniformInfiniteLight::default(), Transform::default()));
-        }
-        if world.query::<&kelvin::light::PointLight>().iter(&world).next().is_none() {
-            // Light the file for sure, whatever lights it brings.
-            world.spawn((kelvin::light::UniformInfiniteLight::default(), Transform::default()));
-        }
+        // A uniform sky besides the file's sun, so that every side of the cube is lit.
+        world.spawn((kelvin::light::UniformInfiniteLight::default(), Transform::default()));
         images.push(render(&mut world, &mut schedule, &RenderOptions::direct(32, 24, 2), |_| {}).0.pixels());
     }
     let lit = images[0].iter().filter(|p| p.max_element() > 0.0).count();

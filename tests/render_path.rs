@@ -166,12 +166,54 @@ fn depth_one_agrees_with_the_direct_integrator_on_the_cornell_box() {
         let diff = (*d - *p).abs().max_element();
         assert!(diff <= 1e-4 * d.max_element().max(mean as f32), "pixel {i}: direct {d} path {p}");
     }
-    // And a deeper path adds the light that bounces: the box gets brighter.
-    let (mut world, mut schedule) = world_with(ColorMode::Rgb, 11);
-    kelvin::render::scene_file::spawn_gltf_file(&mut world, std::path::Path::new(file)).unwrap();
-    let (deep, _) = mean_and_error(&render_pixels(&mut world, &mut schedule, 32, 8, path(8)));
-    eprintln!("mean luminance: direct {mean:.4}, path depth 8 {deep:.4}");
-    assert!(deep > 1.2 * mean, "indirect light: {deep} vs {mean}");
+}
+
+/// A Lambertian floor meeting a Lambertian wall at a right angle, both of albedo a and "infinite",
+/// under a uniform sky of radiance L: every point of either plane sees half its cosine-weighted
+/// hemisphere as sky and half as the other plane, so radiance is uniform and each bounce adds a
+/// factor a/2: L_d = L * sum_{k=1..d} (a/2)^k, and a L / (2 - a) without a limit. The hard case is
+/// light that reaches a surface only by bouncing (the half of the wall's hemisphere facing the
+/// floor) in an open scene, at every depth, and the direct integrator as depth 1.
+#[test]
+fn a_floor_and_wall_under_a_uniform_sky_give_the_series_of_half_their_albedo() {
+    let sky = 3.0f32;
+    // Planes 2000 across, seen within 2 units of the corner: the sky beyond their edges is
+    // ~1e-3 of the cosine weight.
+    let s = 1000.0f32;
+    let floor = Mesh::new(
+        vec![Vec3::new(0.0, 0.0, -s), Vec3::new(0.0, 0.0, s), Vec3::new(s, 0.0, s), Vec3::new(s, 0.0, -s)],
+        vec![0, 1, 2, 0, 2, 3],
+    )
+    .unwrap();
+    let wall = Mesh::new(
+        vec![Vec3::new(0.0, 0.0, -s), Vec3::new(0.0, s, -s), Vec3::new(0.0, s, s), Vec3::new(0.0, 0.0, s)],
+        vec![0, 1, 2, 0, 2, 3],
+    )
+    .unwrap();
+    for (a, integrator, bounces) in [
+        (0.8f32, Integrator::Direct, Some(1)),
+        (0.8, path(1), Some(1)),
+        (0.8, path(2), Some(2)),
+        (0.5, path(4), Some(4)),
+        (0.8, path(u32::MAX), None),
+    ] {
+        let (mut world, mut schedule) = world_with(ColorMode::Rgb, 9);
+        world.spawn((UniformInfiniteLight { amount: Amount::Nits(sky), ..Default::default() }, Transform::default()));
+        for mesh in [floor.clone(), wall.clone()] {
+            world.spawn((mesh, Transform::default(), Material::lambertian(Vec3::splat(a))));
+        }
+        let eye = Vec3::new(2.0, 1.0, 0.0);
+        world.spawn((Camera { yfov: 0.6 }, Transform::from_translation(eye).looking_to(Vec3::new(-1.0, -1.0, 0.0), Vec3::Y)));
+        let pixels = render_pixels(&mut world, &mut schedule, 16, 32, integrator.clone());
+        let (got, error) = mean_and_error(&pixels);
+        let (h, l) = (a as f64 / 2.0, sky as f64);
+        let want = match bounces {
+            Some(d) => l * h * (1.0 - h.powi(d)) / (1.0 - h),
+            None => l * h / (1.0 - h),
+        };
+        eprintln!("a = {a} {integrator:?}: {got:.5} +- {error:.5}, expected {want:.5}");
+        assert!((got - want).abs() < 3.0 * error + 4e-3 * want, "a = {a} {integrator:?}: {got} vs {want} (+- {error})");
+    }
 }
 
 /// A time budget renders passes of `spp` samples until it is spent, each pass drawing the next

@@ -122,11 +122,8 @@ impl Keyframes {
         match self.interpolation {
             Interpolation::Step => value(k),
             Interpolation::Linear if target == Target::Rotation => {
-                let (a, mut b) = (Quat::from_vec4(value(k)), Quat::from_vec4(value(next)));
-                // The shorter of the two arcs between q and -q (spec Appendix C).
-                if a.dot(b) < 0.0 {
-                    b = -b;
-                }
+                let (a, b) = (Quat::from_vec4(value(k)), Quat::from_vec4(value(next)));
+                // glam's slerp takes the shorter of the arcs to b and -b, as spec Appendix C asks.
                 Vec4::from(a.normalize().slerp(b.normalize(), s))
             }
             Interpolation::Linear => value(k).lerp(value(next), s),
@@ -322,16 +319,22 @@ mod tests {
         assert_eq!(k.sample(5.0, Target::Translation).x, 2.0);
     }
 
-    /// Hard case: keys q and a quaternion near -q (the same rotation): the shorter arc is taken,
-    /// so halfway is q again, not a half turn.
+    /// Hard cases: keys whose quaternions have a negative dot product, by sign (r = -q') or by angle
+    /// (rotations 5 rad apart): the shorter arc is taken at constant angular speed, so the pose at
+    /// s is the rotation by 0.3 + s (shortest signed angle between the keys), up to sign.
     #[test]
-    fn linear_rotation_takes_the_shorter_arc() {
-        let q = Quat::from_rotation_y(0.3);
-        let r = -Quat::from_rotation_y(0.5);
-        let k = Keyframes::new(vec![0.0, 1.0], vec![Vec4::from(q), Vec4::from(r)], Interpolation::Linear).unwrap();
-        let half = Quat::from_vec4(k.sample(0.5, Target::Rotation));
-        // The same rotation up to sign (angle_between's acos is too coarse near 1 in f32).
-        assert!(half.dot(Quat::from_rotation_y(0.4)).abs() > 1.0 - 1e-6, "{half}");
+    fn linear_rotation_takes_the_shorter_arc_at_constant_speed() {
+        use std::f32::consts::TAU;
+        for (end, arc) in [(-Quat::from_rotation_y(0.5), 0.2f32), (Quat::from_rotation_y(5.3), 5.0 - TAU)] {
+            let q = Quat::from_rotation_y(0.3);
+            let k = Keyframes::new(vec![0.0, 2.0], vec![Vec4::from(q), Vec4::from(end)], Interpolation::Linear).unwrap();
+            for s in [0.0f32, 0.1, 0.25, 0.5, 0.8, 1.0] {
+                let got = Quat::from_vec4(k.sample(2.0 * s, Target::Rotation));
+                let want = Quat::from_rotation_y(0.3 + s * arc);
+                // The same rotation up to sign (angle_between's acos is too coarse near 1 in f32).
+                assert!(got.dot(want).abs() > 1.0 - 1e-6, "arc {arc} at s = {s}: {got} vs {want}");
+            }
+        }
     }
 
     #[test]
