@@ -79,7 +79,8 @@ fn a_manifest_of_good_jobs_succeeds_and_plans_as_json() {
     let manifest = write_manifest(
         &dir,
         r#"{"output": "a.exr", "size": "8x6", "spp": 1, "camera": {"environment_at": [0, 1, 0]}},
-           {"output": "b.png", "size": "5x4", "spp": 1, "settings": {"mis": false, "all_lights": true}}"#,
+           {"output": "b.png", "size": "5x4", "spp": 1, "settings": {"mis": false, "all_lights": true}},
+           {"output": "c.exr", "size": "5x4", "spp": 1, "settings": {"light_sampler": "restir", "exposure": 1.5}}"#,
     );
     let plan = kelvin(&["batch", &manifest, "--plan"]);
     assert!(plan.status.success(), "{}", text(&plan));
@@ -91,11 +92,16 @@ fn a_manifest_of_good_jobs_succeeds_and_plans_as_json() {
     assert!(args.windows(2).any(|w| w == ["--environment-at", "0,1,0"]), "{args:?}");
     let b: Vec<&str> = plan["jobs"][1]["args"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
     assert!(b.contains(&"--no-mis") && b.contains(&"--all-lights"), "{b:?}");
+    // What a driver needs: whether a job tiles, and the exposure `kelvin merge` must be given.
+    assert!(a["untileable"].is_null() && a["exposure"].is_null(), "{a}");
+    let c = &plan["jobs"][2];
+    assert!(c["untileable"].as_str().is_some_and(|why| why.contains("ReSTIR")), "{c}");
+    assert_eq!(c["exposure"].as_f64(), Some(1.5));
 
     let out = kelvin(&["batch", &manifest]);
     assert!(out.status.success(), "{}", text(&out));
     assert!(dir.join("a.exr").exists() && dir.join("b.png").exists());
-    assert!(text(&out).contains("2 jobs: 2 rendered, 0 skipped, 0 failed"));
+    assert!(text(&out).contains("3 jobs: 3 rendered, 0 skipped, 0 failed"));
 }
 
 #[test]

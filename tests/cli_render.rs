@@ -21,26 +21,46 @@ fn report_prints_summary_passes_and_run_report() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A light rejected in the render's first update (here an environment light of negative scale)
-/// is still in the report after the last batch, and the report's counts cover every batch.
+/// An emissive glTF mesh of one good and one degenerate (collinear) triangle.
+fn write_degenerate_emitter(path: &std::path::Path) {
+    use base64::Engine;
+    let positions: [[f32; 3]; 6] =
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
+    let bin: Vec<u8> = positions.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+    let uri =
+        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let json = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "scene": 0, "scenes": [{ "nodes": [0] }], "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "name": "panel", "primitives": [{ "attributes": { "POSITION": 0 }, "material": 0 }] }],
+        "materials": [{ "emissiveFactor": [1.0, 1.0, 1.0] }],
+        "accessors": [{ "bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3",
+                        "min": [0.0, 0.0, 0.0], "max": [2.0, 1.0, 0.0] }],
+        "bufferViews": [{ "buffer": 0, "byteLength": bin.len() }],
+        "buffers": [{ "byteLength": bin.len(), "uri": uri }],
+    });
+    std::fs::write(path, serde_json::to_vec(&json).unwrap()).unwrap();
+}
+
+/// A light the render's first update rejects in part (an emissive mesh's degenerate triangle) is
+/// still in the report after the last batch, and the report's counts cover every batch.
 #[test]
 fn report_covers_every_batch_of_the_render() {
     let dir = std::env::temp_dir().join(format!("kelvin-cli-render-batches-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let env = dir.join("sky.exr");
-    kelvin::render::film_io::write_exr(&env, 4, 2, &[glam::Vec3::ONE; 8]).unwrap();
+    let scene = dir.join("panel.gltf");
+    write_degenerate_emitter(&scene);
     let out = dir.join("report.png");
     // 96 x 96 x 4 = 36864 camera samples: three batches of the light system (one update each
     // with direct lighting; the path tracer adds one per bounce).
     let output = Command::new(env!("CARGO_BIN_EXE_kelvin"))
-        .args(["render", "-o", out.to_str().unwrap(), "--size", "96x96", "--spp", "4", "--report"])
-        .args(["--integrator", "direct"])
-        .args(["--env", env.to_str().unwrap(), "--env-intensity=-1"])
+        .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--size", "96x96", "--spp", "4"])
+        .args(["--report", "--integrator", "direct"])
         .output()
         .expect("kelvin runs");
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
-    assert!(stderr.contains("warning: environment light") && stderr.contains("scale = -1"), "{stderr}");
+    assert!(stderr.contains("warning: area light") && stderr.contains("1 degenerate triangles skipped"), "{stderr}");
     assert!(stderr.contains("36864 points"), "points summed over batches: {stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -166,6 +186,25 @@ fn bad_crops_are_clear_errors() {
     }
     let out = kelvin(&["render", "--size", "40x30", "--crop", "0,0,4,4", "-o", "tile.png"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("written as .exr"));
+    // Tiles that would not be regions of the full render are refused before the scene loads.
+    let tile = ["render", "--size", "40x30", "--crop", "0,0,4,4", "-o", "never-written.exr"];
+    for (extra, says) in [(&["--light-sampler", "restir"][..], "ReSTIR"), (&["--time", "1"][..], "time budget")] {
+        let out = kelvin(&[&tile[..], extra].concat());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("--crop 0,0,4,4") && err.contains(says), "{extra:?}: {err}");
+    }
+    // A crop of the whole image is the whole render, ReSTIR included.
+    let dir = std::env::temp_dir().join(format!("kelvin-cli-restir-crop-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (full, tile) = (dir.join("full.exr"), dir.join("tile.exr"));
+    let restir = ["--size", "12x9", "--spp", "2", "--light-sampler", "restir"];
+    let out = kelvin(&[&["render", "-o", full.to_str().unwrap()][..], &restir].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = kelvin(&[&["render", "-o", tile.to_str().unwrap(), "--crop", "0,0,12,9"][..], &restir].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (_, _, a) = kelvin::render::film_io::read_exr(&full).unwrap();
+    assert!(a == kelvin::render::film_io::read_exr_tile(&tile).unwrap().pixels);
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// `--frames` names what is wrong: a still scene, an animation the file lacks, several frames

@@ -10,9 +10,9 @@ use common::lobe_grid::LobeGrid;
 use glam::{Vec2, Vec3};
 use kelvin::light::ColorQuery;
 use kelvin::render::bsdf::bent_shading_normal;
-use rayon::prelude::*;
 use kelvin::render::material::Material;
 use kelvin::rng::SplitMix64;
+use rayon::prelude::*;
 
 fn materials() -> Vec<(&'static str, Material)> {
     vec![
@@ -102,7 +102,8 @@ fn sampled_weights_average_to_the_directional_albedo_integrated_on_a_grid() {
         let bsdf = material.bsdf(Vec2::ZERO, Vec3::Z, ColorQuery::Rgb);
         let wo = view(degrees);
         let grid = mirror_grid(wo, (4.0 * roughness as f64 * roughness as f64).min(1.0));
-        let albedo: f64 = grid.integrate_cells(8, Vec3::Z, 40, |wi| bsdf.f(wo, wi).0[1] as f64 * wi.z.max(0.0) as f64).iter().sum();
+        let albedo: f64 =
+            grid.integrate_cells(8, Vec3::Z, 40, |wi| bsdf.f(wo, wi).0[1] as f64 * wi.z.max(0.0) as f64).iter().sum();
         let mut rng = SplitMix64::new(3);
         let n = 200_000;
         let (mut sum, mut sum2) = (0.0f64, 0.0f64);

@@ -8,14 +8,18 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use kelvin::render::renderer::{Integrator, RenderOptions, render};
 use kelvin::render::tiles::{Crop, Tile, merge_tiles};
-use kelvin::shading::{ColorMode, Settings};
+use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, Restir, Settings};
 use kelvin::systems::LightingPlugin;
 
 /// A world with `scene` (None: the default scene) in the given colour mode.
 fn world(scene: Option<&str>, color_mode: ColorMode) -> (World, Schedule) {
+    world_with(scene, Settings { color_mode, seed: 3, ..Default::default() })
+}
+
+fn world_with(scene: Option<&str>, settings: Settings) -> (World, Schedule) {
     let mut world = World::new();
     let mut schedule = Schedule::default();
-    world.insert_resource(Settings { color_mode, seed: 3, ..Default::default() });
+    world.insert_resource(settings);
     LightingPlugin::build(&mut world, &mut schedule);
     match scene {
         Some(rel) => {
@@ -96,4 +100,59 @@ fn crops_are_clipped_to_the_image_without_panicking() {
     let outside = Crop { x0: 12, y0: 0, x1: 20, y1: 3 };
     let (w, h, tile) = pixels(None, ColorMode::Rgb, &RenderOptions { crop: Some(outside), ..opts });
     assert_eq!((w * h, tile.len()), (0, 0));
+}
+
+/// Every light sampler and selection that tiles (uniform, power, BVH, all lights, RIS) gives crops
+/// equal to the full render bit for bit, through both integrators, on a scene of many lights.
+#[test]
+fn crops_equal_the_full_render_for_every_light_sampler() {
+    let kinds = [LightSamplerKind::Uniform, LightSamplerKind::Power, LightSamplerKind::Bvh];
+    let mut cases: Vec<(LightSamplerKind, LightSelection)> =
+        kinds.iter().map(|&k| (k, LightSelection::OneSampled)).collect();
+    cases.push((LightSamplerKind::Bvh, LightSelection::All));
+    cases.push((LightSamplerKind::Bvh, LightSelection::Resampled { candidates: 4 }));
+    let crop = Crop { x0: 5, y0: 3, x1: 30, y1: 19 };
+    let scene = Some("gltf/renderling/shadow_mapping_points.glb");
+    for (light_sampler, selection) in cases {
+        for integrator in [Integrator::Direct, Integrator::default()] {
+            let settings = Settings { light_sampler, selection, seed: 11, ..Default::default() };
+            let opts = RenderOptions { width: 37, height: 23, spp: 4, integrator, ..Default::default() };
+            assert!(opts.check_tiling(&selection).is_ok());
+            let render = |opts: &RenderOptions| {
+                let (mut world, mut schedule) = world_with(scene, settings.clone());
+                render(&mut world, &mut schedule, opts, |_| {}).0.pixels()
+            };
+            let full = render(&opts);
+            let tile = render(&RenderOptions { crop: Some(crop), ..opts.clone() });
+            let expected = region_of(&full, 37, crop);
+            assert!(expected.iter().filter(|p| **p != Vec3::ZERO).count() > 100, "{light_sampler:?} {selection:?}");
+            assert!(bits(&tile) == bits(&expected), "{light_sampler:?} {selection:?} {integrator:?}: pixels differ");
+        }
+    }
+}
+
+/// Hard case: ReSTIR's spatial reuse takes neighbours from the render's own samples, so a tile is
+/// another image (measured: it differs from the full render's region); a time budget gives tiles
+/// different sample counts. Both are refused by `check_tiling` and warned about by a render; a
+/// crop of the whole image is the full render and is accepted.
+#[test]
+fn restir_and_time_budgets_refuse_to_tile() {
+    let restir = LightSelection::Restir(Restir { spatial: 4, radius: 8, temporal: false, ..Restir::default() });
+    let opts = RenderOptions { width: 37, height: 23, spp: 4, integrator: Integrator::Direct, ..Default::default() };
+    let crop = Crop { x0: 5, y0: 3, x1: 30, y1: 19 };
+    let tiled = RenderOptions { crop: Some(crop), ..opts.clone() };
+    assert!(tiled.check_tiling(&restir).is_err_and(|e| e.to_string().contains("ReSTIR")));
+    let whole = RenderOptions { crop: Some(Crop::full(37, 23)), ..opts.clone() };
+    assert!(whole.check_tiling(&restir).is_ok());
+    let timed = RenderOptions { time_budget: Some(std::time::Duration::from_millis(1)), ..tiled.clone() };
+    assert!(timed.check_tiling(&LightSelection::OneSampled).is_err_and(|e| e.to_string().contains("time budget")));
+
+    let settings = Settings { selection: restir, seed: 11, ..Default::default() };
+    let scene = Some("gltf/renderling/shadow_mapping_points.glb");
+    let (mut world, mut schedule) = world_with(scene, settings.clone());
+    let full = render(&mut world, &mut schedule, &opts, |_| {}).0.pixels();
+    let (mut world, mut schedule) = world_with(scene, settings);
+    let (film, stats) = render(&mut world, &mut schedule, &tiled, |_| {});
+    assert!(bits(&film.pixels()) != bits(&region_of(&full, 37, crop)), "the refusal has a reason");
+    assert!(stats.report.warnings.iter().any(|w| w.contains("ReSTIR")), "{:?}", stats.report.warnings);
 }

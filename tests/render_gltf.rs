@@ -173,7 +173,10 @@ fn every_real_gltf_scene_gets_the_same_light_from_one_sampled_light_as_from_all(
                 "{}: non-finite or negative pixel",
                 e.file
             );
-            eprintln!("{}: {} meshes, {} triangles, {selection:?} {:.3} s", e.file, report.meshes, report.triangles, stats.seconds);
+            eprintln!(
+                "{}: {} meshes, {} triangles, {selection:?} {:.3} s",
+                e.file, report.meshes, report.triangles, stats.seconds
+            );
             images.push((pixels.iter().map(|p| lum_rgb(*p)).collect::<Vec<f64>>(), report.meshes));
         }
         let ((one, meshes), (all, _)) = (&images[0], &images[1]);
@@ -185,7 +188,11 @@ fn every_real_gltf_scene_gets_the_same_light_from_one_sampled_light_as_from_all(
         eprintln!("{}: mean Y {mean:.4} cd/m^2, one-sampled - all {mean_diff:.5} +- {error:.5}", e.file);
         if e.lit {
             assert!(mean > 0.0, "{}: black render", e.file);
-            assert!(mean_diff.abs() < 4.0 * error + 1e-4 * mean, "{}: one-sampled - all = {mean_diff} +- {error}", e.file);
+            assert!(
+                mean_diff.abs() < 4.0 * error + 1e-4 * mean,
+                "{}: one-sampled - all = {mean_diff} +- {error}",
+                e.file
+            );
         } else {
             // four_spotlights.glb has no mesh: every camera ray escapes and spots are not seen.
             assert_eq!(*meshes, 0, "{}", e.file);

@@ -143,7 +143,10 @@ fn white_ggx_furnace_loses_the_energy_its_directional_albedo_says() {
             let (got, error) = mean_and_error(&centre);
             let want = 3.0 * albedo;
             eprintln!("roughness {roughness} depth {depth}: centre {got:.4} +- {error:.4}, expected {want:.4}");
-            assert!((got - want).abs() < 4.0 * error + 0.01 * want, "roughness {roughness} depth {depth}: {got} vs {want}");
+            assert!(
+                (got - want).abs() < 4.0 * error + 0.01 * want,
+                "roughness {roughness} depth {depth}: {got} vs {want}"
+            );
         }
     }
 }
@@ -203,7 +206,10 @@ fn a_floor_and_wall_under_a_uniform_sky_give_the_series_of_half_their_albedo() {
             world.spawn((mesh, Transform::default(), Material::lambertian(Vec3::splat(a))));
         }
         let eye = Vec3::new(2.0, 1.0, 0.0);
-        world.spawn((Camera { yfov: 0.6 }, Transform::from_translation(eye).looking_to(Vec3::new(-1.0, -1.0, 0.0), Vec3::Y)));
+        world.spawn((
+            Camera { yfov: 0.6 },
+            Transform::from_translation(eye).looking_to(Vec3::new(-1.0, -1.0, 0.0), Vec3::Y),
+        ));
         let pixels = render_pixels(&mut world, &mut schedule, 16, 32, integrator.clone());
         let (got, error) = mean_and_error(&pixels);
         let (h, l) = (a as f64 / 2.0, sky as f64);

@@ -104,7 +104,10 @@ def merge(kelvin, job, tiles):
             paths.append(os.path.join(tmp, f"tile{i:03}.exr"))
             with open(paths[-1], "wb") as f:
                 f.write(data)
-        run = subprocess.run([kelvin, "merge", *paths, "-o", job["output"]], capture_output=True, text=True, timeout=600)
+        # The job's exposure, so that the PNG preview is the one `kelvin render` writes.
+        exposure = [] if job.get("exposure") is None else ["--exposure", repr(job["exposure"])]
+        cmd = [kelvin, "merge", *paths, "-o", job["output"], *exposure]
+        run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
         return None if run.returncode == 0 else f"kelvin merge: {run.stderr.strip()}"
 
 
@@ -126,7 +129,10 @@ def run(opts):
         elif job["done"] and not opts.force:
             status[i] = ("skipped", f"{job['output']} exists")
         else:
-            crops = tile_grid(job["width"], job["height"], opts.tiles)
+            # A job whose tiles would not merge into its image (ReSTIR's reuse) renders as one tile.
+            if job.get("untileable"):
+                print(f"{job['name']}: one tile: {job['untileable']}", flush=True)
+            crops = tile_grid(job["width"], job["height"], 1 if job.get("untileable") else opts.tiles)
             tiles[i] = [None] * len(crops)
             for t, crop in enumerate(crops):
                 task = render_tile.options(num_cpus=opts.threads, max_retries=opts.max_retries)

@@ -4,9 +4,9 @@
     python test_cluster.py [--kelvin target/debug/kelvin]
 
 1. A manifest of 3 jobs (two scenes, both colour modes, an environment camera), one of 2 frames of an animated
-   scene, and 2 bad ones (a missing scene, a bad size), split into 16 tiles each: every merged image is byte for
-   byte a plain `kelvin render`, both nodes rendered tiles, the bad jobs fail with kelvin's message and the exit
-   code says so.
+   scene, a ReSTIR job with an exposure (rendered as one tile: its reuse does not tile), and 2 bad ones (a missing
+   scene, a bad size), split into 16 tiles each: every merged image and its PNG preview is byte for byte a plain
+   `kelvin render`'s, both nodes rendered tiles, the bad jobs fail with kelvin's message and the exit code says so.
 2. The same good jobs again while the second node's worker processes are killed mid-run: Ray retries their
    tiles and the images are still byte-identical.
 
@@ -131,15 +131,20 @@ def kelvin_plan(kelvin, manifest):
     return json.loads(run.stdout)["jobs"]
 
 
+def png_of(exr):
+    return os.path.splitext(exr)[0] + ".png"
+
+
 def references(kelvin, jobs, folder):
-    """A plain `kelvin render` of each job: its EXR's bytes."""
+    """A plain `kelvin render` of each job: the bytes of its EXR and of its PNG preview, by output path."""
     refs = {}
     for i, job in enumerate(jobs):
         out = os.path.join(folder, f"ref{i}.exr")
         run = subprocess.run([kelvin, "render", *job["args"], "-o", out], capture_output=True, text=True, timeout=120)
         check(run.returncode == 0, run.stderr)
-        with open(out, "rb") as f:
-            refs[job["output"]] = f.read()
+        for mine, theirs in ((out, job["output"]), (png_of(out), png_of(job["output"]))):
+            with open(mine, "rb") as f:
+                refs[theirs] = f.read()
     return refs
 
 
@@ -177,6 +182,9 @@ def main():
             # Two frames of an animation: two jobs of 16 tiles.
             {"name": "lamp", "scene": os.path.join(REPO, "tests/data/gltf/kelvin/animated_lamp.gltf"),
              "output": "out/lamp_#.exr", "frames": "3..4", "fps": 4, "size": "48x32", "spp": 16},
+            # ReSTIR's reuse does not tile: one task renders it whole; its exposure reaches the PNG.
+            {"name": "room-restir", "output": "out/restir.exr", "size": "40x30", "spp": 8,
+             "settings": {"light_sampler": "restir", "exposure": 1.5}},
         ]
         bad = [
             {"name": "missing-scene", "scene": "no/such/scene.glb", "output": "out/missing.exr"},
@@ -185,7 +193,7 @@ def main():
         manifest = os.path.join(work, "jobs.json")
         with open(manifest, "w") as f:
             json.dump({"jobs": good + bad}, f)
-        refs = references(kelvin, kelvin_plan(kelvin, manifest)[:5], work)
+        refs = references(kelvin, kelvin_plan(kelvin, manifest)[:6], work)
 
         cluster.start()
         print(f"cluster up at {cluster.address} in {time.monotonic() - started:.1f} s", flush=True)
@@ -200,12 +208,13 @@ def main():
         with open(summary) as f:
             result = json.load(f)
         states = {int(k): v for k, v in result["jobs"].items()}
-        check([states[i]["status"] for i in range(7)] == ["rendered"] * 5 + ["FAILED"] * 2, f"{states}")
-        check("no/such/scene.glb: no such file" in states[5]["detail"], states[5]["detail"])
-        check("'0x10'" in states[6]["detail"], states[6]["detail"])
+        check([states[i]["status"] for i in range(8)] == ["rendered"] * 6 + ["FAILED"] * 2, f"{states}")
+        check("no/such/scene.glb: no such file" in states[6]["detail"], states[6]["detail"])
+        check("'0x10'" in states[7]["detail"], states[7]["detail"])
         check(len(result["nodes"]) == 2, f"tiles ran on both nodes: {result['nodes']}")
-        check(sum(n["tiles"] for n in result["nodes"].values()) == 80, f"{result['nodes']}")
-        print(f"1. 3 jobs and 2 frames x 16 tiles byte-identical, bad jobs failed clearly ({time.monotonic() - started:.1f} s)")
+        check(sum(n["tiles"] for n in result["nodes"].values()) == 81, f"{result['nodes']}")
+        print(f"1. 3 jobs and 2 frames x 16 tiles and a whole ReSTIR job byte-identical, PNGs included; "
+              f"bad jobs failed clearly ({time.monotonic() - started:.1f} s)")
 
         # 2. The same jobs while the second node's workers are killed.
         fault = os.path.join(work, "fault")

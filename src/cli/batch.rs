@@ -20,7 +20,7 @@ pub struct BatchArgs {
     #[arg(long)]
     force: bool,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::threads())]
     threads: Option<usize>,
 }
 
@@ -37,7 +37,7 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         return Ok(());
     }
     if let Some(t) = args.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global()?;
+        rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
     }
     let n = jobs.len();
     let mut outcomes = Vec::with_capacity(n);

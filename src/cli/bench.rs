@@ -8,7 +8,7 @@ use clap::{Args, Subcommand};
 use kelvin::report::lights::{LightBenchConfig, format_tables, run_light_bench, write_plots};
 use kelvin::report::render_bench::{RenderBenchConfig, SUITE, format_table, run_render_bench, to_json};
 
-use super::CliError;
+use super::{CliError, values};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -29,23 +29,23 @@ enum BenchCommand {
 #[derive(Args)]
 struct RenderArgs {
     /// Image size as WIDTHxHEIGHT.
-    #[arg(long, default_value = "128x128", value_parser = parse_size)]
+    #[arg(long, default_value = "128x128", value_parser = values::size)]
     size: (u32, u32),
     /// Samples per pixel for every scene; default: each scene's own (about a second of rendering
     /// on a 2-core machine, the same samples per image at any size).
-    #[arg(long)]
+    #[arg(long, value_parser = values::whole(1..=1 << 20))]
     spp: Option<u32>,
     /// Scenes to run, comma-separated; default: the whole suite.
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
     /// Timed renders per scene after a 1-spp warm-up; the fastest counts.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = values::count(1..=1000))]
     repeat: usize,
     /// Folder of the real test data; default: the repository's tests/data.
     #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"))]
     data: PathBuf,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = values::threads())]
     threads: Option<usize>,
     /// After the table, print every row (counts, pass times, warnings) as one line of JSON.
     #[arg(long)]
@@ -55,37 +55,29 @@ struct RenderArgs {
     list: bool,
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT, e.g. 128x128"))?;
-    let parse = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
-    match (parse(w), parse(h)) {
-        (Some(w), Some(h)) => Ok((w, h)),
-        _ => Err(format!("'{s}': width and height must be whole numbers in 1..=16384")),
-    }
-}
-
 #[derive(Args)]
 struct LightsArgs {
     /// Light counts of the scaling scene, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 10, 100, 1_000, 10_000, 100_000, 1_000_000])]
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 10, 100, 1_000, 10_000, 100_000, 1_000_000],
+        value_parser = values::count(1..=100_000_000))]
     counts: Vec<usize>,
     /// Folder for the plots (SVG); created if missing.
     #[arg(long, default_value = "bench-lights")]
     out: PathBuf,
     /// Ground points where irradiance is estimated.
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = 128, value_parser = values::count(1..=1 << 24))]
     points: usize,
     /// Samples per point for timing and the measured RMSE.
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = values::count(1..=1 << 24))]
     samples: usize,
     /// Frames per update measurement.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = values::count(1..=100_000))]
     frames: usize,
     /// How far each moving light moves per frame, m (per horizontal axis, at most).
-    #[arg(long, default_value_t = 0.25)]
+    #[arg(long, default_value_t = 0.25, value_parser = values::finite_in(0.0, 1e6))]
     move_step: f32,
     /// Tiles per side of the emissive panel (2 tiles^2 triangles); 0 skips the room.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = values::count(0..=4096))]
     panel_tiles: usize,
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -108,7 +100,7 @@ fn render(a: RenderArgs) -> Result<(), CliError> {
         return Ok(());
     }
     if let Some(t) = a.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global()?;
+        rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
     }
     if cfg!(debug_assertions) {
         eprintln!("note: a debug build; timings are only meaningful with --release");
@@ -118,7 +110,7 @@ fn render(a: RenderArgs) -> Result<(), CliError> {
         width: a.size.0,
         height: a.size.1,
         spp: a.spp,
-        repeat: a.repeat.max(1),
+        repeat: a.repeat,
         scenes: a.scenes,
     };
     let rows = run_render_bench(&cfg, |line| eprintln!("{line}")).map_err(|e| e.to_string())?;
@@ -140,7 +132,7 @@ fn lights(a: LightsArgs) -> Result<(), CliError> {
         counts: a.counts,
         points: a.points,
         samples: a.samples,
-        frames: a.frames.max(1),
+        frames: a.frames,
         move_step: a.move_step,
         panel_tiles: a.panel_tiles,
         seed: a.seed,

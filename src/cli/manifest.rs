@@ -108,6 +108,11 @@ pub struct PlannedJob {
     pub args: Vec<String>,
     /// The output exists: a finished render (images are written under a temporary name and renamed).
     pub done: bool,
+    /// Why the job cannot be split into tiles (ReSTIR's reuse): a driver renders it whole.
+    pub untileable: Option<String>,
+    /// The PNG preview's exposure in stops (None: automatic): what `kelvin merge` needs to write the
+    /// preview `kelvin render` would.
+    pub exposure: Option<f32>,
     pub error: Option<String>,
 }
 
@@ -140,8 +145,8 @@ fn parse_render_args(args: &[String], output: &Path) -> Result<RenderArgs, Strin
 /// with its own error if it has one.
 pub fn plan(path: &Path) -> Result<Vec<PlannedJob>, String> {
     let what = path.display();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{what}: {e}"))?;
-    let manifest: Manifest = serde_json::from_str(&text).map_err(|e| format!("{what}: {e}"))?;
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{what}: cannot read: {e}"))?;
+    let manifest: Manifest = serde_json::from_str(&text).map_err(|e| format!("{what}: not a manifest: {e}"))?;
     // Absolute paths in the arguments, so that they mean the same from any working directory.
     let base = std::path::absolute(path).map_err(|e| format!("{what}: {e}"))?;
     let base = base.parent().unwrap_or(Path::new("/"));
@@ -183,6 +188,8 @@ fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Pat
         height: 0,
         args: Vec::new(),
         done: false,
+        untileable: None,
+        exposure: None,
         error: None,
     };
     if name.is_none()
@@ -191,18 +198,19 @@ fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Pat
         planned.name = file.to_string_lossy().into_owned();
     }
     match resolve(job, frame, base) {
-        Ok((args, (width, height))) => {
+        Ok((args, parsed)) => {
             planned.done = planned.output.exists();
-            (planned.args, planned.width, planned.height) = (args, width, height);
+            (planned.width, planned.height) = parsed.size();
+            (planned.args, planned.untileable, planned.exposure) = (args, parsed.tiling_refusal(), parsed.exposure());
         }
         Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
     }
     planned
 }
 
-/// The job's `kelvin render` arguments (without `-o`) and image size, checked by its parser;
-/// for one `frame` of a job with frames.
-fn resolve(job: serde_json::Value, frame: Option<u32>, base: &Path) -> Result<(Vec<String>, (u32, u32)), String> {
+/// The job's `kelvin render` arguments (without `-o`) and what its parser made of them; for one
+/// `frame` of a job with frames.
+fn resolve(job: serde_json::Value, frame: Option<u32>, base: &Path) -> Result<(Vec<String>, RenderArgs), String> {
     let spec: JobSpec = serde_json::from_value(job).map_err(|e| e.to_string())?;
     let output = match frame {
         Some(k) => frame_path(&base.join(&spec.output), k)?,
@@ -274,5 +282,5 @@ fn resolve(job: serde_json::Value, frame: Option<u32>, base: &Path) -> Result<(V
         args.push(scene.display().to_string());
     }
     let parsed = parse_render_args(&args, &output)?;
-    Ok((args, parsed.size()))
+    Ok((args, parsed))
 }

@@ -17,7 +17,7 @@ pub struct MergeArgs {
     #[arg(short, long)]
     output: PathBuf,
     /// PNG exposure in stops; automatic (as `kelvin render`'s) when absent.
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::exposure())]
     exposure: Option<f32>,
 }
 

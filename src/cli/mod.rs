@@ -8,6 +8,7 @@ mod merge;
 mod render;
 mod report;
 mod spectrum;
+mod values;
 
 use clap::{Parser, Subcommand};
 

@@ -18,8 +18,8 @@ use kelvin::scene::animate::{GltfAnimations, pose_gltf};
 use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, Restir, ReuseWeights, Settings};
 use kelvin::systems::LightingPlugin;
 
-use super::CliError;
 use super::frames::{FrameRange, frame_output};
+use super::{CliError, values};
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum SamplerArg {
@@ -50,19 +50,19 @@ pub struct RenderArgs {
     #[arg(short, long, default_value = "render.exr")]
     output: PathBuf,
     /// Camera samples per pixel (per pass, with --time).
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 32, value_parser = values::whole(1..=1 << 20))]
     spp: u32,
     /// Render passes of --spp samples per pixel until this many seconds have passed (at least one).
-    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    #[arg(long, value_name = "SECONDS", value_parser = values::seconds)]
     time: Option<f64>,
     /// Image size as WIDTHxHEIGHT.
-    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    #[arg(long, default_value = "512x512", value_parser = values::size)]
     size: (u32, u32),
     /// Lat-long environment map (.exr or .hdr) lighting the scene as an infinite light.
     #[arg(long)]
     env: Option<PathBuf>,
     /// Luminance (nit) of an environment texel of value 1.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = values::intensity())]
     env_intensity: f32,
     /// A physical sun and sky (Hosek-Wilkie) for a place and a UTC time: latitude (degrees north),
     /// longitude (degrees east), UTC date-time, optional turbidity 1-10 (default 3), e.g.
@@ -70,17 +70,17 @@ pub struct RenderArgs {
     #[arg(long, value_name = "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]")]
     sky: Option<String>,
     /// Multiplies the sky's physical radiance (1 = real daylight, ~100 klx in full sun).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = values::intensity())]
     sky_intensity: f32,
     /// How light reaches the camera: paths of up to --max-depth bounces, every bounce through the
     /// light system, or direct lighting (light and BSDF samples at the surface the camera sees).
     #[arg(long, value_enum, default_value = "path")]
     integrator: IntegratorArg,
     /// Path tracer: surfaces after the camera's at most (1 = direct lighting, 0 = emission only).
-    #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth)]
+    #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth, value_parser = values::whole(0..=1024))]
     max_depth: u32,
     /// Path tracer: Russian roulette may end a path from this many surfaces on.
-    #[arg(long, default_value_t = PathDepth::DEFAULT.roulette_depth)]
+    #[arg(long, default_value_t = PathDepth::DEFAULT.roulette_depth, value_parser = values::whole(0..=1024))]
     roulette_depth: u32,
     /// How a light is chosen per sample (ris: resampled importance sampling over --candidates
     /// light-BVH samples, one shadow ray for the one it keeps; restir: ris, then each pixel's
@@ -91,13 +91,13 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value = "rgb")]
     color: ColorArg,
     /// Light samples drawn per resampled one (--light-sampler ris).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, value_parser = values::whole(1..=4096))]
     candidates: u32,
     /// Neighbour reservoirs combined per pixel (--light-sampler restir).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = values::whole(0..=256))]
     neighbours: u32,
     /// Radius of the neighbourhood, pixels (--light-sampler restir).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = values::whole(1..=values::MAX_SIDE as i64))]
     radius: u32,
     /// Weigh combined reservoirs 1/sum M: fewer target evaluations, biased (--light-sampler restir).
     #[arg(long)]
@@ -112,18 +112,18 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Worker threads (default: all cores). Output is bit-identical for any count.
-    #[arg(long)]
+    #[arg(long, value_parser = values::threads())]
     threads: Option<usize>,
     /// PNG exposure in stops; automatic (mean log luminance to 18% grey) when absent.
-    #[arg(long)]
+    #[arg(long, value_parser = values::exposure())]
     exposure: Option<f32>,
     /// Render a lat-long radiance map seen from this point (an environment camera), e.g. 0,1,0,
     /// instead of the scene's camera; the EXR can light another scene with --env.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point)]
+    #[arg(long, value_name = "X,Y,Z", value_parser = values::point)]
     environment_at: Option<glam::Vec3>,
     /// Render only this tile of the image (pixels X0..X1 by Y0..Y1, ends exclusive), bit for bit as
     /// in the full render, into an EXR that records its place (`kelvin merge` joins tiles).
-    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_crop)]
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = values::crop)]
     crop: Option<Crop>,
     /// Render these frames of the scene's animation (both ends included, or one frame) in one
     /// process, each frame moving only what the animation moves; the output's run of '#' takes
@@ -131,7 +131,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FIRST..LAST")]
     frames: Option<FrameRange>,
     /// Frames per second: frame k shows the animation at k / fps seconds.
-    #[arg(long, default_value_t = 24.0, value_parser = parse_fps)]
+    #[arg(long, default_value_t = 24.0, value_parser = values::fps)]
     fps: f64,
     /// The animation --frames plays, by name or index.
     #[arg(long, default_value = "0")]
@@ -148,40 +148,51 @@ impl RenderArgs {
     pub(super) fn size(&self) -> (u32, u32) {
         self.size
     }
-}
 
-fn parse_point(s: &str) -> Result<glam::Vec3, String> {
-    let v: Vec<f32> = s.split(',').filter_map(|c| c.trim().parse().ok()).collect();
-    match v[..] {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
-        _ => Err(format!("'{s}': expected three numbers X,Y,Z")),
+    /// The PNG exposure, stops (None: automatic).
+    pub(super) fn exposure(&self) -> Option<f32> {
+        self.exposure
     }
-}
 
-fn parse_seconds(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(t) if t.is_finite() && t >= 0.0 && t < 1e7 => Ok(t),
-        _ => Err(format!("'{s}': expected a number of seconds, 0 or more")),
+    fn selection(&self) -> LightSelection {
+        match self.light_sampler {
+            _ if self.all_lights => LightSelection::All,
+            SamplerArg::Ris => LightSelection::Resampled { candidates: self.candidates },
+            SamplerArg::Restir => LightSelection::Restir(Restir {
+                candidates: self.candidates,
+                spatial: self.neighbours,
+                radius: self.radius,
+                // One frame: no previous run to reuse.
+                temporal: false,
+                weights: if self.biased_reuse { ReuseWeights::Biased } else { ReuseWeights::Unbiased },
+                ..Restir::default()
+            }),
+            _ => LightSelection::OneSampled,
+        }
     }
-}
 
-fn parse_fps(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(f) if f.is_finite() && f > 0.0 && f <= 1e6 => Ok(f),
-        _ => Err(format!("'{s}': expected frames per second, a number > 0")),
+    /// The render's options (image, samples, integrator, crop).
+    fn options(&self) -> RenderOptions {
+        RenderOptions {
+            width: self.size.0,
+            height: self.size.1,
+            spp: self.spp,
+            strategy: if self.no_mis { Strategy::LightOnly } else { Strategy::Mis },
+            integrator: match self.integrator {
+                IntegratorArg::Path => {
+                    Integrator::Path(PathDepth { max_depth: self.max_depth, roulette_depth: self.roulette_depth })
+                }
+                IntegratorArg::Direct => Integrator::Direct,
+            },
+            time_budget: self.time.map(std::time::Duration::from_secs_f64),
+            crop: self.crop,
+        }
     }
-}
 
-fn parse_crop(s: &str) -> Result<Crop, String> {
-    s.parse().map_err(|e: kelvin::render::tiles::TileError| e.to_string())
-}
-
-pub(super) fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT, e.g. 512x512"))?;
-    let parse = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
-    match (parse(w), parse(h)) {
-        (Some(w), Some(h)) => Ok((w, h)),
-        _ => Err(format!("'{s}': width and height must be whole numbers in 1..=16384")),
+    /// Why this render cannot be split into tiles that merge into it (None: it can).
+    pub(super) fn tiling_refusal(&self) -> Option<String> {
+        let whole = RenderOptions { crop: Some(Crop { x0: 0, y0: 0, x1: 1, y1: 1 }), ..self.options() };
+        whole.check_tiling(&self.selection()).err().map(|e| e.to_string())
     }
 }
 
@@ -191,8 +202,9 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule, Option<usize>), Cl
     // Checked before the scene loads, so a typo fails at once.
     let sky = match &args.sky {
         Some(spec) => {
-            let light = SunSkyLight { scale: args.sky_intensity, ..SunSkyLight::parse(spec)? };
-            light.validate()?;
+            let bad = |e: kelvin::light::LightError| format!("--sky {spec}: {e}");
+            let light = SunSkyLight { scale: args.sky_intensity, ..SunSkyLight::parse(spec).map_err(bad)? };
+            light.validate().map_err(bad)?;
             Some(light)
         }
         None => None,
@@ -209,20 +221,7 @@ fn build_world(args: &RenderArgs) -> Result<(World, Schedule, Option<usize>), Cl
             SamplerArg::Power => LightSamplerKind::Power,
             SamplerArg::Bvh | SamplerArg::Ris | SamplerArg::Restir => LightSamplerKind::Bvh,
         },
-        selection: match args.light_sampler {
-            _ if args.all_lights => LightSelection::All,
-            SamplerArg::Ris => LightSelection::Resampled { candidates: args.candidates.max(1) },
-            SamplerArg::Restir => LightSelection::Restir(Restir {
-                candidates: args.candidates.max(1),
-                spatial: args.neighbours,
-                radius: args.radius.max(1),
-                // One frame: no previous run to reuse.
-                temporal: false,
-                weights: if args.biased_reuse { ReuseWeights::Biased } else { ReuseWeights::Unbiased },
-                ..Restir::default()
-            }),
-            _ => LightSelection::OneSampled,
-        },
+        selection: args.selection(),
         seed: args.seed,
         ..Default::default()
     });
@@ -322,13 +321,17 @@ pub(super) fn render_to_files(
     mut progress: impl FnMut(f32) + Send,
 ) -> Result<Vec<Rendered>, CliError> {
     let (width, height) = args.size;
+    let opts = args.options();
+    let ext = args.output.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let out = args.output.display();
     if let Some(crop) = args.crop {
         crop.check(width, height)?;
-        let ext = args.output.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
         if ext.as_deref() != Some("exr") {
-            let out = args.output.display();
             return Err(format!("{out}: a --crop tile is written as .exr, which records its place in the image").into());
         }
+        opts.check_tiling(&args.selection()).map_err(|e| format!("--crop {crop}: {e}"))?;
+    } else if !matches!(ext.as_deref(), Some("exr" | "png")) {
+        return Err(format!("{out}: unsupported output extension; use .exr or .png").into());
     }
     // Checked before the scene loads, so a bad name fails at once.
     let frames: Vec<Option<u32>> = match args.frames {
@@ -340,20 +343,6 @@ pub(super) fn render_to_files(
     };
     let (mut world, mut schedule, file) = build_world(args)?;
     let clip = if args.frames.is_some() { Some(chosen_clip(&world, file, args)?) } else { None };
-    let opts = RenderOptions {
-        width,
-        height,
-        spp: args.spp.max(1),
-        strategy: if args.no_mis { Strategy::LightOnly } else { Strategy::Mis },
-        integrator: match args.integrator {
-            IntegratorArg::Path => {
-                Integrator::Path(PathDepth { max_depth: args.max_depth, roulette_depth: args.roulette_depth })
-            }
-            IntegratorArg::Direct => Integrator::Direct,
-        },
-        time_budget: args.time.map(std::time::Duration::from_secs_f64),
-        crop: args.crop,
-    };
     let camera = args.environment_at.map(|origin| CameraModel::LatLong { origin, width, height });
     let mut rendered = Vec::with_capacity(frames.len());
     let n = frames.len() as f32;
@@ -408,7 +397,7 @@ pub(super) fn progress_bar() -> ProgressBar {
 
 pub fn run(args: RenderArgs) -> Result<(), CliError> {
     if let Some(t) = args.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global()?;
+        rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
     }
     let bar = progress_bar();
     let rendered = render_to_files(&args, |f| bar.set_position((f * 1000.0) as u64));

@@ -34,14 +34,14 @@ struct AccuracyArgs {
     #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"))]
     data: PathBuf,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::threads())]
     threads: Option<usize>,
 }
 
 pub fn run(args: ReportArgs) -> Result<(), CliError> {
     let Report::Accuracy(args) = args.report;
     if let Some(t) = args.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global()?;
+        rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
     }
     let scenes = args.scenes.iter().map(|s| SceneId::parse(s)).collect::<Result<Vec<_>, _>>()?;
     let opts = AccuracyOptions {

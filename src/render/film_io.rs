@@ -26,7 +26,7 @@ use crate::spectrum::color::srgb_encode;
 /// What [`write_image`] accepts, for error messages.
 pub const WRITE_FORMATS: &str = ".exr (linear f32), .hdr (linear RGBE), .png (tone-mapped 8-bit sRGB)";
 
-/// Why an image could not be written. `what` names the file.
+/// Why an image could not be written or read back. `what` names the file.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum ImageIoError {
     #[error("{what}: unknown image extension {given:?}; accepted: {WRITE_FORMATS}")]
@@ -39,6 +39,8 @@ pub enum ImageIoError {
     Encode { what: String, format: &'static str, msg: String },
     #[error("{what}: cannot write: {msg}")]
     Io { what: String, msg: String },
+    #[error("{what}: cannot read: {msg}")]
+    Read { what: String, msg: String },
 }
 
 /// Writes linear RGB as a 32-bit float OpenEXR with lossless (ZIP) compression.
@@ -82,7 +84,7 @@ pub fn read_exr_tile(path: &Path) -> Result<Tile, ImageIoError> {
     let (w, h) = (image.layer_data.size.width(), image.layer_data.size.height());
     let display = image.attributes.display_window;
     let position = image.layer_data.attributes.layer_position;
-    let bad = |msg: String| ImageIoError::Io { what: what.clone(), msg };
+    let bad = |msg: String| ImageIoError::Read { what: what.clone(), msg };
     if display.position.x() != 0 || display.position.y() != 0 {
         return Err(bad(format!("display window starts at {:?}, not at 0,0", display.position)));
     }
@@ -123,7 +125,7 @@ fn read_exr_image(path: &Path) -> Result<(ExrRgb, Vec<Vec3>), ImageIoError> {
         .all_attributes()
         .non_parallel()
         .from_file(path)
-        .map_err(|e| ImageIoError::Io { what: what.clone(), msg: e.to_string() })?;
+        .map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
     let pixels = std::mem::take(&mut image.layer_data.channel_data.pixels.1);
     Ok((image, pixels))
 }

@@ -12,11 +12,11 @@ use super::film::Film;
 use super::normal_map::apply_normal_maps;
 use super::path::{PathDepth, PathJob, Paths};
 use super::shade::{Materials, ShadeContext};
-use super::tiles::Crop;
+use super::tiles::{Crop, TileError};
 use crate::geometry::{RAY_CHUNK, SceneBvh};
 use crate::lanes::LANES;
 use crate::rng::SampleStream;
-use crate::shading::{ColorMode, RunReport, RunSummary, SceneBounds, Settings, ShadingBatch};
+use crate::shading::{ColorMode, LightSelection, RunReport, RunSummary, SceneBounds, Settings, ShadingBatch};
 use crate::spectrum::{SampledSpectrum, SampledWavelengths, color};
 
 /// Camera samples per batch handed to the light system.
@@ -113,6 +113,25 @@ impl RenderOptions {
     /// The region of the image the film covers: the crop clipped to the image, or all of it.
     pub fn region(&self) -> Crop {
         self.crop.map_or(Crop::full(self.width, self.height), |c| c.clipped(self.width, self.height))
+    }
+
+    /// Whether the crop (if any) renders that region of the full render. Two things make a tile
+    /// another image: ReSTIR's reuse, whose neighbours come from the render's own samples and
+    /// batches, and a time budget, which gives each tile as many passes as fit its own time. A
+    /// crop that covers the whole image is the full render.
+    pub fn check_tiling(&self, selection: &LightSelection) -> Result<(), TileError> {
+        if self.region() == Crop::full(self.width, self.height) {
+            return Ok(());
+        }
+        if let LightSelection::Restir(r) = selection
+            && (r.spatial > 0 || r.temporal)
+        {
+            return Err(TileError::Reuse);
+        }
+        if self.time_budget.is_some() {
+            return Err(TileError::TimeBudget);
+        }
+        Ok(())
     }
 }
 
@@ -236,6 +255,9 @@ fn render_on_pool(
     let camera = camera.unwrap_or_else(|| CameraModel::Pinhole(find_camera(world, opts.width, opts.height)));
     let materials = Materials::of(world);
     let settings = world.resource::<Settings>().clone();
+    if let Err(e) = opts.check_tiling(&settings.selection) {
+        stats.report.warnings.push(format!("crop {}: {e}", opts.region()));
+    }
     let spectral = settings.color_mode == ColorMode::Spectral;
     let seed = settings.seed ^ RENDER_SALT;
 

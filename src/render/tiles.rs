@@ -38,6 +38,16 @@ pub enum TileError {
     PixelCount { tile: String, len: usize, crop: Crop },
     #[error("no tiles to merge")]
     NoTiles,
+    #[error(
+        "ReSTIR reuses reservoirs of the render's own samples, so a tile would not be that region of the full \
+         image: render ReSTIR images whole, or tile with the ris light sampler"
+    )]
+    Reuse,
+    #[error(
+        "a time budget renders as many passes as fit, so tiles would differ in samples per pixel: give tiles \
+         a sample count, not a time"
+    )]
+    TimeBudget,
 }
 
 impl std::fmt::Display for Crop {

@@ -47,19 +47,14 @@ static TABLE: LazyLock<PlanckTable> = LazyLock::new(|| {
 pub fn cct_duv_from_xy(xy: [f64; 2]) -> Result<(f64, f64), SpectrumError> {
     let [u, v] = color::xy_to_uv1960(xy);
     if !(u.is_finite() && v.is_finite()) {
-        return Err(SpectrumError::OutOfRange { what: "chromaticity x".into(), value: xy[0], lo: 0.0, hi: 1.0 });
+        return Err(SpectrumError::out_of_range("chromaticity x", xy[0], 0.0, 1.0));
     }
     let tab = &*TABLE;
     let dist = |i: usize| ((u - tab.uv[i][0]).powi(2) + (v - tab.uv[i][1]).powi(2)).sqrt();
     let m = (0..tab.t.len()).min_by(|&a, &b| dist(a).total_cmp(&dist(b))).expect("table is not empty");
     if m == 0 || m + 1 == tab.t.len() {
         let t = tab.t[m];
-        return Err(SpectrumError::OutOfRange {
-            what: "CCT (K)".into(),
-            value: t,
-            lo: CCT_RANGE_K.0,
-            hi: CCT_RANGE_K.1,
-        });
+        return Err(SpectrumError::out_of_range("CCT (K)", t, CCT_RANGE_K.0, CCT_RANGE_K.1));
     }
     let (p, n) = (m - 1, m + 1);
     let (dp, dm, dn) = (dist(p), dist(m), dist(n));
@@ -87,7 +82,7 @@ fn in_range((t, duv): (f64, f64)) -> Result<(f64, f64), SpectrumError> {
     if (CCT_RANGE_K.0 * (1.0 - 1e-9)..=CCT_RANGE_K.1 * (1.0 + 1e-9)).contains(&t) {
         Ok((t, duv))
     } else {
-        Err(SpectrumError::OutOfRange { what: "CCT (K)".into(), value: t, lo: CCT_RANGE_K.0, hi: CCT_RANGE_K.1 })
+        Err(SpectrumError::out_of_range("CCT (K)", t, CCT_RANGE_K.0, CCT_RANGE_K.1))
     }
 }
 

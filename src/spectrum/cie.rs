@@ -75,12 +75,7 @@ static D_BASIS: LazyLock<DaylightBasis> = LazyLock::new(|| {
 /// 4.8), defined for 4000 K to 25000 K.
 pub fn daylight_xy(cct_k: f64) -> Result<[f64; 2], SpectrumError> {
     if !(4000.0..=25000.0).contains(&cct_k) {
-        return Err(SpectrumError::OutOfRange {
-            what: "daylight CCT (K)".into(),
-            value: cct_k,
-            lo: 4000.0,
-            hi: 25000.0,
-        });
+        return Err(SpectrumError::out_of_range("daylight CCT (K)", cct_k, 4000.0, 25000.0));
     }
     let t = cct_k;
     let x = if t <= 7000.0 {

@@ -28,16 +28,24 @@ pub use tabulated::TabulatedSpectrum;
 /// What can go wrong building a spectrum. Messages say what was given and what is accepted.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum SpectrumError {
-    #[error("{what} = {value} is outside [{lo}, {hi}]")]
-    OutOfRange { what: String, value: f64, lo: f64, hi: f64 },
+    /// `range` as written in maths: "[0, 1]", "(0, 1000000000]".
+    #[error("{what} = {value} is outside {range}")]
+    OutOfRange { what: String, value: f64, range: String },
     #[error("{what}: {msg}")]
     BadTable { what: String, msg: String },
     #[error("{what}, line {line}: {msg}")]
     BadCsv { what: String, line: usize, msg: String },
     #[error("unknown spectrum '{given}'; accepted: {accepted}")]
     Unknown { given: String, accepted: String },
-    #[error("{what}: {msg}")]
+    #[error("{what}: cannot read: {msg}")]
     Io { what: String, msg: String },
+}
+
+impl SpectrumError {
+    /// `value` of `what` is outside the closed range `[lo, hi]`.
+    pub fn out_of_range(what: &str, value: f64, lo: f64, hi: f64) -> Self {
+        Self::OutOfRange { what: what.into(), value, range: format!("[{lo}, {hi}]") }
+    }
 }
 
 /// A spectral distribution over wavelength (nm): an emitter's shape, or an emissivity.
@@ -76,7 +84,7 @@ impl Spectrum {
     pub fn graybody(temperature_k: f64, emissivity: f64) -> Result<Self, SpectrumError> {
         check_temperature(temperature_k)?;
         if !(0.0..=1.0).contains(&emissivity) {
-            return Err(SpectrumError::OutOfRange { what: "emissivity".into(), value: emissivity, lo: 0.0, hi: 1.0 });
+            return Err(SpectrumError::out_of_range("emissivity", emissivity, 0.0, 1.0));
         }
         Ok(Self::Graybody { temperature_k, emissivity })
     }
@@ -188,7 +196,7 @@ fn check_temperature(t: f64) -> Result<(), SpectrumError> {
     if t > 0.0 && t <= 1e9 {
         Ok(())
     } else {
-        Err(SpectrumError::OutOfRange { what: "temperature (K)".into(), value: t, lo: f64::MIN_POSITIVE, hi: 1e9 })
+        Err(SpectrumError::OutOfRange { what: "temperature (K)".into(), value: t, range: "(0, 1000000000]".into() })
     }
 }
 

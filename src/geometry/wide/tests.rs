@@ -43,7 +43,11 @@ fn triangle_lanes_match_the_scalar_test() {
                     [
                         c,
                         c + Vec3::new(a.cos(), a.sin(), 0.0),
-                        c + Vec3::new((a + std::f32::consts::FRAC_PI_2).cos(), (a + std::f32::consts::FRAC_PI_2).sin(), 0.0),
+                        c + Vec3::new(
+                            (a + std::f32::consts::FRAC_PI_2).cos(),
+                            (a + std::f32::consts::FRAC_PI_2).sin(),
+                            0.0,
+                        ),
                     ]
                 })
                 .collect()

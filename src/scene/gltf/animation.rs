@@ -327,7 +327,8 @@ mod tests {
         use std::f32::consts::TAU;
         for (end, arc) in [(-Quat::from_rotation_y(0.5), 0.2f32), (Quat::from_rotation_y(5.3), 5.0 - TAU)] {
             let q = Quat::from_rotation_y(0.3);
-            let k = Keyframes::new(vec![0.0, 2.0], vec![Vec4::from(q), Vec4::from(end)], Interpolation::Linear).unwrap();
+            let k =
+                Keyframes::new(vec![0.0, 2.0], vec![Vec4::from(q), Vec4::from(end)], Interpolation::Linear).unwrap();
             for s in [0.0f32, 0.1, 0.25, 0.5, 0.8, 1.0] {
                 let got = Quat::from_vec4(k.sample(2.0 * s, Target::Rotation));
                 let want = Quat::from_rotation_y(0.3 + s * arc);

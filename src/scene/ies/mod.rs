@@ -45,7 +45,7 @@ pub const MAX_ANGLES: usize = 100_000;
 /// errors, the 1-based line where reading stopped and what was expected there.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum IesError {
-    #[error("{what}: {msg}")]
+    #[error("{what}: cannot read: {msg}")]
     Io { what: String, msg: String },
     #[error("{what}, line {line}: the file ends early; expected {expected}")]
     Truncated { what: String, line: usize, expected: String },
