@@ -8,7 +8,9 @@
 //! `cargo run --release --example resampling_efficiency [rows]` (an image of 32 x 16 points by
 //! default; `scripts/resampling_efficiency.sh` runs it). The reference is `LightSelection::All`
 //! (exact for the delta lights; 16 samples of every triangle for the panel); relMSE is the
-//! image's (see `rel_mse`), over 5 frames after 20 warm-up frames, and the time the best frame's.
+//! image's (see `rel_mse`). Every method renders the same `FRAMES` frames from no history, and is
+//! judged by the average of its frames at the time all of them took: temporal reuse pays for the
+//! frames that build its history, and the light BVH's frames are averaged as a still image's are.
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
@@ -24,10 +26,12 @@ const WIDTH: u32 = 32;
 /// within 0.3 m (the light changes over metres here; far neighbours' samples help little).
 const SPACING: f32 = 0.1;
 const RADIUS: u32 = 3;
+/// Frames of a still scene per method: enough for temporal reuse to reach its history cap (20 x M).
+const FRAMES: u32 = 25;
 
 /// Per point, sum Li cos / pdf over its entries divided by the samples per point, and the time
-/// of the schedule run that made them. The batch is `WIDTH` wide and last run's points (for
-/// temporal reuse); `frame` is the sample index.
+/// of the schedule run that made them. The batch is `WIDTH` wide; `frame` is the sample index.
+/// Temporal reuse finds last run's points unless `frame` is 0, which starts without history.
 fn estimate(
     world: &mut World,
     schedule: &mut Schedule,
@@ -44,7 +48,7 @@ fn estimate(
             batch.push(p.p, p.n, i as u32, frame);
         }
         batch.layout = Some(ImageLayout { width: WIDTH, samples_per_pixel: 1, first: 0 });
-        batch.previous = (0..points.len() as u32).collect();
+        batch.previous = if frame == 0 { Vec::new() } else { (0..points.len() as u32).collect() };
     }
     let start = std::time::Instant::now();
     schedule.run(world);
@@ -83,14 +87,18 @@ fn restir(candidates: u32, spatial: u32, temporal: bool, weights: ReuseWeights) 
     LightSelection::Restir(Restir { candidates, spatial, radius: RADIUS, temporal, weights, ..Default::default() })
 }
 
-/// One table row; `mean` is the estimate's sum over the reference's (1 when unbiased).
-fn print_row(scene: &str, name: &str, (spp, seconds): (u32, f64), (error, mean): (f64, f64), bvh: &mut f64) {
+/// One table row; `mean` is the estimate's sum over the reference's (1 when unbiased), `last` the
+/// relMSE of the last frame alone (NaN: not measured).
+fn print_row(scene: &str, name: &str, (spp, seconds): (u32, f64), (error, mean, last): (f64, f64, f64), bvh: &mut f64) {
     let efficiency = 1.0 / (error * seconds);
     if *bvh == 0.0 {
         *bvh = efficiency;
     }
     let vs = efficiency / *bvh;
-    println!("| {scene} | {name} | {spp} | {seconds:.4} | {mean:.3} | {error:.3e} | {efficiency:.3e} | {vs:.2}x |");
+    let last = if last.is_nan() { "-".to_string() } else { format!("{last:.3e}") };
+    println!(
+        "| {scene} | {name} | {spp} | {seconds:.4} | {mean:.3} | {error:.3e} | {last} | {efficiency:.3e} | {vs:.2}x |"
+    );
 }
 
 fn ratio(estimate: &[f64], exact: &[f64]) -> f64 {
@@ -99,8 +107,8 @@ fn ratio(estimate: &[f64], exact: &[f64]) -> f64 {
 
 fn main() {
     let rows: u32 = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(16);
-    println!("| scene | method | spp | seconds | mean | relMSE | efficiency | vs BVH |");
-    println!("|---|---|---:|---:|---:|---:|---:|---:|");
+    println!("| scene | method | spp | seconds | mean | relMSE | last frame relMSE | efficiency | vs BVH |");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|");
     // KELVIN_SCENES=panel (a substring) limits the run to matching scenes.
     let only = std::env::var("KELVIN_SCENES").unwrap_or_default();
     for scene in ["scaling 10k", "scaling 100k", "panel 10k triangles", "dynamic"] {
@@ -147,18 +155,22 @@ fn main() {
             ("temporal+spatial M=1 k=4 biased", restir(1, 4, true, ReuseWeights::Biased)),
         ];
         for (name, selection) in methods {
-            // Warm-up runs build what the first one would (sampler kind, buffers) and, under
-            // temporal reuse, reach the steady state (M at its cap).
-            for frame in 0..20 {
-                estimate(&mut world, &mut schedule, &points, (selection, spp), 1, frame);
-            }
-            let (mut error, mut mean, mut seconds) = (0.0, 0.0, f64::INFINITY);
-            for frame in 20..25 {
+            // An untimed run builds what the first one would (sampler kind, buffers); frame 0
+            // then starts without history.
+            estimate(&mut world, &mut schedule, &points, (selection, spp), 2, 0);
+            let mut average = vec![0.0; points.len()];
+            let (mut seconds, mut last) = (0.0, 0.0);
+            for frame in 0..FRAMES {
                 let (values, s) = estimate(&mut world, &mut schedule, &points, (selection, spp), 1, frame);
-                (error, seconds) = (error + rel_mse(&values, &exact) / 5.0, seconds.min(s));
-                mean += ratio(&values, &exact) / 5.0;
+                for (a, v) in average.iter_mut().zip(&values) {
+                    *a += v / FRAMES as f64;
+                }
+                seconds += s;
+                last = rel_mse(&values, &exact);
             }
-            print_row(scene, name, (spp, seconds), (error, mean), &mut bvh_efficiency);
+            let error = rel_mse(&average, &exact);
+            let row = (error, ratio(&average, &exact), last);
+            print_row(scene, name, (spp * FRAMES, seconds), row, &mut bvh_efficiency);
         }
     }
 }
@@ -168,12 +180,15 @@ fn main() {
 fn dynamic(rows: u32) {
     println!();
     println!(
-        "| dynamic: 10k lights, 1% moving | method | spp | seconds per frame | mean | relMSE | efficiency | vs BVH |"
+        "| dynamic: 10k lights, 1% moving | method | spp | seconds per frame | mean | relMSE | - | efficiency | vs BVH |"
     );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|");
     let spp = 4;
+    // The BVH averaged over frames (an exponential average of weight 1/20 a frame, the history
+    // temporal reuse keeps at M=1) is what a still image's accumulation becomes when lights move.
     let methods = [
         ("light BVH", LightSelection::OneSampled),
+        ("light BVH, averaged over frames", LightSelection::OneSampled),
         ("RIS M=4", LightSelection::Resampled { candidates: 4 }),
         ("temporal M=4", restir(4, 0, true, ReuseWeights::Unbiased)),
         ("temporal M=1", restir(1, 0, true, ReuseWeights::Unbiased)),
@@ -189,6 +204,7 @@ fn dynamic(rows: u32) {
         let points = image(&scene.ground_points(1, 3)[0], rows, SPACING);
         let mut rng = kelvin::rng::SplitMix64::new(11);
         let (mut error, mut mean, mut seconds, mut measured) = (0.0, 0.0, 0.0, 0);
+        let mut average: Option<Vec<f64>> = None;
         for frame in 0..100u32 {
             for _ in 0..scene.lights.len() / 100 {
                 let e = scene.lights[rng.below(scene.lights.len())];
@@ -197,14 +213,23 @@ fn dynamic(rows: u32) {
                     t.translation += step;
                 }
             }
-            let (values, s) = estimate(&mut world, &mut schedule, &points, (selection, spp), 1, frame);
+            // Every frame's time counts, the ones that build temporal reuse's history too.
+            let (mut values, s) = estimate(&mut world, &mut schedule, &points, (selection, spp), 1, frame);
+            seconds += s;
+            if name.contains("averaged") {
+                let a = average.get_or_insert_with(|| values.clone());
+                for (a, v) in a.iter_mut().zip(&values) {
+                    *a += (v - *a) / 20.0;
+                }
+                values.clone_from(a);
+            }
             if frame >= 20 && frame % 5 == 0 {
                 let (exact, _) = estimate(&mut world, &mut schedule, &points, (LightSelection::All, 1), 99, 0);
-                (error, seconds, measured) = (error + rel_mse(&values, &exact), seconds + s, measured + 1);
+                (error, measured) = (error + rel_mse(&values, &exact), measured + 1);
                 mean += ratio(&values, &exact);
             }
         }
         let n = measured as f64;
-        print_row("10k moving", name, (spp, seconds / n), (error / n, mean / n), &mut bvh_efficiency);
+        print_row("10k moving", name, (spp, seconds / 100.0), (error / n, mean / n, f64::NAN), &mut bvh_efficiency);
     }
 }
