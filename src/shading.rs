@@ -10,6 +10,7 @@ use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 
 /// RGB (linear sRGB, photometric) or spectral (sampled wavelengths per point).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum ColorMode {
     #[default]
     Rgb,

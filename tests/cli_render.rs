@@ -69,8 +69,11 @@ fn report_covers_every_batch_of_the_render() {
 fn light_sampler_defaults_to_the_light_bvh() {
     let output = Command::new(env!("CARGO_BIN_EXE_kelvin")).args(["render", "--help"]).output().expect("kelvin runs");
     let help = String::from_utf8_lossy(&output.stdout);
-    let line = help.lines().skip_while(|l| !l.contains("--light-sampler")).take(3).collect::<Vec<_>>().join("\n");
-    assert!(line.contains("[default: bvh]"), "{help}");
+    // The option's block: its lines up to the next option.
+    let mut lines = help.lines().skip_while(|l| !l.trim_start().starts_with("--light-sampler"));
+    let first = lines.next().unwrap_or_default();
+    let block: Vec<&str> = lines.take_while(|l| !l.trim_start().starts_with("--")).collect();
+    assert!(first.contains("--light-sampler") && block.join("\n").contains("[default: bvh]"), "{help}");
 }
 
 /// `--sky`: a real glTF scene under a physical sun and sky, in both colour modes; night is black

@@ -33,7 +33,7 @@ struct RenderArgs {
     size: (u32, u32),
     /// Samples per pixel for every scene; default: each scene's own (about a second of rendering
     /// on a 2-core machine, the same samples per image at any size).
-    #[arg(long, value_parser = values::whole(1..=1 << 20))]
+    #[arg(long, value_parser = values::whole(kelvin::render::job::SPP))]
     spp: Option<u32>,
     /// Scenes to run, comma-separated; default: the whole suite.
     #[arg(long, value_delimiter = ',')]

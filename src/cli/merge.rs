@@ -24,7 +24,7 @@ pub struct MergeArgs {
 pub fn run(args: MergeArgs) -> Result<(), CliError> {
     let tiles = args.tiles.iter().map(|p| read_exr_tile(p)).collect::<Result<Vec<_>, _>>()?;
     let (width, height, rgb) = merge_tiles(&tiles)?;
-    let exposure = args.exposure.unwrap_or_else(|| super::render::auto_exposure(&rgb));
+    let exposure = args.exposure.unwrap_or_else(|| kelvin::render::film_io::auto_exposure(&rgb));
     super::render::write_outputs(&args.output, width, height, &rgb, exposure)?;
     println!("merged {} tiles into {width}x{height}", tiles.len());
     Ok(())

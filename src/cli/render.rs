@@ -8,39 +8,16 @@ use std::path::{Path, PathBuf};
 
 use bevy_ecs::prelude::*;
 use indicatif::{ProgressBar, ProgressStyle};
-use kelvin::light::SunSkyLight;
-use kelvin::render::camera::CameraModel;
-use kelvin::render::film_io::{write_exr, write_exr_tile, write_png};
+use kelvin::render::film_io::{auto_exposure, write_exr, write_exr_tile, write_png};
+use kelvin::render::job::{self, IntegratorChoice, LoadedJob, RenderJob, SamplerChoice};
 use kelvin::render::path::PathDepth;
-use kelvin::render::renderer::{Integrator, RenderOptions, RenderStats, Strategy, render_with};
+use kelvin::render::renderer::{RenderOptions, RenderStats, render_with};
 use kelvin::render::tiles::Crop;
 use kelvin::scene::animate::{GltfAnimations, pose_gltf};
-use kelvin::shading::{ColorMode, LightSamplerKind, LightSelection, Restir, ReuseWeights, Settings};
-use kelvin::systems::LightingPlugin;
+use kelvin::shading::ColorMode;
 
 use super::frames::{FrameRange, frame_output};
 use super::{CliError, values};
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum SamplerArg {
-    Uniform,
-    Power,
-    Bvh,
-    Ris,
-    Restir,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum IntegratorArg {
-    Path,
-    Direct,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum ColorArg {
-    Rgb,
-    Spectral,
-}
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
@@ -50,7 +27,7 @@ pub struct RenderArgs {
     #[arg(short, long, default_value = "render.exr")]
     output: PathBuf,
     /// Camera samples per pixel (per pass, with --time).
-    #[arg(long, default_value_t = 32, value_parser = values::whole(1..=1 << 20))]
+    #[arg(long, default_value_t = 32, value_parser = values::whole(job::SPP))]
     spp: u32,
     /// Render passes of --spp samples per pixel until this many seconds have passed (at least one).
     #[arg(long, value_name = "SECONDS", value_parser = values::seconds)]
@@ -75,29 +52,29 @@ pub struct RenderArgs {
     /// How light reaches the camera: paths of up to --max-depth bounces, every bounce through the
     /// light system, or direct lighting (light and BSDF samples at the surface the camera sees).
     #[arg(long, value_enum, default_value = "path")]
-    integrator: IntegratorArg,
+    integrator: IntegratorChoice,
     /// Path tracer: surfaces after the camera's at most (1 = direct lighting, 0 = emission only).
-    #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth, value_parser = values::whole(0..=1024))]
+    #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth, value_parser = values::whole(job::DEPTH))]
     max_depth: u32,
     /// Path tracer: Russian roulette may end a path from this many surfaces on.
-    #[arg(long, default_value_t = PathDepth::DEFAULT.roulette_depth, value_parser = values::whole(0..=1024))]
+    #[arg(long, default_value_t = PathDepth::DEFAULT.roulette_depth, value_parser = values::whole(job::DEPTH))]
     roulette_depth: u32,
     /// How a light is chosen per sample (ris: resampled importance sampling over --candidates
     /// light-BVH samples, one shadow ray for the one it keeps; restir: ris, then each pixel's
     /// reservoir combined with --neighbours others' within --radius pixels).
     #[arg(long, value_enum, default_value = "bvh")]
-    light_sampler: SamplerArg,
+    light_sampler: SamplerChoice,
     /// Colour mode.
     #[arg(long, value_enum, default_value = "rgb")]
-    color: ColorArg,
+    color: ColorMode,
     /// Light samples drawn per resampled one (--light-sampler ris).
-    #[arg(long, default_value_t = 8, value_parser = values::whole(1..=4096))]
+    #[arg(long, default_value_t = 8, value_parser = values::whole(job::CANDIDATES))]
     candidates: u32,
     /// Neighbour reservoirs combined per pixel (--light-sampler restir).
-    #[arg(long, default_value_t = 4, value_parser = values::whole(0..=256))]
+    #[arg(long, default_value_t = 4, value_parser = values::whole(job::NEIGHBOURS))]
     neighbours: u32,
     /// Radius of the neighbourhood, pixels (--light-sampler restir).
-    #[arg(long, default_value_t = 16, value_parser = values::whole(1..=values::MAX_SIDE as i64))]
+    #[arg(long, default_value_t = 16, value_parser = values::whole(job::RADIUS))]
     radius: u32,
     /// Weigh combined reservoirs 1/sum M: fewer target evaluations, biased (--light-sampler restir).
     #[arg(long)]
@@ -154,111 +131,52 @@ impl RenderArgs {
         self.exposure
     }
 
-    fn selection(&self) -> LightSelection {
-        match self.light_sampler {
-            _ if self.all_lights => LightSelection::All,
-            SamplerArg::Ris => LightSelection::Resampled { candidates: self.candidates },
-            SamplerArg::Restir => LightSelection::Restir(Restir {
-                candidates: self.candidates,
-                spatial: self.neighbours,
-                radius: self.radius,
-                // One frame: no previous run to reuse.
-                temporal: false,
-                weights: if self.biased_reuse { ReuseWeights::Biased } else { ReuseWeights::Unbiased },
-                ..Restir::default()
-            }),
-            _ => LightSelection::OneSampled,
-        }
-    }
-
-    /// The render's options (image, samples, integrator, crop).
-    fn options(&self) -> RenderOptions {
-        RenderOptions {
+    /// The render these arguments describe (all but outputs and frames).
+    pub(super) fn job(&self) -> RenderJob {
+        RenderJob {
+            scene: self.scene.clone(),
             width: self.size.0,
             height: self.size.1,
             spp: self.spp,
-            strategy: if self.no_mis { Strategy::LightOnly } else { Strategy::Mis },
-            integrator: match self.integrator {
-                IntegratorArg::Path => {
-                    Integrator::Path(PathDepth { max_depth: self.max_depth, roulette_depth: self.roulette_depth })
-                }
-                IntegratorArg::Direct => Integrator::Direct,
-            },
-            time_budget: self.time.map(std::time::Duration::from_secs_f64),
+            time: self.time,
+            env: self.env.clone(),
+            env_intensity: self.env_intensity,
+            sky: self.sky.clone(),
+            sky_intensity: self.sky_intensity,
+            integrator: self.integrator,
+            depth: PathDepth { max_depth: self.max_depth, roulette_depth: self.roulette_depth },
+            light_sampler: self.light_sampler,
+            candidates: self.candidates,
+            neighbours: self.neighbours,
+            radius: self.radius,
+            biased_reuse: self.biased_reuse,
+            color: self.color,
+            all_lights: self.all_lights,
+            mis: !self.no_mis,
+            seed: self.seed,
+            environment_at: self.environment_at,
             crop: self.crop,
         }
     }
 
     /// Why this render cannot be split into tiles that merge into it (None: it can).
     pub(super) fn tiling_refusal(&self) -> Option<String> {
-        let whole = RenderOptions { crop: Some(Crop { x0: 0, y0: 0, x1: 1, y1: 1 }), ..self.options() };
-        whole.check_tiling(&self.selection()).err().map(|e| e.to_string())
+        let job = self.job();
+        let whole = RenderOptions { crop: Some(Crop { x0: 0, y0: 0, x1: 1, y1: 1 }), ..job.options() };
+        whole.check_tiling(&job.selection()).err().map(|e| e.to_string())
     }
 }
 
-/// Builds the world: settings, the scene (file or default) and the optional environment light and
-/// sun and sky. Also returns the glTF file's index in `GltfAnimations`.
-fn build_world(args: &RenderArgs) -> Result<(World, Schedule, Option<usize>), CliError> {
-    // Checked before the scene loads, so a typo fails at once.
-    let sky = match &args.sky {
-        Some(spec) => {
-            let bad = |e: kelvin::light::LightError| format!("--sky {spec}: {e}");
-            let light = SunSkyLight { scale: args.sky_intensity, ..SunSkyLight::parse(spec).map_err(bad)? };
-            light.validate().map_err(bad)?;
-            Some(light)
-        }
-        None => None,
-    };
-    let mut world = World::new();
-    let mut schedule = Schedule::default();
-    world.insert_resource(Settings {
-        color_mode: match args.color {
-            ColorArg::Rgb => ColorMode::Rgb,
-            ColorArg::Spectral => ColorMode::Spectral,
-        },
-        light_sampler: match args.light_sampler {
-            SamplerArg::Uniform => LightSamplerKind::Uniform,
-            SamplerArg::Power => LightSamplerKind::Power,
-            SamplerArg::Bvh | SamplerArg::Ris | SamplerArg::Restir => LightSamplerKind::Bvh,
-        },
-        selection: args.selection(),
-        seed: args.seed,
-        ..Default::default()
-    });
-    LightingPlugin::build(&mut world, &mut schedule);
-    let mut file = None;
-    match &args.scene {
-        Some(path) => {
-            let start = std::time::Instant::now();
-            let report = kelvin::render::scene_file::spawn_gltf_file(&mut world, path)?;
-            let load = start.elapsed().as_secs_f64();
-            for w in &report.warnings {
-                eprintln!("warning: {w}");
-            }
-            eprintln!(
-                "scene {} (loaded in {:.1} ms): {} meshes ({} triangles, {} emissive), {} lights, {} cameras, {} animations",
-                path.display(),
-                load * 1e3,
-                report.meshes,
-                report.triangles,
-                report.emissive_meshes,
-                report.lights,
-                report.cameras,
-                report.animations
-            );
-            file = Some(report.file);
-        }
-        None => kelvin::scenes::default_scene::spawn_default_scene(&mut world),
+/// Loads the job's world, printing the loader's warnings and the scene's summary.
+fn build_world(job: &RenderJob) -> Result<LoadedJob, CliError> {
+    let loaded = job.load()?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
     }
-    if let Some(path) = &args.env {
-        for w in kelvin::render::scene_file::spawn_env_map(&mut world, path, args.env_intensity)? {
-            eprintln!("warning: {w}");
-        }
+    if let Some(summary) = &loaded.summary {
+        eprintln!("{summary}");
     }
-    if let Some(light) = sky {
-        world.spawn(light);
-    }
-    Ok((world, schedule, file))
+    Ok(loaded)
 }
 
 /// The index of the animation `--animation` names in the spawned file, or why there is none.
@@ -273,17 +191,6 @@ fn chosen_clip(world: &World, file: Option<usize>, args: &RenderArgs) -> Result<
         let names: Vec<String> = clips.map(|(i, c)| format!("{i}: {}", c.name.as_deref().unwrap_or("-"))).collect();
         format!("--animation {}: not in {scene} (it has {})", args.animation, names.join(", ")).into()
     })
-}
-
-/// Exposure (stops) that maps the log-average luminance to 18% grey.
-pub(super) fn auto_exposure(rgb: &[glam::Vec3]) -> f32 {
-    let ys: Vec<f64> =
-        rgb.iter().map(|c| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64).filter(|y| *y > 0.0).collect();
-    if ys.is_empty() {
-        return 0.0;
-    }
-    let log_mean = ys.iter().map(|y| y.ln()).sum::<f64>() / ys.len() as f64;
-    (0.18f64 / log_mean.exp()).log2() as f32
 }
 
 /// Writes the image, and beside an .exr a .png preview first (so that an .exr that exists is a
@@ -321,7 +228,8 @@ pub(super) fn render_to_files(
     mut progress: impl FnMut(f32) + Send,
 ) -> Result<Vec<Rendered>, CliError> {
     let (width, height) = args.size;
-    let opts = args.options();
+    let job = args.job();
+    let opts = job.options();
     let ext = args.output.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     let out = args.output.display();
     if let Some(crop) = args.crop {
@@ -329,7 +237,7 @@ pub(super) fn render_to_files(
         if ext.as_deref() != Some("exr") {
             return Err(format!("{out}: a --crop tile is written as .exr, which records its place in the image").into());
         }
-        opts.check_tiling(&args.selection()).map_err(|e| format!("--crop {crop}: {e}"))?;
+        opts.check_tiling(&job.selection()).map_err(|e| format!("--crop {crop}: {e}"))?;
     } else if !matches!(ext.as_deref(), Some("exr" | "png")) {
         return Err(format!("{out}: unsupported output extension; use .exr or .png").into());
     }
@@ -341,9 +249,9 @@ pub(super) fn render_to_files(
         }
         None => vec![None],
     };
-    let (mut world, mut schedule, file) = build_world(args)?;
+    let LoadedJob { mut world, mut schedule, file, .. } = build_world(&job)?;
     let clip = if args.frames.is_some() { Some(chosen_clip(&world, file, args)?) } else { None };
-    let camera = args.environment_at.map(|origin| CameraModel::LatLong { origin, width, height });
+    let camera = job.camera();
     let mut rendered = Vec::with_capacity(frames.len());
     let n = frames.len() as f32;
     for (k, frame) in frames.into_iter().enumerate() {

@@ -5,8 +5,7 @@
 use clap::builder::{RangedI64ValueParser, RangedU64ValueParser};
 use kelvin::render::tiles::Crop;
 
-/// The largest image side, pixels.
-pub(super) const MAX_SIDE: u32 = 16384;
+use kelvin::render::job::{self, MAX_SIDE};
 
 /// WIDTHxHEIGHT, each in 1..=16384.
 pub(super) fn size(s: &str) -> Result<(u32, u32), String> {
@@ -30,7 +29,7 @@ pub(super) fn point(s: &str) -> Result<glam::Vec3, String> {
 /// Seconds in 0..1e7.
 pub(super) fn seconds(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(t) if t.is_finite() && (0.0..1e7).contains(&t) => Ok(t),
+        Ok(t) if t.is_finite() && job::SECONDS.contains(&t) => Ok(t),
         _ => Err(format!("'{s}': expected a number of seconds in [0, 10000000)")),
     }
 }
@@ -57,8 +56,8 @@ pub(super) fn finite_in(lo: f32, hi: f32) -> impl Fn(&str) -> Result<f32, String
 }
 
 /// A whole number in `range` (clap's message: "0 is not in 1..=4294967295").
-pub(super) fn whole(range: impl std::ops::RangeBounds<i64>) -> RangedI64ValueParser<u32> {
-    RangedI64ValueParser::new().range(range)
+pub(super) fn whole(range: std::ops::RangeInclusive<u32>) -> RangedI64ValueParser<u32> {
+    RangedI64ValueParser::new().range(*range.start() as i64..=*range.end() as i64)
 }
 
 /// A count in `range`, for sizes and loops (`usize`).
@@ -78,5 +77,5 @@ pub(super) fn exposure() -> impl Fn(&str) -> Result<f32, String> + Clone + Send 
 
 /// A light's intensity multiplier: [0, 1e12].
 pub(super) fn intensity() -> impl Fn(&str) -> Result<f32, String> + Clone + Send + Sync + 'static {
-    finite_in(0.0, 1e12)
+    finite_in(*job::INTENSITY.start(), *job::INTENSITY.end())
 }

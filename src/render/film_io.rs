@@ -43,6 +43,17 @@ pub enum ImageIoError {
     Read { what: String, msg: String },
 }
 
+/// Exposure (stops) that maps the log-average luminance to 18% grey.
+pub fn auto_exposure(rgb: &[Vec3]) -> f32 {
+    let ys: Vec<f64> =
+        rgb.iter().map(|c| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64).filter(|y| *y > 0.0).collect();
+    if ys.is_empty() {
+        return 0.0;
+    }
+    let log_mean = ys.iter().map(|y| y.ln()).sum::<f64>() / ys.len() as f64;
+    (0.18f64 / log_mean.exp()).log2() as f32
+}
+
 /// Writes linear RGB as a 32-bit float OpenEXR with lossless (ZIP) compression.
 pub fn write_exr(path: &Path, width: usize, height: usize, rgb: &[Vec3]) -> Result<(), ImageIoError> {
     let what = path.display().to_string();

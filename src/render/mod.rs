@@ -4,6 +4,7 @@ pub mod camera;
 mod camera_pass;
 pub mod film;
 pub mod film_io;
+pub mod job;
 pub mod material;
 mod normal_map;
 pub mod path;

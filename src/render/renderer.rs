@@ -2,6 +2,8 @@
 //! and one run of the schedule) -> MIS with BSDF sampling -> film. It never bypasses the light
 //! system: light selection, Sample_Li and shadow rays all happen in the ECS systems.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -152,6 +154,8 @@ pub struct RenderStats {
     /// The light system's run report over every update of the render (the one before the first
     /// batch, then one per batch): each warning, and per system its runs and summed counts.
     pub report: RunSummary,
+    /// The render was stopped before its samples were done (see [`render_until`]).
+    pub stopped: bool,
 }
 
 /// Seconds spent in each pass of a render, summed over its batches.
@@ -229,9 +233,22 @@ pub fn render_with(
     camera: Option<CameraModel>,
     progress: impl FnMut(f32) + Send,
 ) -> (Film, RenderStats) {
+    render_until(world, schedule, opts, camera, progress, &AtomicBool::new(false))
+}
+
+/// [`render_with`] that ends after the batch in flight once `stop` is set (an app's cancel, a
+/// Ctrl-C): the film then holds the samples finished so far and `RenderStats::stopped` is true.
+pub fn render_until(
+    world: &mut World,
+    schedule: &mut Schedule,
+    opts: &RenderOptions,
+    camera: Option<CameraModel>,
+    progress: impl FnMut(f32) + Send,
+    stop: &AtomicBool,
+) -> (Film, RenderStats) {
     // The render runs on a pool thread (rayon::scope moves it there), so each parallel pass
     // starts without handing its work to the pool and putting the calling thread to sleep.
-    rayon::scope(|_| render_on_pool(world, schedule, opts, camera, progress))
+    rayon::scope(|_| render_on_pool(world, schedule, opts, camera, progress, stop))
 }
 
 fn render_on_pool(
@@ -240,6 +257,7 @@ fn render_on_pool(
     opts: &RenderOptions,
     camera: Option<CameraModel>,
     mut progress: impl FnMut(f32),
+    stop: &AtomicBool,
 ) -> (Film, RenderStats) {
     let start = std::time::Instant::now();
     let mut stats = RenderStats::default();
@@ -269,7 +287,7 @@ fn render_on_pool(
     let mut paths = Paths::default();
     // Passes of `spp` samples per pixel: one, or as many as fit in the time budget (each pass
     // draws the next samples of every pixel's streams).
-    for pass in 0u32.. {
+    'passes: for pass in 0u32.. {
         let first_sample = pass * opts.spp;
         let mut first = 0usize;
         while first < total {
@@ -314,6 +332,10 @@ fn render_on_pool(
                 Some(budget) => (start.elapsed().as_secs_f64() / budget.as_secs_f64()).min(1.0) as f32,
             };
             progress(done);
+            if stop.load(Ordering::Relaxed) {
+                stats.stopped = true;
+                break 'passes;
+            }
         }
         stats.spp += opts.spp;
         if opts.time_budget.is_none_or(|budget| start.elapsed() >= budget) {

@@ -1,0 +1,220 @@
+"""kelvin: a physically based light system, from Python.
+
+Renders of glTF scenes (``render``), the light system itself for many-light studies
+(``LightSystem``), and the colorimetry and photometry of ``kelvin spectrum`` and ``kelvin ies``.
+Images and point sets are NumPy arrays; values are photometric (cd/m^2 for radiance, lux for
+irradiance) in linear sRGB. Work runs without the GIL; Ctrl-C stops a render.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from typing import Optional, Sequence, Tuple
+
+import numpy as np
+
+from . import _kelvin
+
+__all__ = ["render", "write_exr", "write_png", "read_exr", "spectrum", "ies", "LightSystem"]
+
+
+def _path(p) -> Optional[str]:
+    return None if p is None else os.fspath(p)
+
+
+def render(
+    scene=None,
+    *,
+    size: Tuple[int, int] = (512, 512),
+    spp: int = 32,
+    time: Optional[float] = None,
+    env=None,
+    env_intensity: float = 1.0,
+    sky: Optional[str] = None,
+    sky_intensity: float = 1.0,
+    integrator: str = "path",
+    max_depth: int = 16,
+    roulette_depth: int = 3,
+    light_sampler: str = "bvh",
+    candidates: int = 8,
+    neighbours: int = 4,
+    radius: int = 16,
+    biased_reuse: bool = False,
+    color: str = "rgb",
+    all_lights: bool = False,
+    mis: bool = True,
+    seed: int = 0,
+    threads: Optional[int] = None,
+    environment_at: Optional[Sequence[float]] = None,
+    crop: Optional[Tuple[int, int, int, int]] = None,
+    stats: Optional[dict] = None,
+) -> np.ndarray:
+    """Render ``scene`` (a .gltf/.glb path; None: the embedded default scene) as ``kelvin render`` does.
+
+    Every keyword is the CLI option of the same name (``mis=False`` is ``--no-mis``); the same
+    options give the same image, bit for bit. Returns an H x W x 3 float32 array of linear
+    photometric radiance (cd/m^2, linear sRGB), rows top to bottom; with ``crop=(x0, y0, x1, y1)``
+    only that region of the full image. The loader's and light system's warnings are issued as
+    ``UserWarning``s; pass a dict as ``stats`` to receive the render's counts and seconds.
+
+    Raises ValueError for an option out of range and OSError for a file that does not load.
+    """
+    pixels, width, height, said, info = _kelvin.render(
+        _path(scene), tuple(size), spp, time, _path(env), env_intensity, sky, sky_intensity, integrator,
+        max_depth, roulette_depth, light_sampler, candidates, neighbours, radius, biased_reuse, color,
+        all_lights, mis, seed, threads, None if environment_at is None else tuple(environment_at),
+        None if crop is None else tuple(crop))
+    for w in said:
+        warnings.warn(w, UserWarning, stacklevel=2)
+    if stats is not None:
+        stats.update(info)
+    return pixels.reshape(height, width, 3)
+
+
+def _image(image) -> Tuple[np.ndarray, int, int]:
+    a = np.ascontiguousarray(image, dtype=np.float32)
+    if a.ndim != 3 or a.shape[2] != 3 or a.shape[0] == 0 or a.shape[1] == 0:
+        raise ValueError(f"image: expected an H x W x 3 array, got shape {a.shape}")
+    return a.reshape(-1), a.shape[1], a.shape[0]
+
+
+def write_exr(path, image) -> None:
+    """Write an H x W x 3 linear image as a 32-bit float OpenEXR (ZIP compressed)."""
+    flat, width, height = _image(image)
+    _kelvin.write_exr(os.fspath(path), flat, width, height)
+
+
+def write_png(path, image, exposure: Optional[float] = None) -> None:
+    """Write an H x W x 3 linear image as a tone-mapped 8-bit sRGB PNG; ``exposure`` in stops,
+    automatic (the log-average luminance to 18% grey, as ``kelvin render``) when None."""
+    flat, width, height = _image(image)
+    _kelvin.write_png(os.fspath(path), flat, width, height, exposure)
+
+
+def read_exr(path) -> np.ndarray:
+    """Read an OpenEXR image's RGB as an H x W x 3 float32 array."""
+    flat, width, height = _kelvin.read_exr(os.fspath(path))
+    return flat.reshape(height, width, 3)
+
+
+def spectrum(spec: str) -> dict:
+    """What ``kelvin spectrum SPEC --json`` prints: XYZ, xy, u'v', linear sRGB, CCT and Duv, luminous
+    efficacy (and exitance and lambda_max for black and grey bodies). ``spec`` is ``blackbody:<K>``,
+    ``graybody:<K>:<emissivity>``, ``illuminant:<name>``, ``daylight:<K>`` or a CSV file of nm,value rows."""
+    return json.loads(_kelvin.spectrum_json(spec))
+
+
+def ies(path) -> dict:
+    """What ``kelvin ies FILE --json`` prints: header keywords, photometric type, stated and integrated
+    lumens, peak candela, beam and field angles of an IES LM-63 file."""
+    return json.loads(_kelvin.ies_json(os.fspath(path)))
+
+
+def _columns(points, normals) -> Tuple[np.ndarray, np.ndarray, int]:
+    p = np.ascontiguousarray(points, dtype=np.float32)
+    n = np.ascontiguousarray(normals, dtype=np.float32)
+    if p.ndim != 2 or p.shape[1] != 3:
+        raise ValueError(f"points: expected an N x 3 array, got shape {p.shape}")
+    if n.shape != p.shape:
+        raise ValueError(f"normals: expected shape {p.shape} (one per point), got {n.shape}")
+    return p.reshape(-1), n.reshape(-1), p.shape[0]
+
+
+class LightSystem:
+    """kelvin's light system on its own: lights and occluders added by id, and batches of surface
+    points whose direct light (light choice, Sample_Li, shadow rays) comes back as NumPy arrays.
+
+    ``sampler`` chooses one light per sample: ``"bvh"`` (the light BVH, default), ``"power"`` or
+    ``"uniform"``; ``all_lights=True`` samples every light at every point instead. Amounts are
+    photometric (candela, lumens, lux, nits) or radiometric where named (watts); ``color`` is linear
+    sRGB with (1, 1, 1) the D65 white, ``temperature`` a blackbody in kelvin. Angles are degrees.
+    Positions are metres, +Y up.
+    """
+
+    def __init__(self, sampler: str = "bvh", *, color: str = "rgb", seed: int = 0, all_lights: bool = False):
+        self._native = _kelvin.LightSystem(sampler, color, seed, all_lights)
+
+    def add_point(self, position, *, candela=None, lumens=None, watts=None, color=None, temperature=None,
+                  radius: float = 0.0) -> int:
+        """A point light (a sphere light of the same intensity when ``radius`` > 0). Returns its id."""
+        return self._native.add_point(tuple(position), candela, lumens, watts, _rgb(color), temperature, radius)
+
+    def add_spot(self, position, direction, *, candela=None, lumens=None, inner_angle: float = 0.0,
+                 outer_angle: float = 45.0, color=None, temperature=None) -> int:
+        """A spot light pointing along ``direction``; full intensity within ``inner_angle`` of the axis,
+        none beyond ``outer_angle`` (half-angles, degrees). Returns its id."""
+        return self._native.add_spot(tuple(position), tuple(direction), candela, lumens, inner_angle, outer_angle,
+                                     _rgb(color), temperature)
+
+    def add_distant(self, direction, *, lux=None, color=None, temperature=None, angular_diameter: float = 0.0) -> int:
+        """A distant light shining along ``direction`` (the sun: ``angular_diameter=0.53``). Returns its id."""
+        return self._native.add_distant(tuple(direction), lux, _rgb(color), temperature, angular_diameter)
+
+    def add_area(self, center, normal, size, *, nits=None, lumens=None, color=None, temperature=None,
+                 two_sided: bool = False) -> int:
+        """A rectangular area light of ``size`` = (width, height) metres at ``center``, emitting along
+        ``normal`` (both sides with ``two_sided``). Returns its id."""
+        return self._native.add_area(tuple(center), tuple(normal), tuple(size), nits, lumens, _rgb(color),
+                                     temperature, two_sided)
+
+    def add_ies(self, path, position, direction=(0.0, -1.0, 0.0), *, lumens=None, multiplier: float = 1.0,
+                color=None, temperature=None) -> int:
+        """A luminaire with the IES LM-63 profile at ``path``, its photometric nadir along ``direction``;
+        the file's candela times ``multiplier``, or scaled to ``lumens``. Returns its id."""
+        return self._native.add_ies(os.fspath(path), tuple(position), tuple(direction), lumens, multiplier,
+                                    _rgb(color), temperature)
+
+    def add_mesh(self, vertices, indices) -> int:
+        """Occluding triangles in world space: ``vertices`` N x 3 (metres), ``indices`` M x 3. Returns its id."""
+        v = np.ascontiguousarray(vertices, dtype=np.float32)
+        i = np.asarray(indices)
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise ValueError(f"vertices: expected an N x 3 array, got shape {v.shape}")
+        if i.ndim != 2 or i.shape[1] != 3:
+            raise ValueError(f"indices: expected an M x 3 array, got shape {i.shape}")
+        if i.size and (not np.issubdtype(i.dtype, np.integer) or i.min() < 0 or i.max() >= v.shape[0]):
+            raise ValueError(f"indices: expected integers in 0..{v.shape[0] - 1}")
+        return self._native.add_mesh(v.reshape(-1), np.ascontiguousarray(i, dtype=np.uint32).reshape(-1))
+
+    def load_gltf(self, path) -> None:
+        """Add a glTF file's meshes, lights and cameras; the loader's warnings become UserWarnings."""
+        for w in self._native.load_gltf(os.fspath(path)):
+            warnings.warn(w, UserWarning, stacklevel=2)
+
+    def move(self, id: int, position, direction=None) -> None:
+        """Place light or mesh ``id`` at ``position`` (and turn it to ``direction``); the next run
+        updates only what moved."""
+        self._native.move_to(id, tuple(position), None if direction is None else tuple(direction))
+
+    def remove(self, id: int) -> None:
+        """Remove light or mesh ``id``."""
+        self._native.remove(id)
+
+    def irradiance(self, points, normals, *, spp: int = 64, threads: Optional[int] = None) -> np.ndarray:
+        """Irradiance (lux, linear sRGB; N x 3 float32) at ``points`` (N x 3) facing ``normals``: an
+        unbiased estimate from ``spp`` light samples per point, shadow rays included."""
+        p, n, count = _columns(points, normals)
+        return self._native.irradiance(p, n, spp, threads).reshape(count, 3)
+
+    def sample_li(self, points, normals, *, spp: int = 1, threads: Optional[int] = None) -> dict:
+        """Every light sample of the points as columns: ``point`` (its point's index), ``radiance`` (E x 3,
+        Li with visibility applied), ``wi`` (E x 3, unit direction to the light), ``pdf`` (the density of
+        the point's samples together: sum radiance * cos / pdf over a point's rows is its irradiance),
+        ``occluded`` and ``delta`` (booleans)."""
+        p, n, _ = _columns(points, normals)
+        c = self._native.sample_li(p, n, spp, threads)
+        c["radiance"] = c["radiance"].reshape(-1, 3)
+        c["wi"] = c["wi"].reshape(-1, 3)
+        c["occluded"] = np.asarray(c["occluded"], dtype=bool)
+        c["delta"] = np.asarray(c["delta"], dtype=bool)
+        return c
+
+    def warnings(self) -> list:
+        """The last run's warnings (lights skipped and why)."""
+        return self._native.warnings()
+
+
+def _rgb(color):
+    return None if color is None else tuple(float(c) for c in color)

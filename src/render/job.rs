@@ -1,0 +1,304 @@
+//! A render as `kelvin render` describes one: a scene file (or the default scene), the lights it
+//! adds (an environment map, a sun and sky) and every option. The CLI and the Python package build
+//! their renders from a [`RenderJob`], so one description gives one image, bit for bit.
+
+use std::ops::RangeInclusive;
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+
+use super::camera::CameraModel;
+use super::film::Film;
+use super::path::PathDepth;
+use super::renderer::{Integrator, RenderOptions, RenderStats, Strategy, render_until};
+use super::tiles::Crop;
+use crate::light::SunSkyLight;
+use crate::shading::{ColorMode, LightSamplerKind, LightSelection, Restir, ReuseWeights, Settings};
+use crate::systems::LightingPlugin;
+
+/// Accepted ranges of the numeric options (the CLI's parsers check the same).
+pub const MAX_SIDE: u32 = 16384;
+pub const SPP: RangeInclusive<u32> = 1..=1 << 20;
+pub const DEPTH: RangeInclusive<u32> = 0..=1024;
+pub const CANDIDATES: RangeInclusive<u32> = 1..=4096;
+pub const NEIGHBOURS: RangeInclusive<u32> = 0..=256;
+pub const RADIUS: RangeInclusive<u32> = 1..=MAX_SIDE;
+/// An intensity multiplier (`env_intensity`, `sky_intensity`).
+pub const INTENSITY: RangeInclusive<f32> = 0.0..=1e12;
+/// A time budget, seconds (the end is excluded).
+pub const SECONDS: std::ops::Range<f64> = 0.0..1e7;
+
+/// How a light is chosen per sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+pub enum SamplerChoice {
+    /// Every light equally likely.
+    Uniform,
+    /// Lights in proportion to their power.
+    Power,
+    /// The light BVH: lights weighed by what can reach the point (pbrt-v4's default).
+    #[default]
+    Bvh,
+    /// Resampled importance sampling over several light-BVH candidates, one shadow ray.
+    Ris,
+    /// RIS, then reuse of neighbouring pixels' reservoirs (ReSTIR, spatial).
+    Restir,
+}
+
+/// Path tracing or direct lighting.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+pub enum IntegratorChoice {
+    /// Paths up to the maximum depth, every bounce through the light system.
+    #[default]
+    Path,
+    /// Light and BSDF samples at the surface the camera sees.
+    Direct,
+}
+
+/// What can be wrong with a job: an option out of range, a scene or map that does not load.
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    #[error("{0}")]
+    Invalid(String),
+    #[error(transparent)]
+    Gltf(#[from] crate::scene::gltf::GltfError),
+    #[error(transparent)]
+    Image(#[from] crate::scene::image::ImageError),
+}
+
+/// Every option of `kelvin render` but its outputs and animation frames. The defaults are the CLI's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderJob {
+    /// A glTF file (.gltf or .glb); None: the embedded default scene.
+    pub scene: Option<PathBuf>,
+    pub width: u32,
+    pub height: u32,
+    /// Camera samples per pixel (per pass, with `time`).
+    pub spp: u32,
+    /// Render passes of `spp` until this many seconds have passed.
+    pub time: Option<f64>,
+    /// A lat-long environment map (.exr or .hdr) as an infinite light, and the luminance (nit) of
+    /// a texel of value 1.
+    pub env: Option<PathBuf>,
+    pub env_intensity: f32,
+    /// A sun and sky: "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]", and a multiplier of its radiance.
+    pub sky: Option<String>,
+    pub sky_intensity: f32,
+    pub integrator: IntegratorChoice,
+    /// Path tracer: surfaces after the camera's at most, and where Russian roulette may start.
+    pub depth: PathDepth,
+    pub light_sampler: SamplerChoice,
+    pub candidates: u32,
+    pub neighbours: u32,
+    pub radius: u32,
+    /// ReSTIR: weigh combined reservoirs 1/sum M (biased).
+    pub biased_reuse: bool,
+    pub color: ColorMode,
+    /// Every light sampled at every point instead of one chosen light.
+    pub all_lights: bool,
+    /// MIS of light and BSDF samples (false: light samples only).
+    pub mis: bool,
+    pub seed: u64,
+    /// Render a lat-long map seen from this point instead of through the scene's camera.
+    pub environment_at: Option<Vec3>,
+    /// Render only this region of the image, bit for bit as in the full render.
+    pub crop: Option<Crop>,
+}
+
+impl Default for RenderJob {
+    fn default() -> Self {
+        Self {
+            scene: None,
+            width: 512,
+            height: 512,
+            spp: 32,
+            time: None,
+            env: None,
+            env_intensity: 1.0,
+            sky: None,
+            sky_intensity: 1.0,
+            integrator: IntegratorChoice::Path,
+            depth: PathDepth::DEFAULT,
+            light_sampler: SamplerChoice::Bvh,
+            candidates: 8,
+            neighbours: 4,
+            radius: 16,
+            biased_reuse: false,
+            color: ColorMode::Rgb,
+            all_lights: false,
+            mis: true,
+            seed: 0,
+            environment_at: None,
+            crop: None,
+        }
+    }
+}
+
+/// A job's world, ready to render: its schedule, the glTF file's index in `GltfAnimations`, and
+/// what loading said (warnings, and a one-line summary of the scene).
+pub struct LoadedJob {
+    pub world: World,
+    pub schedule: Schedule,
+    pub file: Option<usize>,
+    pub warnings: Vec<String>,
+    pub summary: Option<String>,
+}
+
+fn check_in<T: PartialOrd + std::fmt::Display>(name: &str, v: T, range: RangeInclusive<T>) -> Result<(), JobError> {
+    if range.contains(&v) {
+        Ok(())
+    } else {
+        Err(JobError::Invalid(format!("{name} = {v} is outside {}..={}", range.start(), range.end())))
+    }
+}
+
+impl RenderJob {
+    /// Checks every option (ranges, the crop, tiling, the sky's text) without loading anything.
+    pub fn check(&self) -> Result<(), JobError> {
+        check_in("width", self.width, 1..=MAX_SIDE)?;
+        check_in("height", self.height, 1..=MAX_SIDE)?;
+        check_in("spp", self.spp, SPP)?;
+        check_in("max_depth", self.depth.max_depth, DEPTH)?;
+        check_in("roulette_depth", self.depth.roulette_depth, DEPTH)?;
+        check_in("candidates", self.candidates, CANDIDATES)?;
+        check_in("neighbours", self.neighbours, NEIGHBOURS)?;
+        check_in("radius", self.radius, RADIUS)?;
+        check_in("env_intensity", self.env_intensity, INTENSITY)?;
+        check_in("sky_intensity", self.sky_intensity, INTENSITY)?;
+        if let Some(t) = self.time
+            && !(t.is_finite() && SECONDS.contains(&t))
+        {
+            return Err(JobError::Invalid(format!("time = {t} is outside [0, {})", SECONDS.end)));
+        }
+        if let Some(p) = self.environment_at
+            && !p.is_finite()
+        {
+            return Err(JobError::Invalid(format!("environment_at = {p} is not finite")));
+        }
+        if let Some(crop) = self.crop {
+            crop.check(self.width, self.height).map_err(|e| JobError::Invalid(e.to_string()))?;
+            let opts = self.options();
+            opts.check_tiling(&self.selection()).map_err(|e| JobError::Invalid(format!("crop {crop}: {e}")))?;
+        }
+        self.sun_sky()?;
+        Ok(())
+    }
+
+    /// How lights are chosen per point.
+    pub fn selection(&self) -> LightSelection {
+        match self.light_sampler {
+            _ if self.all_lights => LightSelection::All,
+            SamplerChoice::Ris => LightSelection::Resampled { candidates: self.candidates },
+            SamplerChoice::Restir => LightSelection::Restir(Restir {
+                candidates: self.candidates,
+                spatial: self.neighbours,
+                radius: self.radius,
+                // One frame: no previous run to reuse.
+                temporal: false,
+                weights: if self.biased_reuse { ReuseWeights::Biased } else { ReuseWeights::Unbiased },
+                ..Restir::default()
+            }),
+            _ => LightSelection::OneSampled,
+        }
+    }
+
+    /// The light system's settings.
+    pub fn settings(&self) -> Settings {
+        Settings {
+            color_mode: self.color,
+            light_sampler: match self.light_sampler {
+                SamplerChoice::Uniform => LightSamplerKind::Uniform,
+                SamplerChoice::Power => LightSamplerKind::Power,
+                SamplerChoice::Bvh | SamplerChoice::Ris | SamplerChoice::Restir => LightSamplerKind::Bvh,
+            },
+            selection: self.selection(),
+            seed: self.seed,
+            ..Default::default()
+        }
+    }
+
+    /// The render's options (image, samples, integrator, crop).
+    pub fn options(&self) -> RenderOptions {
+        RenderOptions {
+            width: self.width,
+            height: self.height,
+            spp: self.spp,
+            strategy: if self.mis { Strategy::Mis } else { Strategy::LightOnly },
+            integrator: match self.integrator {
+                IntegratorChoice::Path => Integrator::Path(self.depth),
+                IntegratorChoice::Direct => Integrator::Direct,
+            },
+            time_budget: self.time.map(std::time::Duration::from_secs_f64),
+            crop: self.crop,
+        }
+    }
+
+    /// The environment camera, or None for the scene's own.
+    pub fn camera(&self) -> Option<CameraModel> {
+        self.environment_at.map(|origin| CameraModel::LatLong { origin, width: self.width, height: self.height })
+    }
+
+    /// The sun and sky the job names, checked.
+    fn sun_sky(&self) -> Result<Option<SunSkyLight>, JobError> {
+        let Some(spec) = &self.sky else { return Ok(None) };
+        let bad = |e: crate::light::LightError| JobError::Invalid(format!("sky {spec}: {e}"));
+        let light = SunSkyLight { scale: self.sky_intensity, ..SunSkyLight::parse(spec).map_err(bad)? };
+        light.validate().map_err(bad)?;
+        Ok(Some(light))
+    }
+
+    /// Checks the job and builds its world: settings, the scene (file or default), the
+    /// environment map and the sun and sky.
+    pub fn load(&self) -> Result<LoadedJob, JobError> {
+        self.check()?;
+        let sky = self.sun_sky()?;
+        let mut world = World::new();
+        let mut schedule = Schedule::default();
+        world.insert_resource(self.settings());
+        LightingPlugin::build(&mut world, &mut schedule);
+        let (mut warnings, mut file, mut summary) = (Vec::new(), None, None);
+        match &self.scene {
+            Some(path) => {
+                let start = std::time::Instant::now();
+                let report = super::scene_file::spawn_gltf_file(&mut world, path)?;
+                summary = Some(format!(
+                    "scene {} (loaded in {:.1} ms): {} meshes ({} triangles, {} emissive), {} lights, {} cameras, {} animations",
+                    path.display(),
+                    start.elapsed().as_secs_f64() * 1e3,
+                    report.meshes,
+                    report.triangles,
+                    report.emissive_meshes,
+                    report.lights,
+                    report.cameras,
+                    report.animations
+                ));
+                warnings.extend(report.warnings);
+                file = Some(report.file);
+            }
+            None => crate::scenes::default_scene::spawn_default_scene(&mut world),
+        }
+        if let Some(path) = &self.env {
+            warnings.extend(super::scene_file::spawn_env_map(&mut world, path, self.env_intensity)?);
+        }
+        if let Some(light) = sky {
+            world.spawn(light);
+        }
+        Ok(LoadedJob { world, schedule, file, warnings, summary })
+    }
+}
+
+impl LoadedJob {
+    /// Renders the job's image (its crop, if it has one); `progress` gets the finished fraction,
+    /// and setting `stop` ends the render after the batch in flight (`RenderStats::stopped`).
+    pub fn render(
+        &mut self,
+        job: &RenderJob,
+        progress: impl FnMut(f32) + Send,
+        stop: &AtomicBool,
+    ) -> (Film, RenderStats) {
+        render_until(&mut self.world, &mut self.schedule, &job.options(), job.camera(), progress, stop)
+    }
+}
