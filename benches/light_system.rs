@@ -172,9 +172,11 @@ fn spawn_kind(world: &mut World, kind: &str, data: &Path) {
     }
     match kind {
         "distant" => {
-            drop(world.spawn((DistantLight::default(), Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z))))
+            world.spawn((DistantLight::default(), Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z)));
         }
-        "uniform_sky" => drop(world.spawn((UniformInfiniteLight::default(), Transform::default()))),
+        "uniform_sky" => {
+            world.spawn((UniformInfiniteLight::default(), Transform::default()));
+        }
         "image_sky" => {
             let env = data.join("env/spiaggia_di_mondello_1k.hdr");
             spawn_env_map(world, &env, 1.0).expect("test data");

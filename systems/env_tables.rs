@@ -65,7 +65,8 @@ pub fn build_env_tables(
     let tables = &mut *tables;
     for (entity, light) in &changed {
         if let Err(e) = light.validate() {
-            (tables.by_entity.remove(&entity), tables.built_from.remove(&entity));
+            tables.by_entity.remove(&entity);
+            tables.built_from.remove(&entity);
             report.warnings.push(format!("environment light {entity} skipped: {e}"));
             continue;
         }

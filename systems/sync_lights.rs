@@ -226,6 +226,8 @@ pub fn sync_sun_sky_lights(
 }
 
 /// Removes the rows of lights whose component was removed or whose entity was despawned.
+// A system: one parameter per light component.
+#[allow(clippy::too_many_arguments)]
 pub fn remove_lights(
     mut points: RemovedComponents<PointLight>,
     mut spots: RemovedComponents<SpotLight>,

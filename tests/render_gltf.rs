@@ -223,15 +223,15 @@ fn the_validator_files_spawn_without_panicking() {
             let path = entry.unwrap().path();
             if path.is_dir() {
                 stack.push(path);
-            } else if path.extension().is_some_and(|e| e == "gltf") {
-                if let Ok(scene) = load_gltf(&path) {
-                    let mut world = World::new();
-                    let mut schedule = Schedule::default();
-                    LightingPlugin::build(&mut world, &mut schedule);
-                    spawn_gltf(&mut world, &scene);
-                    schedule.run(&mut world);
-                    n += 1;
-                }
+            } else if path.extension().is_some_and(|e| e == "gltf")
+                && let Ok(scene) = load_gltf(&path)
+            {
+                let mut world = World::new();
+                let mut schedule = Schedule::default();
+                LightingPlugin::build(&mut world, &mut schedule);
+                spawn_gltf(&mut world, &scene);
+                schedule.run(&mut world);
+                n += 1;
             }
         }
     }

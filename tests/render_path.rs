@@ -210,7 +210,7 @@ fn a_floor_and_wall_under_a_uniform_sky_give_the_series_of_half_their_albedo() {
             Camera { yfov: 0.6 },
             Transform::from_translation(eye).looking_to(Vec3::new(-1.0, -1.0, 0.0), Vec3::Y),
         ));
-        let pixels = render_pixels(&mut world, &mut schedule, 16, 32, integrator.clone());
+        let pixels = render_pixels(&mut world, &mut schedule, 16, 32, integrator);
         let (got, error) = mean_and_error(&pixels);
         let (h, l) = (a as f64 / 2.0, sky as f64);
         let want = match bounces {

@@ -50,7 +50,7 @@ fn sphere_pixels(material: Material, integrator: Integrator) -> Vec<f32> {
     world.spawn((UniformInfiniteLight { amount: Amount::Nits(1.0), ..Default::default() }, Transform::default()));
     let (camera, eye) = (Camera { yfov: 0.75 }, Transform::from_translation(Vec3::new(0.0, 0.3, 3.2)));
     let eye = eye.looking_to(-eye.translation, Vec3::Y);
-    world.spawn((camera.clone(), eye));
+    world.spawn((camera, eye));
     let opts = RenderOptions { integrator, ..RenderOptions::direct(SIZE, SIZE, 32) };
     let film = render(&mut world, &mut schedule, &opts, |_| {}).0;
     // The mesh's faces lie outside the sphere of radius cos(18 deg) cos(15 deg) = 0.918: a pixel

@@ -46,6 +46,9 @@ pub struct AreaRow {
 pub trait Block {
     type Row;
     fn len(&self) -> usize;
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
     fn push(&mut self, owner: Entity, row: Self::Row, casts_shadows: bool);
     fn set(&mut self, i: usize, row: Self::Row, casts_shadows: bool);
     /// Removes row `i` by moving the last row into it.

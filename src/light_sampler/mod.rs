@@ -22,6 +22,8 @@ pub use power::PowerSampler;
 pub use uniform::UniformSampler;
 
 /// The light sampler the `Settings` ask for, kept in step with the `LightTable`.
+// One sampler lives in the world (a resource), so the size of its largest variant costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Resource, Clone, Debug)]
 pub enum LightSampler {
     Uniform(UniformSampler),

@@ -178,14 +178,16 @@ impl Paths {
         }));
         self.next.clear();
         let (mut path, mut beta) = (std::mem::take(&mut self.path), std::mem::take(&mut self.beta));
-        (path.clear(), beta.clear());
+        path.clear();
+        beta.clear();
         for (((p, c), hit), found) in self.continuations.iter().zip(&self.hits).zip(&self.found) {
             let r = &mut self.radiance[*p as usize];
             *r = r.add(*found);
             if let (Some(hit), false) = (hit, rules.last) {
                 let (pixel, sample) = (self.pixel[*p as usize], self.sample[*p as usize]);
                 self.next.push(FoundSurface { dir: c.wi, hit: *hit, pixel, sample });
-                (path.push(*p), beta.push(c.beta));
+                path.push(*p);
+                beta.push(c.beta);
             }
         }
         (self.path, self.beta) = (path, beta);

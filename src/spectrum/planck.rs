@@ -17,7 +17,7 @@ pub const STEFAN_BOLTZMANN: f64 = 5.670_374_419e-8;
 /// Finite for every input: 0 for T <= 0, for non-finite or non-positive wavelengths, and where
 /// the exponent hc/(lambda k T) overflows (the true value underflows f64 there anyway).
 pub fn planck(lambda_nm: f64, t_k: f64) -> f64 {
-    if !(t_k > 0.0 && lambda_nm > 0.0) || !t_k.is_finite() || !lambda_nm.is_finite() {
+    if !(t_k > 0.0 && lambda_nm > 0.0 && t_k.is_finite() && lambda_nm.is_finite()) {
         return 0.0;
     }
     let lambda = lambda_nm * 1e-9;
@@ -42,7 +42,7 @@ pub fn wien_peak_nm(t_k: f64) -> f64 {
 /// At the peak, x = hc / (lambda_max k T) = hc / (b k) is the same for every T, so the ratio is
 /// (lambda_max / lambda)^5 (e^x_max - 1) / (e^x - 1): one exponential per call.
 pub fn planck_normalized(lambda_nm: f64, t_k: f64) -> f64 {
-    if !(t_k > 0.0 && lambda_nm > 0.0) || !t_k.is_finite() || !lambda_nm.is_finite() {
+    if !(t_k > 0.0 && lambda_nm > 0.0 && t_k.is_finite() && lambda_nm.is_finite()) {
         return 0.0;
     }
     const X_MAX: f64 = PLANCK_H * LIGHT_SPEED_C / (WIEN_B * BOLTZMANN_K);

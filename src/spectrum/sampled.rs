@@ -28,6 +28,8 @@ pub fn sample_visible_wavelength(u: f32) -> f32 {
 }
 
 /// Density of [`sample_visible_wavelength`], 1/nm; 0 outside 360-830 nm.
+// The normalisation as pbrt-v4 prints it (VisibleWavelengthsPDF).
+#[allow(clippy::excessive_precision)]
 pub fn visible_wavelength_pdf(lambda: f32) -> f32 {
     if !(VISIBLE_NM.0..=VISIBLE_NM.1).contains(&lambda) {
         return 0.0;
@@ -68,6 +70,8 @@ impl SampledWavelengths {
     }
 }
 
+// Named `mul` and `add` rather than operator impls, so hot loops read as the lane arithmetic they are.
+#[allow(clippy::should_implement_trait)]
 impl SampledSpectrum {
     /// The same value at every wavelength.
     pub const fn splat(v: f32) -> Self {

@@ -234,10 +234,14 @@ fn gonio_ies_delta_irradiance_is_intensity_cos_over_r2() {
 /// A 32 x 32 equal-area picture (bright band, gradient, some black texels) and a 64 x 32 lat-long one.
 fn gonio_images() -> (RgbImage, RgbImage) {
     let texel = |x: usize, y: usize| {
-        if (x * 5 + y * 3) % 13 == 0 {
+        if (x * 5 + y * 3).is_multiple_of(13) {
             return Vec3::ZERO;
         }
-        Vec3::new(0.2 + x as f32 / 40.0, 1.0 + (0.3 * y as f32).sin(), if (x + y) % 4 == 0 { 3.0 } else { 0.1 })
+        Vec3::new(
+            0.2 + x as f32 / 40.0,
+            1.0 + (0.3 * y as f32).sin(),
+            if (x + y).is_multiple_of(4) { 3.0 } else { 0.1 },
+        )
     };
     let grid = |w: usize, h: usize| (0..h).flat_map(|y| (0..w).map(move |x| texel(x, y))).collect();
     (RgbImage { width: 32, height: 32, pixels: grid(32, 32) }, RgbImage { width: 64, height: 32, pixels: grid(64, 32) })
