@@ -51,8 +51,9 @@ fn point_lanes(table: &LightTable, row: usize, positions: &[Vec3], wi: &mut [Vec
         #[inline(always)]
         || {
             for b in (0..positions.len()).step_by(LANES) {
-                let lit =
-                    table.points.sample_li_rgb_lanes(&[row as u32; LANES], &lanes::columns(lanes::block(positions, b)));
+                let lit = table
+                    .points()
+                    .sample_li_rgb_lanes(&[row as u32; LANES], &lanes::columns(lanes::block(positions, b)));
                 let (w, l) = (lanes::block_mut(wi, b), lanes::block_mut(radiance, b));
                 for k in 0..LANES {
                     w[k] = Vec3::new(lit.wi[0][k], lit.wi[1][k], lit.wi[2][k]);
@@ -80,7 +81,7 @@ fn sample_li_batch(c: &mut Criterion) {
                         .into_par_iter()
                         .for_each(|(p, w, l)| match kind {
                             "point" => point_lanes(&table, row, p, w, l),
-                            _ => table.spots.sample_li_batch_rgb(row, p, w, l),
+                            _ => table.spots().sample_li_batch_rgb(row, p, w, l),
                         });
                 }
                 black_box(&li);

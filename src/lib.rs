@@ -3,7 +3,14 @@
 //!
 //! `src/` holds what things are (data and pure math); `systems/` holds what happens each update.
 pub mod geometry;
+/// Lane kernels' plumbing (16 f32 per array, the run-time instruction-set choice): public only with the
+/// `internals` feature, for the crate's own lane benchmarks and tests.
+#[cfg(feature = "internals")]
+#[doc(hidden)]
 pub mod lanes;
+#[cfg(not(feature = "internals"))]
+#[allow(dead_code)]
+pub(crate) mod lanes;
 pub mod light;
 pub mod light_sampler;
 mod prefetch;
@@ -13,6 +20,7 @@ pub mod report;
 pub mod rng;
 pub mod sampling;
 pub mod scene;
+#[cfg(feature = "scenes")]
 #[path = "../scenes/mod.rs"]
 pub mod scenes;
 pub mod shading;
@@ -20,17 +28,24 @@ pub mod spectrum;
 #[path = "../systems/mod.rs"]
 pub mod systems;
 
-/// What an app that embeds the light system needs: the light and geometry components, their
-/// `Transform`, the `Settings`, the batch it fills and the results it reads, and the plugin.
+/// What an app that embeds the light system needs, glob-importable next to `bevy::prelude::*`: it
+/// holds no name Bevy's prelude uses. kelvin's types named like Bevy's (`PointLight`, `SpotLight`,
+/// `Transform`, `Mesh`, `Sphere`, `Rectangle`, `Camera`, `Material`) are reached through the
+/// modules it brings in: `light::PointLight`, `geometry::Transform`, `render::material::Material`.
 pub mod prelude {
-    pub use crate::geometry::{Disk, Mesh, Rectangle, Sphere, Transform};
+    pub use crate::geometry::Disk;
     pub use crate::light::{
-        Amount, AreaLight, DistantLight, GoniometricLight, ImageInfiniteLight, PointLight, ProjectionLight, SpotLight,
+        Amount, AreaLight, DistantLight, GoniometricLight, ImageInfiniteLight, ProjectionLight, SunSkyLight,
         UniformInfiniteLight,
     };
-    pub use crate::shading::{ColorMode, DirectLighting, LightSamplerKind, RunReport, Settings, ShadingBatch};
+    pub use crate::render::job::RenderJob;
+    pub use crate::shading::{
+        ColorMode, DirectLighting, LightSamplerKind, LightSelection, Restir, ReuseWeights, RunReport, Settings,
+        ShadingBatch,
+    };
     pub use crate::spectrum::Spectrum;
     pub use crate::systems::{LightingPlugin, LightingSet};
+    pub use crate::{geometry, light, render};
 }
 
 /// The README's examples, compiled and run as doc-tests.

@@ -11,7 +11,8 @@ use bevy_transform::TransformPlugin;
 use bevy_transform::components::{GlobalTransform, Transform};
 use glam::Vec3;
 use kelvin::geometry::Sphere;
-use kelvin::prelude::{DirectLighting, LightingPlugin, PointLight, Settings, ShadingBatch};
+use kelvin::light::PointLight;
+use kelvin::prelude::{DirectLighting, LightingPlugin, Settings, ShadingBatch};
 use kelvin::shading::LightSelection;
 
 /// With every light sampled at every point, the light system's illuminance is exact (delta lights,
@@ -86,4 +87,43 @@ fn geometry_placed_by_a_propagated_parent_transform_casts_its_shadow() {
     app.world_mut().get_mut::<Transform>(parent).unwrap().translation = demo::to_bevy(Vec3::new(5.0, -2.0, 0.0));
     let lit = lux(&mut app);
     assert!((lit - 100.0 / 16.0).abs() < 1e-3, "after the parent moved: {lit} lx, expected 100 cd / (4 m)^2");
+}
+
+/// kelvin's prelude glob-imports next to the Bevy preludes a plugin build has (ecs, app, math,
+/// transform): `Transform` and `Vec3` still mean Bevy's, and an app reaches kelvin's same-named types
+/// through the modules the prelude brings in. A name in both preludes would make
+/// these uses ambiguous, a compile error.
+mod preludes_side_by_side {
+    use bevy_app::prelude::*;
+    use bevy_ecs::prelude::*;
+    use bevy_math::prelude::*;
+    use bevy_transform::prelude::*;
+    use kelvin::prelude::*;
+
+    #[test]
+    fn every_prelude_name_means_one_thing() {
+        let mut app = App::new();
+        app.add_plugins((
+            bevy_app::TaskPoolPlugin::default(),
+            bevy_transform::TransformPlugin,
+            LightingPlugin::default(),
+        ));
+        let bevy_side = (Transform::from_xyz(0.0, 2.0, 0.0), Vec3::Y, Quat::IDENTITY);
+        let kelvin_side =
+            (light::PointLight::candela(100.0), geometry::Transform::IDENTITY, render::material::Material::default());
+        app.world_mut().spawn((kelvin_side.0, bevy_side.0));
+        app.world_mut().resource_mut::<ShadingBatch>().push(Vec3::ZERO, bevy_side.1, 0, 0);
+        app.update();
+        let world: &World = app.world();
+        let lighting = world.resource::<DirectLighting>();
+        // 100 cd, 2 m straight above: 25 lx.
+        let e = lighting.irradiance(0, Vec3::Y).0[1];
+        assert!((e - 25.0).abs() < 1e-3, "{e}");
+        let _ = (bevy_side.1, bevy_side.2, kelvin_side.1, kelvin_side.2);
+        let _: (Settings, LightSelection, ColorMode, LightSamplerKind) = Default::default();
+        let _: Option<(Amount, Disk, Restir, ReuseWeights, LightingSet, ImageInfiniteLight)> = None;
+        let _: Option<(GoniometricLight, ProjectionLight)> = None;
+        let _ = (SunSkyLight::default(), AreaLight::default(), DistantLight::default(), RenderJob::default());
+        let _ = (Spectrum::d65(), UniformInfiniteLight::default(), RunReport::default());
+    }
 }

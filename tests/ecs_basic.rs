@@ -65,7 +65,7 @@ fn all_lights_mode_gives_one_entry_per_light_and_removal_keeps_the_table_dense()
     schedule.run(&mut world);
     let table = world.resource::<LightTable>();
     assert_eq!(table.len(), 2);
-    assert_eq!(table.points.len(), 1);
+    assert_eq!(table.points().len(), 1);
     assert_eq!(world.resource::<DirectLighting>().len(), 2);
 }
 

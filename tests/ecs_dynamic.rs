@@ -55,7 +55,7 @@ fn assert_table_matches_world(world: &mut World, frame: usize) {
     for (e, want) in fresh {
         let rows = table.rows_of(e);
         assert!(rows.len() == 1 && rows[0].kind == LightKind::Point, "frame {frame}: {e} rows {rows:?}");
-        assert_eq!(table.points.get(rows[0].row as usize), want, "frame {frame}: point {e}");
+        assert_eq!(table.points().get(rows[0].row as usize), want, "frame {frame}: point {e}");
         entities += 1;
     }
     let mut spots = world.query::<(Entity, &SpotLight, &Transform)>();
@@ -64,7 +64,7 @@ fn assert_table_matches_world(world: &mut World, frame: usize) {
     for (e, want) in fresh {
         let rows = table.rows_of(e);
         assert!(rows.len() == 1 && rows[0].kind == LightKind::Spot, "frame {frame}: {e}");
-        assert_eq!(table.spots.get(rows[0].row as usize), want, "frame {frame}: spot {e}");
+        assert_eq!(table.spots().get(rows[0].row as usize), want, "frame {frame}: spot {e}");
         entities += 1;
     }
     let mut distant = world.query::<(Entity, &DistantLight, &Transform)>();
@@ -73,7 +73,7 @@ fn assert_table_matches_world(world: &mut World, frame: usize) {
     for (e, want) in fresh {
         let rows = table.rows_of(e);
         assert!(rows.len() == 1 && rows[0].kind == LightKind::Distant, "frame {frame}: {e}");
-        assert_eq!(table.distant.items[rows[0].row as usize], want, "frame {frame}: distant {e}");
+        assert_eq!(table.distant().items[rows[0].row as usize], want, "frame {frame}: distant {e}");
         entities += 1;
     }
     assert_eq!(table.entity_count(), entities, "frame {frame}: no stale rows");

@@ -122,10 +122,10 @@ fn every_real_gltf_scene_has_exactly_its_lights_in_the_table() {
         let table = world.resource::<LightTable>();
         let punctual = e.points + e.spots + e.directional;
         let got = (
-            table.points.len(),
-            table.spots.len(),
-            table.distant.items.len(),
-            table.area.items.len(),
+            table.points().len(),
+            table.spots().len(),
+            table.distant().items.len(),
+            table.area().items.len(),
             report.lights,
             report.emissive_meshes,
             table.entity_count(),

@@ -84,32 +84,102 @@ impl<T> Block for Rows<T> {
 /// `owner` is that entity, and every row has an entry.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct LightTable {
-    pub points: PointColumns,
-    pub spots: SpotColumns,
-    pub area: Rows<AreaRow>,
-    pub projection: Rows<ResolvedProjection>,
-    pub goniometric: Rows<ResolvedGoniometric>,
-    pub distant: Rows<ResolvedDistant>,
-    pub uniform_infinite: Rows<ResolvedUniformInfinite>,
-    pub image_infinite: Rows<ResolvedImageInfinite>,
-    pub sun_sky: Rows<ResolvedSunSky>,
+    pub(crate) points: PointColumns,
+    pub(crate) spots: SpotColumns,
+    pub(crate) area: Rows<AreaRow>,
+    pub(crate) projection: Rows<ResolvedProjection>,
+    pub(crate) goniometric: Rows<ResolvedGoniometric>,
+    pub(crate) distant: Rows<ResolvedDistant>,
+    pub(crate) uniform_infinite: Rows<ResolvedUniformInfinite>,
+    pub(crate) image_infinite: Rows<ResolvedImageInfinite>,
+    pub(crate) sun_sky: Rows<ResolvedSunSky>,
     /// Image lights sample their MIS-compensated tables (valid only when the caller combines light
     /// samples with BSDF samples by MIS); set from `Settings::mis` by the sampling system.
-    pub mis_compensation: bool,
+    pub(crate) mis_compensation: bool,
     rows_of: EntityHashMap<Vec<LightId>>,
     /// Bumped on every change; samplers compare it to know when to update.
-    pub generation: u64,
+    pub(crate) generation: u64,
     /// Set when a light was added, removed or changed its power since the flags were cleared.
-    pub powers_changed: bool,
+    pub(crate) powers_changed: bool,
     /// Set when a light moved (same power) since the flags were cleared.
-    pub moved: bool,
+    pub(crate) moved: bool,
     /// Rows set in place (moved or re-powered) since the flags were cleared, in order, possibly
     /// repeated: what an incremental sampler refits.
-    pub changed_rows: Vec<LightId>,
+    pub(crate) changed_rows: Vec<LightId>,
     /// Set when rows were added or removed since the flags were cleared (rows may have moved).
-    pub rows_reordered: bool,
+    pub(crate) rows_reordered: bool,
     /// `generation` when the flags were last cleared: the flags describe every change after it.
-    pub changes_since: u64,
+    pub(crate) changes_since: u64,
+}
+
+/// Read access to the table: its blocks of rows by kind and its change log. The table is written
+/// only by the light system's sync systems, which keep `rows_of` and the rows' owners in step.
+impl LightTable {
+    /// Point light rows.
+    pub fn points(&self) -> &PointColumns {
+        &self.points
+    }
+    /// Spot light rows.
+    pub fn spots(&self) -> &SpotColumns {
+        &self.spots
+    }
+    /// Area light rows: one per emitting triangle or analytic shape.
+    pub fn area(&self) -> &Rows<AreaRow> {
+        &self.area
+    }
+    /// Projection light rows.
+    pub fn projection(&self) -> &Rows<ResolvedProjection> {
+        &self.projection
+    }
+    /// Goniometric (IES and image-profile) light rows.
+    pub fn goniometric(&self) -> &Rows<ResolvedGoniometric> {
+        &self.goniometric
+    }
+    /// Distant light rows.
+    pub fn distant(&self) -> &Rows<ResolvedDistant> {
+        &self.distant
+    }
+    /// Uniform infinite light rows.
+    pub fn uniform_infinite(&self) -> &Rows<ResolvedUniformInfinite> {
+        &self.uniform_infinite
+    }
+    /// Image infinite light rows.
+    pub fn image_infinite(&self) -> &Rows<ResolvedImageInfinite> {
+        &self.image_infinite
+    }
+    /// Sun-and-sky rows.
+    pub fn sun_sky(&self) -> &Rows<ResolvedSunSky> {
+        &self.sun_sky
+    }
+    /// Whether image lights sample their MIS-compensated tables.
+    pub fn mis_compensation(&self) -> bool {
+        self.mis_compensation
+    }
+    /// Bumped on every change; samplers compare it to know when to update.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+    /// A light was added, removed or changed its power since the change log was cleared.
+    pub fn powers_changed(&self) -> bool {
+        self.powers_changed
+    }
+    /// A light moved (same power) since the change log was cleared.
+    pub fn moved(&self) -> bool {
+        self.moved
+    }
+    /// Rows set in place (moved or re-powered) since the change log was cleared, in order,
+    /// possibly repeated.
+    pub fn changed_rows(&self) -> &[LightId] {
+        &self.changed_rows
+    }
+    /// Rows were added or removed since the change log was cleared (rows may have moved).
+    pub fn rows_reordered(&self) -> bool {
+        self.rows_reordered
+    }
+    /// `generation` when the change log was last cleared.
+    pub fn changes_since(&self) -> u64 {
+        self.changes_since
+    }
 }
 
 /// Runs `$body` with `$b` bound to the block of `$kind` (`&mut` unless the table is given as

@@ -259,12 +259,11 @@ impl RenderJob {
         let mut schedule = Schedule::default();
         world.insert_resource(self.settings());
         LightingPlugin::build(&mut world, &mut schedule);
-        let (mut warnings, mut file, mut summary) = (Vec::new(), None, None);
-        match &self.scene {
+        let (mut warnings, file, summary) = match &self.scene {
             Some(path) => {
                 let start = std::time::Instant::now();
                 let report = super::scene_file::spawn_gltf_file(&mut world, path)?;
-                summary = Some(format!(
+                let summary = format!(
                     "scene {} (loaded in {:.1} ms): {} meshes ({} triangles, {} emissive), {} lights, {} cameras, {} animations",
                     path.display(),
                     start.elapsed().as_secs_f64() * 1e3,
@@ -274,12 +273,14 @@ impl RenderJob {
                     report.lights,
                     report.cameras,
                     report.animations
-                ));
-                warnings.extend(report.warnings);
-                file = Some(report.file);
+                );
+                (report.warnings, Some(report.file), Some(summary))
             }
-            None => crate::scenes::default_scene::spawn_default_scene(&mut world),
-        }
+            None => {
+                spawn_default_scene(&mut world)?;
+                (Vec::new(), None, None)
+            }
+        };
         if let Some(path) = &self.env {
             warnings.extend(super::scene_file::spawn_env_map(&mut world, path, self.env_intensity)?);
         }
@@ -288,6 +289,18 @@ impl RenderJob {
         }
         Ok(LoadedJob { world, schedule, file, warnings, summary })
     }
+}
+
+/// The embedded default scene (feature `scenes`).
+#[cfg(feature = "scenes")]
+fn spawn_default_scene(world: &mut World) -> Result<(), JobError> {
+    crate::scenes::default_scene::spawn_default_scene(world);
+    Ok(())
+}
+
+#[cfg(not(feature = "scenes"))]
+fn spawn_default_scene(_: &mut World) -> Result<(), JobError> {
+    Err(JobError::Invalid("no scene given, and the embedded default scene needs the `scenes` feature".into()))
 }
 
 impl LoadedJob {

@@ -535,7 +535,7 @@ fn cornell_box_glb_emissive_quad_on_the_tall_box() {
     {
         let table = scene.world.resource::<LightTable>();
         let (mut lo, mut hi) = (Vec3::MAX, Vec3::MIN);
-        for row in &table.area.items {
+        for row in &table.area().items {
             let (a, b) = row.light.shape.bounds();
             (lo, hi) = (lo.min(a), hi.max(b));
         }
