@@ -54,14 +54,18 @@ const HALF_VIEW: f32 = 0.4;
 /// One patch: its name, linear-sRGB albedo and centre on the chart plane (z = 0).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Patch {
+    /// The patch's name on the chart.
     pub name: &'static str,
+    /// Its albedo, linear sRGB.
     pub albedo: Vec3,
+    /// Its centre on the chart, metres.
     pub center: Vec2,
 }
 
 /// What [`spawn_color_checker`] made: the patches and how to find them in the image.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ColorChecker {
+    /// The chart's patches.
     pub patches: Vec<Patch>,
     /// Luminance of a perfect white Lambertian surface on the chart, cd/m^2: the white of
     /// CIELAB comparisons (E cos(theta) / pi).

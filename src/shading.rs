@@ -12,8 +12,10 @@ use crate::spectrum::{SampledSpectrum, SampledWavelengths};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum ColorMode {
+    /// Linear sRGB channels holding photometric quantities (nit, lx). The default.
     #[default]
     Rgb,
+    /// Spectral radiometric quantities at each point's sampled wavelengths.
     Spectral,
 }
 
@@ -43,7 +45,10 @@ pub enum LightSelection {
     /// `OneSampled` draws one, one kept in proportion to its unshadowed contribution, one shadow
     /// ray. The entry's pdf is then the estimator's 1/W, which no BSDF sample can know: a
     /// renderer weighs such entries 1 and gives BSDF samples that find emitters weight 0.
-    Resampled { candidates: u32 },
+    Resampled {
+        /// Light samples drawn per entry (M); 0 counts as 1.
+        candidates: u32,
+    },
     /// Reservoir reuse after RIS (Bitterli et al. 2020, "Spatiotemporal reservoir resampling",
     /// ReSTIR): each entry's RIS reservoir is combined with last run's reservoir at the same
     /// surface point (`ShadingBatch::previous`) and then with neighbours' in the batch's image
@@ -101,8 +106,11 @@ pub enum ReuseWeights {
 /// row-major `width` to a row. Neighbours are the same sample of nearby pixels in the batch.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ImageLayout {
+    /// Image width, pixels.
     pub width: u32,
+    /// Consecutive slots per pixel.
     pub samples_per_pixel: u32,
+    /// Global slot of the batch's point 0.
     pub first: u64,
 }
 
@@ -110,17 +118,21 @@ pub struct ImageLayout {
 /// the vector to the light, its length and 1/r^2); other light types always use f32.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LightPrecision {
+    /// Single precision, the default.
     #[default]
     F32,
+    /// Double precision, the reference of the accuracy report.
     F64,
 }
 
 /// What the light system computes and how.
 #[derive(Resource, Clone, Debug, PartialEq)]
 pub struct Settings {
+    /// RGB or spectral. Defaults to RGB.
     pub color_mode: ColorMode,
     /// How lights are chosen. Defaults to the light BVH.
     pub light_sampler: LightSamplerKind,
+    /// One sampled light per sample, every light, or resampling. Defaults to one sampled light.
     pub selection: LightSelection,
     /// Trace shadow rays (when there is geometry that can occlude).
     pub shadows: bool,
@@ -181,6 +193,7 @@ pub struct ShadingBatch {
     pub shading_normal: Vec<Vec3>,
     /// Pixel (or any stable point id) and sample index, the keys of the random numbers.
     pub pixel: Vec<u32>,
+    /// Sample index within the pixel (see `pixel`).
     pub sample: Vec<u32>,
     /// Wavelengths per point, spectral mode only.
     pub wavelengths: Vec<SampledWavelengths>,
@@ -279,6 +292,7 @@ impl ShadingBatch {
 /// all-lights mode). An entry's `radiance` is zero when the light sample failed or is occluded.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct DirectLighting {
+    /// Start of each point's entries, plus the end: `len()` of the batch + 1 values.
     pub offsets: Vec<u32>,
     /// Incident radiance Li (visibility applied), in the batch's colour mode.
     pub radiance: Vec<SampledSpectrum>,
@@ -333,8 +347,11 @@ impl DirectLighting {
 /// One line of the run report: a system and whether it ran this update, and why.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RunEntry {
+    /// The system's name.
     pub system: &'static str,
+    /// Whether it ran this update.
     pub ran: bool,
+    /// Why it ran or was skipped.
     pub why: String,
     /// How many items a decision to run covers and of what (`(16384, "points")`), for systems
     /// that count their work; [`RunSummary`] sums them over updates.
@@ -352,7 +369,9 @@ pub struct RunEntry {
 /// prints.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct RunReport {
+    /// One decision per system, in the order the systems made them.
     pub entries: Vec<RunEntry>,
+    /// This update's warnings.
     pub warnings: Vec<String>,
 }
 
@@ -406,7 +425,9 @@ pub struct RunSummary {
 /// A system's updates with one outcome, in a [`RunSummary`].
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SummaryLine {
+    /// The system's name.
     pub system: &'static str,
+    /// The outcome: ran, or skipped.
     pub ran: bool,
     /// Updates with this outcome.
     pub updates: u32,
@@ -476,5 +497,6 @@ impl std::fmt::Display for RunSummary {
 /// place their far sample points and to compute their power.
 #[derive(Resource, Clone, Copy, Debug, Default, PartialEq)]
 pub struct SceneBounds {
+    /// Bounding sphere, world space, metres.
     pub sphere: crate::light::SceneSphere,
 }

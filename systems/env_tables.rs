@@ -18,6 +18,7 @@ use super::Work;
 /// Sampling tables of each image infinite light, by entity.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct EnvTables {
+    /// The tables of each image infinite light's entity.
     pub by_entity: EntityHashMap<Arc<EnvMapTables>>,
     /// The image and options each entity's tables were built from.
     built_from: EntityHashMap<(Arc<RgbImage>, EnvTableOptions)>,

@@ -15,6 +15,7 @@ use super::Work;
 /// Which entity each BVH instance is (instance index = position).
 #[derive(Resource, Clone, Debug, Default)]
 pub struct GeometryIndex {
+    /// The entity of each BVH instance, by instance index.
     pub entities: Vec<Entity>,
     instance_of: EntityHashMap<u32>,
 }
@@ -29,9 +30,12 @@ impl GeometryIndex {
 /// What the BVH needs this update.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BvhWork {
+    /// Nothing changed: keep the BVH as it is.
     #[default]
     None,
+    /// Only transforms moved: refit the bounds.
     Refit,
+    /// Geometry was added, removed or reshaped: build from scratch.
     Rebuild,
 }
 

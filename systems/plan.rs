@@ -11,10 +11,15 @@ use crate::shading::{RunReport, Settings, ShadingBatch};
 /// This update's decisions.
 #[derive(Resource, Clone, Debug, Default, PartialEq, Eq)]
 pub struct Work {
+    /// Update the light sampler (the light table changed, or the settings ask for another kind).
     pub sampler: bool,
+    /// Sample direct lighting (there are points and lights).
     pub sampling: bool,
+    /// Trace shadow rays (shadows are on, there are rays and geometry to block them).
     pub shadows: bool,
+    /// Rebuild, refit or keep the scene BVH.
     pub bvh: super::geometry::BvhWork,
+    /// Build environment-map sampling tables (an image infinite light was added or changed).
     pub env_tables: bool,
 }
 

@@ -43,7 +43,9 @@ pub const REBUILD_COST_RATIO: f32 = 1.5;
 /// Which entity and which of its primitives (triangle index in the mesh; 0 for a shape).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct GeometryId {
+    /// `Entity::index()` of the owner.
     pub entity_index: u32,
+    /// Triangle index in the owner's mesh; 0 for an analytic shape.
     pub primitive: u32,
 }
 
@@ -55,14 +57,18 @@ impl GeometryId {
 /// The geometry of one instance: a borrowed mesh (copied into the BVH) or an analytic shape.
 #[derive(Clone, Copy, Debug)]
 pub enum GeometryRef<'a> {
+    /// A triangle mesh in the instance's local space.
     Mesh(&'a Mesh),
+    /// An analytic shape, sized in the instance's local space.
     Shape(Shape),
 }
 
 /// One entity's geometry with its placement and ids, as handed to [`SceneBvh::build`].
 #[derive(Clone, Copy, Debug)]
 pub struct GeometryInstance<'a> {
+    /// The mesh or shape, in local space.
     pub geometry: GeometryRef<'a>,
+    /// Where it sits: local to world space.
     pub transform: Transform,
     /// `Entity::index()` of the owner, reported back in hits.
     pub entity_index: u32,
@@ -84,7 +90,10 @@ pub struct BuildReport {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum UpdateKind {
     /// Refitted; the SAH cost is now `cost_ratio` times its value after the last build.
-    Refitted { cost_ratio: f32 },
+    Refitted {
+        /// SAH cost now over its value after the last build (1 = as built).
+        cost_ratio: f32,
+    },
     /// Rebuilt, because the cost ratio passed [`REBUILD_COST_RATIO`] or an instance entered or
     /// left the tree.
     Rebuilt,

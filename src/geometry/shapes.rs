@@ -49,14 +49,18 @@ pub struct Rectangle {
 /// The closed set of analytic shapes; one `match` per operation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
+    /// A sphere centred on the origin.
     Sphere(Sphere),
+    /// A disk or annulus in the local XY plane.
     Disk(Disk),
+    /// A rectangle in the local XY plane.
     Rectangle(Rectangle),
 }
 
 /// A shape fixed in world space, with the f64 maps the BVH and light sampling share.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlacedShape {
+    /// The shape, sized in its local frame.
     pub shape: Shape,
     pub(super) to_world: DAffine3,
     pub(super) to_object: DAffine3,

@@ -78,6 +78,7 @@ pub struct ResolvedDistant {
     pub sin2_half_angle: f32,
     /// 1 - cos of the half-angle.
     pub one_minus_cos: f32,
+    /// Bounds of the scene, used to place sample points beyond it and to compute the power.
     pub scene: SceneSphere,
 }
 

@@ -13,12 +13,38 @@ const RGB_BASIS_NM: (f64, f64) = (380.0, 780.0);
 /// Errors in a light's description; each names the light and the field.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum LightError {
+    /// An amount or a size is negative, NaN or infinite (an area light's size also when it is 0 or
+    /// overflows once scaled by its transform).
     #[error("{light}: {field} = {value} must be finite and >= 0")]
-    BadAmount { light: &'static str, field: &'static str, value: f32 },
+    BadAmount {
+        /// The light's component type, such as `"PointLight"`.
+        light: &'static str,
+        /// The field that holds the number.
+        field: &'static str,
+        /// The number given.
+        value: f32,
+    },
+    /// An [`Amount`] measures a quantity this light does not accept (say, lux for a point light).
     #[error("{light}: {field} is given in {given}, expected {expected}")]
-    WrongUnit { light: &'static str, field: &'static str, given: &'static str, expected: &'static str },
+    WrongUnit {
+        /// The light's component type, such as `"PointLight"`.
+        light: &'static str,
+        /// The field that holds the amount.
+        field: &'static str,
+        /// Symbol of the unit given, as [`Amount::unit`].
+        given: &'static str,
+        /// The units the light accepts, for the message (such as `"lx or W/m^2"`).
+        expected: &'static str,
+    },
+    /// Any other invalid description: an angle out of range, a degenerate shape or transform, a bad
+    /// texture or image, a value that overflows f32, an entity without a shape; `msg` says which.
     #[error("{light}: {msg}")]
-    Invalid { light: &'static str, msg: String },
+    Invalid {
+        /// The light's component type, such as `"AreaLight"`.
+        light: &'static str,
+        /// What is wrong.
+        msg: String,
+    },
 }
 
 /// How much light, in a photometric or a radiometric unit. Which units a light accepts is in its
@@ -46,9 +72,13 @@ pub enum Amount {
 /// The physical quantity an [`Amount`] measures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quantity {
+    /// Total emitted power: lm or W.
     Power,
+    /// Power per solid angle: cd or W/sr.
     Intensity,
+    /// Power arriving per area: lx or W/m^2.
     Irradiance,
+    /// Power per area and solid angle: nit or W/(m^2 sr).
     Radiance,
 }
 
@@ -106,6 +136,7 @@ impl Amount {
 /// photometric linear sRGB (lm, cd, lx or nit per channel; its Y is the photometric amount).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Emitter {
+    /// Spectral shape S; only its shape matters, `scale` sets the amount.
     pub spectrum: Spectrum,
     /// Multiplies `spectrum.eval(lambda)` to give the quantity per nm.
     pub scale: f32,

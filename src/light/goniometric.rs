@@ -73,6 +73,7 @@ pub enum GonioProfile {
 /// A point light at its entity's translation with a measured directional profile.
 #[derive(Component, Clone, Debug, PartialEq)]
 pub struct GoniometricLight {
+    /// Relative intensity over directions in the light's local frame (module docs).
     pub profile: GonioProfile,
     /// Scale in cd (or W/sr) per unit of the profile, or total power (lm or W) to which the profile
     /// is normalised. Defaults to 1 cd: an IES file's own candela values, image texels as candela.
@@ -214,9 +215,11 @@ enum DirectionSampler {
 /// A goniometric light in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResolvedGoniometric {
+    /// World-space position, metres.
     pub position: Vec3,
     /// Local-to-world rotation (unit).
     pub rotation: Quat,
+    /// Relative intensity over local directions, scaled by `intensity`.
     pub profile: GonioProfile,
     /// Radiant intensity per unit of the profile, W/sr (with its photometric RGB in cd).
     pub intensity: Emitter,

@@ -75,6 +75,7 @@ impl UniformInfiniteLight {
 pub struct ResolvedUniformInfinite {
     /// Radiance, W/(m^2 sr) (with its photometric RGB in nit).
     pub radiance: Emitter,
+    /// Bounds of the scene, used to place sample points beyond it and to compute the power.
     pub scene: SceneSphere,
 }
 

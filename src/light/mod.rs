@@ -78,7 +78,9 @@ impl LightSampleContext {
 /// or spectral mode (spectral radiance, W/(m^2 sr nm), at the sampled wavelengths).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ColorQuery<'a> {
+    /// Linear sRGB in channels 0-2, photometric (channel 3 is zero).
     Rgb,
+    /// Spectral radiance at these sampled wavelengths, one channel per wavelength.
     Spectral(&'a SampledWavelengths),
 }
 
@@ -203,6 +205,7 @@ impl LightKind {
 pub struct LightBounds {
     /// Bounding box of the emitting positions, world space.
     pub min: Vec3,
+    /// Upper corner of the bounding box (see `min`), world space.
     pub max: Vec3,
     /// Total emitted power, W (radiometric).
     pub phi: f32,
@@ -220,7 +223,9 @@ pub struct LightBounds {
 /// (they need it to place sample points "at infinity" and to compute their power).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SceneSphere {
+    /// Centre, world space, metres.
     pub center: Vec3,
+    /// Radius in metres.
     pub radius: f32,
 }
 

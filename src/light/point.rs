@@ -71,6 +71,7 @@ impl PointLight {
 /// A point light in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResolvedPoint {
+    /// World-space position, metres.
     pub position: Vec3,
     /// Radiant intensity, W/sr (with its photometric RGB in cd).
     pub intensity: Emitter,
@@ -123,15 +124,19 @@ fn sample_li_at(
 /// Point lights as columns (the `LightTable` block): what the batch paths read.
 #[derive(Clone, Debug, Default)]
 pub struct PointColumns {
+    /// World-space positions, metres.
     pub position: Vec<Vec3>,
     /// Photometric linear sRGB intensity, cd.
     pub rgb: Vec<Vec3>,
     /// Spectral shape and its scale (W/(sr nm) per unit), for spectral mode.
     pub spectrum: Vec<crate::spectrum::Spectrum>,
+    /// Multiplies `spectrum` to give W/(sr nm).
     pub scale: Vec<f32>,
     /// Radiant intensity, W/sr.
     pub radiometric: Vec<f32>,
+    /// Whether shadow rays are traced for each light.
     pub casts_shadows: Vec<bool>,
+    /// The entity each light belongs to.
     pub owner: Vec<bevy_ecs::entity::Entity>,
 }
 

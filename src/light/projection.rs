@@ -168,9 +168,11 @@ fn texel_solid_angle(half: DVec2, x: usize, y: usize, width: usize, height: usiz
 /// A projection light in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResolvedProjection {
+    /// World-space position, metres.
     pub position: Vec3,
     /// Local-to-world rotation (unit); the light looks along local -Z.
     pub rotation: Quat,
+    /// The projected picture, linear RGB, scaled by `intensity`.
     pub image: Arc<RgbImage>,
     /// Half-width and half-height (sx, sy) of the image window on the plane z = -1.
     pub half_extent: Vec2,

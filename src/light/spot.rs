@@ -94,10 +94,13 @@ impl SpotLight {
 /// A spot light in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResolvedSpot {
+    /// World-space position, metres.
     pub position: Vec3,
     /// Unit axis the light shines along.
     pub direction: Vec3,
+    /// Cosine of the inner half-angle, inside which the intensity is full.
     pub cos_inner: f32,
+    /// Cosine of the outer half-angle, outside which there is no light.
     pub cos_outer: f32,
     /// On-axis radiant intensity, W/sr.
     pub intensity: Emitter,
@@ -155,17 +158,25 @@ impl ResolvedSpot {
 /// Spot lights as columns (the `LightTable` block).
 #[derive(Clone, Debug, Default)]
 pub struct SpotColumns {
+    /// World-space positions, metres.
     pub position: Vec<Vec3>,
+    /// Unit axes the lights shine along.
     pub direction: Vec<Vec3>,
+    /// Cosines of the inner half-angles (full intensity inside).
     pub cos_inner: Vec<f32>,
+    /// Cosines of the outer half-angles (no light outside).
     pub cos_outer: Vec<f32>,
     /// Photometric linear sRGB on-axis intensity, cd.
     pub rgb: Vec<Vec3>,
+    /// Spectral shape, for spectral mode.
     pub spectrum: Vec<Spectrum>,
+    /// Multiplies `spectrum` to give the on-axis intensity, W/(sr nm).
     pub scale: Vec<f32>,
     /// On-axis radiant intensity, W/sr.
     pub radiometric: Vec<f32>,
+    /// Whether shadow rays are traced for each light.
     pub casts_shadows: Vec<bool>,
+    /// The entity each light belongs to.
     pub owner: Vec<bevy_ecs::entity::Entity>,
 }
 

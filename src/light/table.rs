@@ -15,14 +15,18 @@ use super::{
 /// `LightId` is valid until the next table update.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct LightId {
+    /// Which block the light's row is in.
     pub kind: LightKind,
+    /// The row within that block.
     pub row: u32,
 }
 
 /// Rows of a resolved light type with the entity that owns each row.
 #[derive(Clone, Debug)]
 pub struct Rows<T> {
+    /// The resolved lights, one per row.
     pub items: Vec<T>,
+    /// The entity each row belongs to.
     pub owner: Vec<Entity>,
     /// Whether shadow rays are traced for the row's light.
     pub casts_shadows: Vec<bool>,
@@ -38,34 +42,45 @@ impl<T> Default for Rows<T> {
 /// triangle of a mesh (its index in the mesh).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AreaRow {
+    /// The emitter (its radiance, spectrum, sides) of the row.
     pub light: ResolvedArea,
+    /// The emitting triangle or shape of that emitter.
     pub primitive: u32,
 }
 
 /// Operations every block supports, so the table's bookkeeping is written once.
 pub trait Block {
+    /// What one row holds.
     type Row;
+    /// Rows in the block.
     fn len(&self) -> usize;
+    /// No rows.
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
+    /// Appends a row owned by `owner`.
     fn push(&mut self, owner: Entity, row: Self::Row, casts_shadows: bool);
+    /// Replaces row `i` in place.
     fn set(&mut self, i: usize, row: Self::Row, casts_shadows: bool);
     /// Removes row `i` by moving the last row into it.
     fn swap_remove(&mut self, i: usize);
+    /// The entity that owns row `i`.
     fn owner(&self, i: usize) -> Entity;
 }
 
 impl<T> Block for Rows<T> {
     type Row = T;
+    /// Rows in the block.
     fn len(&self) -> usize {
         self.items.len()
     }
+    /// Appends a row owned by `owner`.
     fn push(&mut self, owner: Entity, row: T, casts_shadows: bool) {
         self.items.push(row);
         self.owner.push(owner);
         self.casts_shadows.push(casts_shadows);
     }
+    /// Replaces row `i` in place.
     fn set(&mut self, i: usize, row: T, casts_shadows: bool) {
         self.items[i] = row;
         self.casts_shadows[i] = casts_shadows;
@@ -75,6 +90,7 @@ impl<T> Block for Rows<T> {
         self.owner.swap_remove(i);
         self.casts_shadows.swap_remove(i);
     }
+    /// The entity that owns row `i`.
     fn owner(&self, i: usize) -> Entity {
         self.owner[i]
     }

@@ -53,7 +53,12 @@ pub enum BvhUpdate {
     #[default]
     UpToDate,
     /// Refitted `nodes` nodes; the cost ratio is now `cost_ratio`.
-    Refit { nodes: usize, cost_ratio: f32 },
+    Refit {
+        /// Number of nodes whose bounds were recomputed.
+        nodes: usize,
+        /// [`BvhSampler::cost_ratio`] after the refit.
+        cost_ratio: f32,
+    },
     /// Built from scratch.
     Rebuilt,
 }

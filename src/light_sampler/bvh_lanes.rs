@@ -20,8 +20,11 @@ const SHARED_PASS_LANES: u32 = 4;
 /// the lanes of `chosen`.
 #[derive(Clone, Copy, Debug)]
 pub struct LaneChoices {
+    /// The light chosen in each lane.
     pub light: [LightId; LANES],
+    /// Probability with which each lane's light was chosen.
     pub pmf: [f32; LANES],
+    /// Bit mask of the lanes that chose a light (bit l for lane l).
     pub chosen: u32,
 }
 

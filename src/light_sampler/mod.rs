@@ -26,8 +26,11 @@ pub use uniform::UniformSampler;
 #[allow(clippy::large_enum_variant)]
 #[derive(Resource, Clone, Debug)]
 pub enum LightSampler {
+    /// Every light equally likely.
     Uniform(UniformSampler),
+    /// Proportional to emitted power.
     Power(PowerSampler),
+    /// Light BVH, by each light's importance at the shading point.
     Bvh(BvhSampler),
 }
 

@@ -23,9 +23,11 @@ const MIN_ALPHA: f32 = 1e-3;
 /// A BSDF at one surface point, in its shading frame (z = shading normal).
 #[derive(Clone, Copy, Debug)]
 pub struct Bsdf {
+    /// The shading frame, world space; its z is the shading normal.
     pub frame: Frame,
     /// Base colour (albedo for dielectrics, F0 for metals).
     pub base: SampledSpectrum,
+    /// Metalness in [0, 1]: 0 a dielectric, 1 a conductor, blends between.
     pub metallic: f32,
     /// Dielectric reflectance at normal incidence times the specular factor; 0 = no lobe.
     pub dielectric_f0: f32,
@@ -38,8 +40,11 @@ pub struct Bsdf {
 /// A sampled direction with its BSDF value and pdf (solid angle).
 #[derive(Clone, Copy, Debug)]
 pub struct BsdfSample {
+    /// The sampled direction toward the light, world space, unit length.
     pub wi: Vec3,
+    /// BSDF value for `wi` (per steradian; no cosine factor).
     pub f: SampledSpectrum,
+    /// Solid-angle pdf of `wi`, per steradian; always positive.
     pub pdf: f32,
 }
 

@@ -104,11 +104,15 @@ pub struct EnvironmentCamera;
 /// How primary rays leave the camera.
 #[derive(Clone, Copy, Debug)]
 pub enum CameraModel {
+    /// A perspective camera, fixed for one image.
     Pinhole(PinholeCamera),
     /// An environment camera at `origin` rendering a `width` x `height` lat-long map.
     LatLong {
+        /// Where every ray starts, world space (metres).
         origin: Vec3,
+        /// Map width in pixels (the full turn of longitude).
         width: u32,
+        /// Map height in pixels (pole to pole).
         height: u32,
     },
 }

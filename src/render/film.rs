@@ -5,7 +5,9 @@ use glam::{DVec3, Vec3};
 /// Accumulated radiance per pixel, row-major from the top left.
 #[derive(Clone, Debug)]
 pub struct Film {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
     sum: Vec<DVec3>,
     count: Vec<u32>,

@@ -29,18 +29,62 @@ pub const WRITE_FORMATS: &str = ".exr (linear f32), .hdr (linear RGBE), .png (to
 /// Why an image could not be written or read back. `what` names the file.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum ImageIoError {
+    /// [`write_image`] was given a path whose extension is not one of [`WRITE_FORMATS`].
     #[error("{what}: unknown image extension {given:?}; accepted: {WRITE_FORMATS}")]
-    UnknownExtension { what: String, given: String },
+    UnknownExtension {
+        /// The file.
+        what: String,
+        /// The extension, lower-cased (empty if none).
+        given: String,
+    },
+    /// The pixel count is not `width * height`.
     #[error("{what}: {len} pixels given for a {width} x {height} image")]
-    SizeMismatch { what: String, width: usize, height: usize, len: usize },
+    SizeMismatch {
+        /// The file.
+        what: String,
+        /// Width in pixels.
+        width: usize,
+        /// Height in pixels.
+        height: usize,
+        /// Number of pixels given.
+        len: usize,
+    },
+    /// A side is zero or larger than the format can store.
     #[error("{what}: cannot write a {width} x {height} image (zero or too large a size)")]
-    BadSize { what: String, width: usize, height: usize },
+    BadSize {
+        /// The file.
+        what: String,
+        /// Width in pixels.
+        width: usize,
+        /// Height in pixels.
+        height: usize,
+    },
+    /// The encoder failed, or (EXR tiles) the tile is not inside its full image.
     #[error("{what}: {format} encoding failed: {msg}")]
-    Encode { what: String, format: &'static str, msg: String },
+    Encode {
+        /// The file.
+        what: String,
+        /// `"OpenEXR"`, `"PNG"` or `"Radiance HDR"`.
+        format: &'static str,
+        /// The encoder's message.
+        msg: String,
+    },
+    /// Writing the temporary file or renaming it onto the target failed.
     #[error("{what}: cannot write: {msg}")]
-    Io { what: String, msg: String },
+    Io {
+        /// The file.
+        what: String,
+        /// The operating system's message.
+        msg: String,
+    },
+    /// An EXR could not be read or decoded, or its windows do not describe a tile of an image.
     #[error("{what}: cannot read: {msg}")]
-    Read { what: String, msg: String },
+    Read {
+        /// The file.
+        what: String,
+        /// What went wrong.
+        msg: String,
+    },
 }
 
 /// Exposure (stops) that maps the log-average luminance to 18% grey.

@@ -20,10 +20,15 @@ use crate::systems::LightingPlugin;
 
 /// Accepted ranges of the numeric options (the CLI's parsers check the same).
 pub const MAX_SIDE: u32 = 16384;
+/// Camera samples per pixel.
 pub const SPP: RangeInclusive<u32> = 1..=1 << 20;
+/// Path depth and roulette depth.
 pub const DEPTH: RangeInclusive<u32> = 0..=1024;
+/// RIS candidates per sample.
 pub const CANDIDATES: RangeInclusive<u32> = 1..=4096;
+/// ReSTIR neighbours per pixel.
 pub const NEIGHBOURS: RangeInclusive<u32> = 0..=256;
+/// ReSTIR neighbourhood radius, pixels.
 pub const RADIUS: RangeInclusive<u32> = 1..=MAX_SIDE;
 /// An intensity multiplier (`env_intensity`, `sky_intensity`).
 pub const INTENSITY: RangeInclusive<f32> = 0.0..=1e12;
@@ -62,10 +67,13 @@ pub enum IntegratorChoice {
 #[derive(Debug, thiserror::Error)]
 pub enum JobError {
     #[error("{0}")]
+    /// An option out of range or inconsistent with another; the message names it.
     Invalid(String),
     #[error(transparent)]
+    /// The scene file did not load.
     Gltf(#[from] crate::scene::gltf::GltfError),
     #[error(transparent)]
+    /// The environment map did not load.
     Image(#[from] crate::scene::image::ImageError),
 }
 
@@ -74,7 +82,9 @@ pub enum JobError {
 pub struct RenderJob {
     /// A glTF file (.gltf or .glb); None: the embedded default scene.
     pub scene: Option<PathBuf>,
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
     /// Camera samples per pixel (per pass, with `time`).
     pub spp: u32,
@@ -83,24 +93,33 @@ pub struct RenderJob {
     /// A lat-long environment map (.exr or .hdr) as an infinite light, and the luminance (nit) of
     /// a texel of value 1.
     pub env: Option<PathBuf>,
+    /// Luminance (nit) of an environment texel of value 1.
     pub env_intensity: f32,
     /// A sun and sky: "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]", and a multiplier of its radiance.
     pub sky: Option<String>,
+    /// Multiplier of the sun and sky's physical radiance.
     pub sky_intensity: f32,
+    /// Path tracing or direct lighting.
     pub integrator: IntegratorChoice,
     /// Path tracer: surfaces after the camera's at most, and where Russian roulette may start.
     pub depth: PathDepth,
+    /// How a light is chosen per sample.
     pub light_sampler: SamplerChoice,
+    /// RIS: light-BVH candidates per resampled sample.
     pub candidates: u32,
+    /// ReSTIR: neighbour reservoirs combined per pixel.
     pub neighbours: u32,
+    /// ReSTIR: radius of the neighbourhood, pixels.
     pub radius: u32,
     /// ReSTIR: weigh combined reservoirs 1/sum M (biased).
     pub biased_reuse: bool,
+    /// RGB or spectral rendering.
     pub color: ColorMode,
     /// Every light sampled at every point instead of one chosen light.
     pub all_lights: bool,
     /// MIS of light and BSDF samples (false: light samples only).
     pub mis: bool,
+    /// Seed of the random numbers.
     pub seed: u64,
     /// Render a lat-long map seen from this point instead of through the scene's camera.
     pub environment_at: Option<Vec3>,
@@ -140,10 +159,15 @@ impl Default for RenderJob {
 /// A job's world, ready to render: its schedule, the glTF file's index in `GltfAnimations`, and
 /// what loading said (warnings, and a one-line summary of the scene).
 pub struct LoadedJob {
+    /// The world with the scene, its lights and the light system's resources.
     pub world: World,
+    /// The light system's schedule for that world.
     pub schedule: Schedule,
+    /// The glTF file's index in `GltfAnimations` (None: the default scene).
     pub file: Option<usize>,
+    /// The loaders' warnings.
     pub warnings: Vec<String>,
+    /// A one-line summary of the loaded scene file.
     pub summary: Option<String>,
 }
 

@@ -20,7 +20,9 @@ pub const DEFAULT_IOR: f32 = 1.5;
 pub struct Material {
     /// Linear-sRGB base colour (albedo / metal F0).
     pub base_color: Vec3,
+    /// Multiplies `base_color` (linear RGB, sampled at the hit's uv).
     pub base_color_texture: Option<Arc<RgbImage>>,
+    /// Metalness in [0, 1]: 0 a dielectric, 1 a metal.
     pub metallic: f32,
     /// Perceptual roughness in [0, 1].
     pub roughness: f32,

@@ -77,7 +77,9 @@ impl Default for Integrator {
 pub struct RenderOptions {
     /// Size of the full image, which the camera frames.
     pub width: u32,
+    /// Height of the full image, pixels.
     pub height: u32,
+    /// Samples per pixel in each pass.
     pub spp: u32,
     /// How light and BSDF samples are combined (at every bounce). Defaults to MIS.
     pub strategy: Strategy,
@@ -140,11 +142,15 @@ impl RenderOptions {
 /// Counts of a finished render.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RenderStats {
+    /// Wall-clock time of the whole render, s (the first update included).
     pub seconds: f64,
     /// Samples per pixel rendered (more than asked under a time budget).
     pub spp: u32,
+    /// Camera rays traced, one per sample (escaped ones included).
     pub camera_samples: u64,
+    /// Shadow rays the light system traced, over every bounce.
     pub shadow_rays: u64,
+    /// BSDF-sampled rays traced: for MIS at the surface, or (path tracing) to continue a path.
     pub bsdf_rays: u64,
     /// The light system's update before the first batch, s: what bringing the BVH and light
     /// tables up to date with the world cost (a scene's load, or an animation frame's changes).

@@ -9,40 +9,120 @@ use glam::Vec3;
 /// A rectangle of pixels `x0..x1` by `y0..y1` (exclusive ends) of a full image, row 0 at the top.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Crop {
+    /// First column, pixels.
     pub x0: u32,
+    /// First row, pixels from the top.
     pub y0: u32,
+    /// One past the last column.
     pub x1: u32,
+    /// One past the last row.
     pub y1: u32,
 }
 
 /// Why a crop or a set of tiles was refused.
 #[derive(Debug, thiserror::Error, Clone, PartialEq, Eq)]
 pub enum TileError {
+    /// A crop string is not four comma-separated whole numbers.
     #[error("crop '{given}': expected four whole numbers X0,Y0,X1,Y1 (pixels, X1 and Y1 exclusive)")]
-    Syntax { given: String },
+    Syntax {
+        /// The string as given.
+        given: String,
+    },
+    /// A crop covers no pixel: `x1 <= x0` or `y1 <= y0`.
     #[error("crop {crop} is empty: X1 must be greater than X0 and Y1 greater than Y0")]
-    Empty { crop: Crop },
+    Empty {
+        /// The empty crop.
+        crop: Crop,
+    },
+    /// A crop reaches past the right or bottom edge of the image ([`Crop::check`]).
     #[error("crop {crop} is not inside the {width}x{height} image")]
-    Outside { crop: Crop, width: u32, height: u32 },
+    Outside {
+        /// The crop.
+        crop: Crop,
+        /// Image width, pixels.
+        width: u32,
+        /// Image height, pixels.
+        height: u32,
+    },
+    /// A tile to merge belongs to a full image of another size than the first tile's.
     #[error(
         "{tile}: it belongs to a {width}x{height} image, but {first} belongs to a {first_width}x{first_height} one"
     )]
-    ImageSize { tile: String, width: u32, height: u32, first: String, first_width: u32, first_height: u32 },
+    ImageSize {
+        /// Name of the tile.
+        tile: String,
+        /// Width of its full image, pixels.
+        width: u32,
+        /// Height of its full image, pixels.
+        height: u32,
+        /// Name of the first tile.
+        first: String,
+        /// Width of the first tile's full image, pixels.
+        first_width: u32,
+        /// Height of the first tile's full image, pixels.
+        first_height: u32,
+    },
+    /// A tile to merge has an empty region or one not inside its full image.
     #[error("{tile}: region {crop} is not inside its {width}x{height} image")]
-    TileOutside { tile: String, crop: Crop, width: u32, height: u32 },
+    TileOutside {
+        /// Name of the tile.
+        tile: String,
+        /// Its region.
+        crop: Crop,
+        /// Full image width, pixels.
+        width: u32,
+        /// Full image height, pixels.
+        height: u32,
+    },
+    /// Two tiles to merge cover the same pixel.
     #[error("{tile} and {other} overlap (both cover pixel {x},{y})")]
-    Overlap { tile: String, other: String, x: u32, y: u32 },
+    Overlap {
+        /// Name of the later tile.
+        tile: String,
+        /// Name of the earlier tile that already covers the pixel.
+        other: String,
+        /// Column of the first shared pixel.
+        x: u32,
+        /// Row of the first shared pixel.
+        y: u32,
+    },
+    /// The merged tiles leave pixels of the full image uncovered.
     #[error("{count} pixels of the {width}x{height} image are in no tile, within {region} (e.g. pixel {x},{y})")]
-    Gap { count: u64, width: u32, height: u32, region: Crop, x: u32, y: u32 },
+    Gap {
+        /// Number of uncovered pixels.
+        count: u64,
+        /// Full image width, pixels.
+        width: u32,
+        /// Full image height, pixels.
+        height: u32,
+        /// Bounding box of the uncovered pixels.
+        region: Crop,
+        /// Column of the first uncovered pixel (row-major order).
+        x: u32,
+        /// Row of the first uncovered pixel.
+        y: u32,
+    },
+    /// A tile's pixel list does not match the size of its region.
     #[error("{tile}: {len} pixels for a {crop} region")]
-    PixelCount { tile: String, len: usize, crop: Crop },
+    PixelCount {
+        /// Name of the tile.
+        tile: String,
+        /// Number of pixels it holds.
+        len: usize,
+        /// Its region.
+        crop: Crop,
+    },
+    /// [`merge_tiles`] was given an empty list.
     #[error("no tiles to merge")]
     NoTiles,
+    /// A crop was asked of a ReSTIR render with spatial or temporal reuse, whose tiles would not
+    /// match the full render.
     #[error(
         "ReSTIR reuses reservoirs of the render's own samples, so a tile would not be that region of the full \
          image: render ReSTIR images whole, or tile with the ris light sampler"
     )]
     Reuse,
+    /// A crop was asked of a render with a time budget, whose tiles would differ in samples per pixel.
     #[error(
         "a time budget renders as many passes as fit, so tiles would differ in samples per pixel: give tiles \
          a sample count, not a time"
@@ -81,10 +161,12 @@ impl Crop {
         Self { x0: 0, y0: 0, x1: width, y1: height }
     }
 
+    /// Width in pixels (0 if inverted).
     pub fn width(&self) -> u32 {
         self.x1.saturating_sub(self.x0)
     }
 
+    /// Height in pixels (0 if inverted).
     pub fn height(&self) -> u32 {
         self.y1.saturating_sub(self.y0)
     }
@@ -114,10 +196,15 @@ impl Crop {
 /// region's size). `name` says where it came from, for errors.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tile {
+    /// Where the tile came from (e.g. its file name), for errors.
     pub name: String,
+    /// Width of the full image, pixels.
     pub width: u32,
+    /// Height of the full image, pixels.
     pub height: u32,
+    /// The tile's region of the full image.
     pub crop: Crop,
+    /// The region's pixels, row-major from its top left.
     pub pixels: Vec<Vec3>,
 }
 

@@ -48,6 +48,7 @@ pub struct LightBenchConfig {
     pub move_step: f32,
     /// Tiles per side of the emissive panel (2 tiles^2 triangles); 0 skips the panel room.
     pub panel_tiles: usize,
+    /// Seed of the scenes, the ground points and the moves.
     pub seed: u64,
 }
 
@@ -90,10 +91,15 @@ pub struct SamplerFigures {
 /// Update times for one light count, ms (the fastest of the timed frames).
 #[derive(Clone, Debug, Default)]
 pub struct UpdateFigures {
+    /// Power sampler update after 1% of the lights moved.
     pub power_move_1pct_ms: f64,
+    /// Power sampler built from scratch.
     pub power_rebuild_ms: f64,
+    /// Light BVH update (refit, or rebuild when the cost ratio calls for it) after 1% moved.
     pub bvh_refit_1pct_ms: f64,
+    /// Light BVH update after 10% of the lights moved.
     pub bvh_refit_10pct_ms: f64,
+    /// Light BVH built from scratch.
     pub bvh_rebuild_ms: f64,
     /// Rebuilds the cost-ratio test triggered during the moving frames.
     pub bvh_rebuilds: usize,
@@ -106,12 +112,17 @@ pub struct UpdateFigures {
 /// All figures for one scene.
 #[derive(Clone, Debug, Default)]
 pub struct LightBenchRow {
+    /// `"scaling"` or `"panel"`.
     pub scene: String,
+    /// Number of lights (emitting triangles in the panel room).
     pub n: usize,
     /// Spawning and syncing the scene through the ECS, ms.
     pub scene_ms: f64,
+    /// Depth of the light BVH's deepest leaf.
     pub bvh_depth: usize,
+    /// One entry per sampler, in [`KINDS`] order.
     pub samplers: Vec<SamplerFigures>,
+    /// Update times; scaling scene only.
     pub update: Option<UpdateFigures>,
 }
 
@@ -135,7 +146,9 @@ pub fn irradiance(table: &LightTable, id: LightId, ctx: &LightSampleContext) -> 
 
 /// A scene synced through the ECS: its light table (change flags cleared) and scene BVH.
 pub struct SyncedScene {
+    /// The scene's lights.
     pub table: LightTable,
+    /// The scene's geometry, for shadow rays.
     pub bvh: SceneBvh,
     /// Spawning and syncing time, ms.
     pub ms: f64,

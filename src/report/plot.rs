@@ -8,14 +8,19 @@ use plotters::prelude::*;
 
 /// One named curve of (x, y) points.
 pub struct Series {
+    /// Legend label; empty for none.
     pub name: String,
+    /// The points in drawing order; non-finite ones are left out.
     pub points: Vec<(f64, f64)>,
 }
 
 /// Axes and title of a plot.
 pub struct PlotSpec<'a> {
+    /// Caption above the chart.
     pub title: &'a str,
+    /// Label of the horizontal axis.
     pub x_label: &'a str,
+    /// Label of the vertical axis.
     pub y_label: &'a str,
     /// Draw with equal units on both axes (polar plots).
     pub equal_aspect: bool,
@@ -25,7 +30,9 @@ pub struct PlotSpec<'a> {
 #[derive(Debug, thiserror::Error)]
 #[error("cannot write plot {path}: {msg}")]
 pub struct PlotError {
+    /// The plot file.
     pub path: String,
+    /// What failed: an unsupported extension or plotters' error.
     pub msg: String,
 }
 

@@ -155,7 +155,9 @@ pub fn suite_options(width: u32, height: u32, spp: u32) -> RenderOptions {
 pub struct RenderBenchConfig {
     /// Folder of the real test data (tests/data).
     pub data_dir: PathBuf,
+    /// Image width, pixels (at least 1 is used).
     pub width: u32,
+    /// Image height, pixels (at least 1 is used).
     pub height: u32,
     /// Samples per pixel for every scene; each scene's `default_spp` when None.
     pub spp: Option<u32>,
@@ -181,8 +183,11 @@ impl Default for RenderBenchConfig {
 /// Seconds of each pass of the fastest render (see `PassSeconds`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct PassRow {
+    /// Camera rays and their closest hits.
     pub camera: f64,
+    /// The light system: light choice, Sample_Li and shadow rays.
     pub light_system: f64,
+    /// MIS with BSDF samples and adding the samples to the film.
     pub shading: f64,
 }
 
@@ -195,32 +200,51 @@ impl From<PassSeconds> for PassRow {
 /// One scene's measurement. Rates are per second of the fastest timed render.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct RenderBenchRow {
+    /// The suite scene's name.
     pub scene: String,
     /// The glTF file and the environment map, as paths (absolute when `data_dir` is).
     pub file: String,
+    /// The environment map, if the scene has one (see `file`).
     pub env: Option<String>,
+    /// Luminance of an environment texel of value 1, nit.
     pub env_intensity: Option<f32>,
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// Samples per pixel of the timed renders.
     pub spp: u32,
+    /// Rayon worker threads.
     pub threads: usize,
+    /// Meshes spawned from the file.
     pub meshes: usize,
+    /// Triangles spawned from the file.
     pub triangles: usize,
+    /// Punctual and IES lights spawned from the file (emissive meshes not counted).
     pub lights: usize,
+    /// Cameras in the file.
     pub cameras: usize,
     /// Loading the file and the map and spawning them.
     pub seconds_load: f64,
     /// The 1-spp render that builds the scene BVH, light table, sampler and env tables.
     pub seconds_setup: f64,
+    /// The fastest timed render, s.
     pub seconds_best: f64,
+    /// Every timed render, s, in order.
     pub seconds_all: Vec<f64>,
     /// Counts of one render.
     pub camera_samples: u64,
+    /// Shadow rays traced by the light system.
     pub shadow_rays: u64,
+    /// BSDF-sampled rays traced for MIS.
     pub bsdf_rays: u64,
+    /// Camera samples per second.
     pub samples_per_s: f64,
+    /// Shadow rays per second.
     pub shadow_rays_per_s: f64,
+    /// BSDF rays per second.
     pub bsdf_rays_per_s: f64,
+    /// Time of each pass of the fastest render.
     pub passes: PassRow,
     /// Loader and light-system warnings.
     pub warnings: Vec<String>,

@@ -6,8 +6,11 @@ use glam::Vec3;
 /// with the three axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
+    /// Unit axis of local x.
     pub x: Vec3,
+    /// Unit axis of local y.
     pub y: Vec3,
+    /// Unit axis of local z, the "up" of local directions (a normal, say).
     pub z: Vec3,
 }
 

@@ -32,12 +32,34 @@ pub use warp::*;
 /// accepted.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum SamplingError {
+    /// A domain bound is not finite, or min >= max (for a 2D distribution, on one of its axes).
     #[error("{what}: domain [{min}, {max}] must be finite with min < max")]
-    BadDomain { what: &'static str, min: f32, max: f32 },
+    BadDomain {
+        /// The distribution being built.
+        what: &'static str,
+        /// Lower bound given.
+        min: f32,
+        /// Upper bound given.
+        max: f32,
+    },
+    /// A 2D grid's size is 0 along an axis, or does not match the number of values.
     #[error("{what}: {len} values given for a {nu} x {nv} grid (needs {nu} * {nv} values, both at least 1)")]
-    BadGrid { what: &'static str, len: usize, nu: usize, nv: usize },
+    BadGrid {
+        /// The distribution being built.
+        what: &'static str,
+        /// Number of values given.
+        len: usize,
+        /// Grid size along u (values per row).
+        nu: usize,
+        /// Grid size along v (rows).
+        nv: usize,
+    },
+    /// A 1D function has no values.
     #[error("{what}: no values given (needs at least one)")]
-    Empty { what: &'static str },
+    Empty {
+        /// The distribution being built.
+        what: &'static str,
+    },
 }
 
 /// The largest f32 below 1: samples are clamped to it so that `floor(u * n) < n`.

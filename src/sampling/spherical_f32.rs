@@ -100,6 +100,7 @@ pub struct TriangleView {
     denom: f32,
     /// Solid angle (sr) and a bound on its absolute error.
     pub solid_angle: f32,
+    /// Bound on the absolute error of `solid_angle`, sr.
     pub solid_angle_error: f32,
     /// |N| = twice the triangle's area.
     cross_len: f32,

@@ -12,6 +12,7 @@ use crate::geometry::Transform;
 /// (`SpawnReport::file` indexes them).
 #[derive(Resource, Clone, Debug, Default)]
 pub struct GltfAnimations {
+    /// One entry per spawned file.
     pub files: Vec<SceneAnimations>,
 }
 
@@ -20,6 +21,7 @@ pub struct GltfAnimations {
 pub struct GltfNode {
     /// Index into [`GltfAnimations::files`].
     pub file: usize,
+    /// Index of the node in that file's glTF `nodes`.
     pub node: usize,
     /// The inverse of the node's rest transform where the entity's data holds it (a mesh's
     /// vertices are stored in world space at rest, so its `Transform` is the change since

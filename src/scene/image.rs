@@ -80,29 +80,99 @@ pub struct LoadedImage {
 /// Why an image could not be loaded. `what` names the file (or the in-memory source).
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum ImageError {
+    /// The file does not exist.
     #[error("{what}: file not found")]
-    NotFound { what: String },
+    NotFound {
+        /// The file.
+        what: String,
+    },
+    /// The file exists but could not be read.
     #[error("{what}: cannot read: {msg}")]
-    Io { what: String, msg: String },
+    Io {
+        /// The file.
+        what: String,
+        /// The operating system's message.
+        msg: String,
+    },
+    /// The extension or MIME type is not one of [`IMAGE_FORMATS`].
     #[error("{what}: unknown image format {given:?}; accepted: {IMAGE_FORMATS}")]
-    UnknownFormat { what: String, given: String },
+    UnknownFormat {
+        /// The file or source.
+        what: String,
+        /// The extension or MIME type given.
+        given: String,
+    },
+    /// The file or buffer has zero bytes.
     #[error("{what}: empty (zero bytes)")]
-    Empty { what: String },
+    Empty {
+        /// The file or source.
+        what: String,
+    },
+    /// The data is corrupt or truncated, its header claims implausibly many pixels for its size
+    /// ([`MAX_PIXELS_PER_BYTE`]), or the decoder panicked.
     #[error("{what}: corrupt or truncated {format} data: {msg}")]
-    Decode { what: String, format: &'static str, msg: String },
+    Decode {
+        /// The file or source.
+        what: String,
+        /// The format's name ([`ImageFormat::name`]).
+        format: &'static str,
+        /// The decoder's message.
+        msg: String,
+    },
+    /// The image is 0 pixels wide or high.
     #[error("{what}: image has zero size ({width} x {height})")]
-    ZeroSize { what: String, width: usize, height: usize },
+    ZeroSize {
+        /// The file or source.
+        what: String,
+        /// Width in pixels.
+        width: usize,
+        /// Height in pixels.
+        height: usize,
+    },
+    /// The image has more than [`MAX_PIXELS`] pixels.
     #[error("{what}: image too large ({width} x {height} pixels; at most {MAX_PIXELS} pixels accepted)")]
-    TooLarge { what: String, width: usize, height: usize },
+    TooLarge {
+        /// The file or source.
+        what: String,
+        /// Width in pixels.
+        width: usize,
+        /// Height in pixels.
+        height: usize,
+    },
+    /// No EXR layer has R, G and B channels, or a Y channel.
     #[error("{what}: no R, G, B or Y channels in any EXR layer (found: {channels})")]
-    NoColorChannels { what: String, channels: String },
+    NoColorChannels {
+        /// The file or source.
+        what: String,
+        /// The channel names found, comma-separated.
+        channels: String,
+    },
+    /// An image kelvin does not read: subsampled EXR channels, one over the decoder's allocation
+    /// limit, or a decoder that gave a pixel count other than width x height.
     #[error("{what}: {msg}")]
-    Unsupported { what: String, msg: String },
+    Unsupported {
+        /// The file or source.
+        what: String,
+        /// What is not supported.
+        msg: String,
+    },
+    /// Some pixels have a NaN or infinite channel (see the module's validation policy).
     #[error(
         "{what}: {count} pixel(s) with NaN or infinite values, first at (x {x}, y {y}) = {value}; \
          not usable as a light or environment map"
     )]
-    NonFinite { what: String, x: usize, y: usize, value: String, count: usize },
+    NonFinite {
+        /// The file or source.
+        what: String,
+        /// Column of the first bad pixel (row-major order).
+        x: usize,
+        /// Row of the first bad pixel, from the top.
+        y: usize,
+        /// The first bad pixel's value, as text.
+        value: String,
+        /// Number of bad pixels.
+        count: usize,
+    },
 }
 
 /// The formats kelvin reads.

@@ -27,15 +27,21 @@ use crate::spectrum::Spectrum;
 /// What was spawned, and what was skipped with why.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SpawnReport {
+    /// Mesh entities spawned, one per glTF mesh primitive and instance.
     pub meshes: usize,
+    /// Triangles over all spawned meshes.
     pub triangles: usize,
+    /// Spawned meshes that are also area lights (an emissive material).
     pub emissive_meshes: usize,
+    /// Punctual and IES lights spawned (emissive meshes not counted).
     pub lights: usize,
+    /// Cameras spawned.
     pub cameras: usize,
     /// The file's index in the world's [`GltfAnimations`] (what `animate::pose_gltf` takes).
     pub file: usize,
     /// Its animations.
     pub animations: usize,
+    /// The loader's warnings, then what spawning skipped and why.
     pub warnings: Vec<String>,
 }
 

@@ -30,15 +30,51 @@ pub use tabulated::TabulatedSpectrum;
 pub enum SpectrumError {
     /// `range` as written in maths: "[0, 1]", "(0, 1000000000]".
     #[error("{what} = {value} is outside {range}")]
-    OutOfRange { what: String, value: f64, range: String },
+    OutOfRange {
+        /// The parameter, with its unit: `"temperature (K)"`, `"emissivity"`.
+        what: String,
+        /// The value given.
+        value: f64,
+        /// The accepted range.
+        range: String,
+    },
+    /// A table's wavelengths and values do not match in number, it has fewer than two rows, a
+    /// wavelength is not positive or not increasing, or a value is not finite.
     #[error("{what}: {msg}")]
-    BadTable { what: String, msg: String },
+    BadTable {
+        /// The table's source (a file path, a built-in name).
+        what: String,
+        /// What is wrong, with the row.
+        msg: String,
+    },
+    /// A CSV row has the wrong number of fields or a field that is not a number, or there are no
+    /// data rows.
     #[error("{what}, line {line}: {msg}")]
-    BadCsv { what: String, line: usize, msg: String },
+    BadCsv {
+        /// The CSV's source (a file path).
+        what: String,
+        /// 1-based line number; 0 when the whole file is at fault (no data rows).
+        line: usize,
+        /// What is wrong.
+        msg: String,
+    },
+    /// A specification is not one of the accepted forms, names no known illuminant, or has a
+    /// number that does not parse.
     #[error("unknown spectrum '{given}'; accepted: {accepted}")]
-    Unknown { given: String, accepted: String },
+    Unknown {
+        /// The specification given.
+        given: String,
+        /// The accepted forms or names.
+        accepted: String,
+    },
+    /// A spectrum file could not be read.
     #[error("{what}: cannot read: {msg}")]
-    Io { what: String, msg: String },
+    Io {
+        /// The file's path.
+        what: String,
+        /// The system's error message.
+        msg: String,
+    },
 }
 
 impl SpectrumError {
@@ -54,20 +90,36 @@ pub enum Spectrum {
     /// The same value at every wavelength (CIE illuminant E when 1). Integrated over 360-830 nm.
     Constant(f64),
     /// Planck's law at a temperature (K), normalised so its peak (at Wien's lambda_max) is 1.
-    Blackbody { temperature_k: f64 },
+    Blackbody {
+        /// Temperature, K.
+        temperature_k: f64,
+    },
     /// Kirchhoff's law with a constant emissivity in [0, 1]: a grey body, `emissivity` times the
     /// normalised blackbody.
-    Graybody { temperature_k: f64, emissivity: f64 },
+    Graybody {
+        /// Temperature, K.
+        temperature_k: f64,
+        /// Emissivity at every wavelength, in [0, 1].
+        emissivity: f64,
+    },
     /// Kirchhoff's law with a tabulated emissivity (0 outside its table) times the normalised
     /// blackbody.
-    Emitter { temperature_k: f64, emissivity: Arc<TabulatedSpectrum> },
+    Emitter {
+        /// Temperature, K.
+        temperature_k: f64,
+        /// Emissivity over wavelength (nm), clamped to [0, 1] where evaluated.
+        emissivity: Arc<TabulatedSpectrum>,
+    },
     /// CIE illuminant A from its defining formula, 300-830 nm, 100 at 560 nm.
     IlluminantA,
     /// A table, linearly interpolated (CIE illuminants, daylight, measured data).
     Tabulated(Arc<TabulatedSpectrum>),
     /// An emitter whose colour is a linear-sRGB triple: the Mallett-Yuksel (2019) basis spectra
     /// weighted by `rgb`, times the D65 illuminant normalised to 1 at 560 nm, so (1, 1, 1) is D65.
-    Rgb { rgb: [f64; 3] },
+    Rgb {
+        /// Linear-sRGB weights of the red, green and blue basis spectra.
+        rgb: [f64; 3],
+    },
 }
 
 /// Range over which analytic, unbounded spectra (constants) are integrated: the CMF range.

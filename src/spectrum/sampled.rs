@@ -13,7 +13,9 @@ pub const VISIBLE_NM: (f32, f32) = (360.0, 830.0);
 /// `N_SPECTRUM_SAMPLES` wavelengths (nm) and the pdf (1/nm) each was drawn with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SampledWavelengths {
+    /// The wavelengths, nm.
     pub lambda: [f32; N_SPECTRUM_SAMPLES],
+    /// Density each wavelength was drawn with, 1/nm.
     pub pdf: [f32; N_SPECTRUM_SAMPLES],
 }
 

@@ -78,7 +78,9 @@ impl Default for AreaLight {
 /// images into this form.
 #[derive(Clone, PartialEq)]
 pub struct LightTexture {
+    /// Width in texels, > 0.
     pub width: usize,
+    /// Height in texels, > 0.
     pub height: usize,
     /// Row-major, `width * height` finite non-negative texels.
     pub texels: Vec<Vec3>,
@@ -131,10 +133,13 @@ impl LightTexture {
 /// An area light's shape and emission in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResolvedArea {
+    /// The emitting surface, world space.
     pub shape: AreaShape,
     /// Emitted radiance, W/(m^2 sr) (photometric RGB in nit).
     pub radiance: Emitter,
+    /// Emits from both faces; otherwise only on the side of the surface normal.
     pub two_sided: bool,
+    /// Linear-sRGB tint looked up at the surface's uv, multiplying `radiance`.
     pub texture: Option<Arc<LightTexture>>,
     /// Area of `shape`, m^2.
     pub area: f32,
@@ -145,6 +150,7 @@ pub struct ResolvedArea {
 /// The triangles of a mesh light and how many degenerate triangles were left out.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResolvedMesh {
+    /// One light per non-degenerate triangle, world space.
     pub triangles: Vec<ResolvedArea>,
     /// Index in the mesh of each of `triangles` (degenerate ones are missing).
     pub primitives: Vec<u32>,

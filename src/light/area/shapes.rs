@@ -38,14 +38,38 @@ pub const SPHERE_NEAR_MARGIN: f64 = 1e-4;
 pub enum AreaShape {
     /// Normal points outward. uv: spherical coordinates around world +Y, u = azimuth / 2 pi
     /// (from +X toward -Z), v = polar angle / pi (0 at the +Y pole).
-    Sphere { center: Vec3, radius: f32 },
+    Sphere {
+        /// Centre, metres.
+        center: Vec3,
+        /// Radius in metres.
+        radius: f32,
+    },
     /// uv: polar, u = azimuth / 2 pi in `Frame::from_z(normal)`, v = 1 - rho / radius.
-    Disk { center: Vec3, normal: Vec3, radius: f32 },
+    Disk {
+        /// Centre, metres.
+        center: Vec3,
+        /// Unit normal, the emitting side of a one-sided light.
+        normal: Vec3,
+        /// Radius in metres.
+        radius: f32,
+    },
     /// The parallelogram corner + s ex + t ey, s, t in [0, 1], with ex orthogonal to ey;
     /// normal = normalize(ex x ey); uv = (s, t).
-    Rectangle { corner: Vec3, ex: Vec3, ey: Vec3 },
+    Rectangle {
+        /// The corner at uv (0, 0), metres.
+        corner: Vec3,
+        /// First edge from `corner` (s direction), metres; its length is the side length.
+        ex: Vec3,
+        /// Second edge from `corner` (t direction), metres, orthogonal to `ex`.
+        ey: Vec3,
+    },
     /// Counter-clockwise vertices (normal = normalize((p1 - p0) x (p2 - p0))) with their uvs.
-    Triangle { p: [Vec3; 3], uv: [Vec2; 3] },
+    Triangle {
+        /// Vertices, metres, counter-clockwise seen from the emitting side.
+        p: [Vec3; 3],
+        /// Texture coordinates of the vertices, interpolated barycentrically.
+        uv: [Vec2; 3],
+    },
 }
 
 /// How a shape is sampled from a given reference point.
@@ -64,9 +88,11 @@ pub enum SamplingStrategy {
 /// A point on a shape's surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
+    /// Position, world space, metres.
     pub p: Vec3,
     /// Unit geometric normal (the shape's orientation, not flipped toward anyone).
     pub n: Vec3,
+    /// Texture coordinate in the shape's parameterisation (see [`AreaShape`]).
     pub uv: Vec2,
 }
 
@@ -74,9 +100,11 @@ pub struct SurfacePoint {
 /// (1/sr) of the shape's sampling strategy for that direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShapeSample {
+    /// The visible surface point along `wi`.
     pub point: SurfacePoint,
     /// Unit direction from the reference point toward `point`.
     pub wi: Vec3,
+    /// Solid-angle density of `wi` under the shape's sampling strategy, 1/sr.
     pub pdf: f32,
 }
 

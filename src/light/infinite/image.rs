@@ -49,6 +49,8 @@ impl ImageInfiniteLight {
         }
     }
 
+    /// Checks that the image has at least one pixel and width * height of them, that
+    /// `table_max_width` is not 0 and that `scale` is finite and >= 0.
     pub fn validate(&self) -> Result<(), LightError> {
         let (w, h, n) = (self.image.width, self.image.height, self.image.pixels.len());
         if w == 0 || h == 0 || w.checked_mul(h) != Some(n) {
@@ -153,13 +155,17 @@ impl std::fmt::Debug for ResolvedImageInfinite {
 /// only for estimators that combine them with BSDF sampling by MIS.
 #[derive(Clone)]
 pub struct ResolvedImageInfinite {
+    /// Lat-long map of relative linear RGB radiance (see [`ImageInfiniteLight::image`]).
     pub image: Arc<RgbImage>,
+    /// Sampling tables of `image`, shared by every light of the same image.
     pub tables: Arc<EnvMapTables>,
+    /// Radiance between texel centres.
     pub lookup: EnvLookup,
     /// Image-to-world rotation (unit).
     pub rotation: Quat,
     /// Radiance of a (1, 1, 1) texel, W/(m^2 sr) (with its photometric RGB in nit).
     pub emitter: Emitter,
+    /// Bounds of the scene, used to place sample points beyond it and to compute the power.
     pub scene: SceneSphere,
     phi: f32,
     luminous_phi: f32,

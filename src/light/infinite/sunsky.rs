@@ -58,7 +58,14 @@ pub enum SunPosition {
     Direction(Vec3),
     /// From latitude (north positive) and longitude (east positive), degrees, and a UTC instant,
     /// by the NOAA solar position equations at the apparent (refracted) elevation.
-    Location { latitude_deg: f64, longitude_deg: f64, time: UtcDateTime },
+    Location {
+        /// Latitude, degrees in [-90, 90], north positive.
+        latitude_deg: f64,
+        /// Longitude, degrees in [-180, 180], east positive.
+        longitude_deg: f64,
+        /// The instant, UTC.
+        time: UtcDateTime,
+    },
 }
 
 /// A physical sun and sky around the scene (world frame: +Y up, -Z north, +X east; the entity's
@@ -271,11 +278,13 @@ fn sky_efficacy(sky: &SkyModel, sun: Vec3) -> f64 {
 /// The sun's disc: Hosek-Wilkie radiance with limb darkening, sampled uniformly in its cone.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SunDisc {
+    /// Spectral radiance and limb darkening for the sun's elevation and the turbidity.
     pub model: SunModel,
     /// Unit direction toward the disc's centre.
     pub dir: Vec3,
     /// sin^2 and 1 - cos of the disc's angular radius.
     pub sin2_radius: f32,
+    /// 1 - cos of the disc's angular radius (see `sin2_radius`).
     pub one_minus_cos: f32,
     /// Radiance factor keeping the illuminance of a sun of [`SUN_ANGULAR_DIAMETER`].
     pub size_factor: f32,
@@ -284,6 +293,7 @@ pub struct SunDisc {
     pub rgb_limb: [Vec3; 6],
     /// Normal illuminance (lx) and irradiance (W/m^2) of the disc, before `scale`.
     pub illuminance: f64,
+    /// Normal irradiance of the disc, W/m^2, before `scale` (see `illuminance`).
     pub irradiance: f64,
 }
 
@@ -381,9 +391,11 @@ pub struct ResolvedSunSky {
     pub sun: Option<SunDisc>,
     /// The sky's image and sampling tables.
     pub buffers: Arc<SkyBuffers>,
+    /// Multiplies sky and sun radiance alike (see [`SunSkyLight::scale`]).
     pub scale: f32,
     /// Probability that Sample_Li samples the sun rather than the sky.
     pub p_sun: f32,
+    /// Bounds of the scene, used to place sample points beyond it and to compute the power.
     pub scene: SceneSphere,
     /// Integral of luminance over the sphere, nit sr (= lx), and of radiance, W/m^2.
     luminous_integral: f32,

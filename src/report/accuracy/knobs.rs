@@ -12,12 +12,19 @@ use crate::shading::{ColorMode, LightPrecision, LightSamplerKind, LightSelection
 /// Everything the report varies about one render.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
+    /// Camera samples per pixel.
     pub spp: u32,
+    /// RGB or spectral rendering.
     pub color: ColorMode,
+    /// How a light is chosen for each sample.
     pub sampler: LightSamplerKind,
+    /// One sampled light per point, or every light.
     pub selection: LightSelection,
+    /// Light samples, BSDF samples or both combined by MIS.
     pub strategy: Strategy,
+    /// How shadow rays are moved off the surface.
     pub offset: ShadowOffset,
+    /// f32 or f64 light math.
     pub precision: LightPrecision,
     /// Largest env sampling-table width; None for the image's own width.
     pub env_table_width: Option<usize>,
@@ -80,13 +87,21 @@ impl Config {
 /// A knob of the report.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Knob {
+    /// Camera samples per pixel, doubling from 1.
     Spp,
+    /// Uniform, power or light-BVH light selection.
     LightSampler,
+    /// RGB or spectral rendering.
     Color,
+    /// Width of the environment map's sampling table ([`ENV_TABLE_WIDTHS`] and the full width).
     EnvTable,
+    /// MIS, light samples only or BSDF samples only.
     Strategy,
+    /// One light per sample, or every light at fewer samples per pixel.
     Selection,
+    /// Error-bound shadow-ray offsets or fixed ones ([`FIXED_EPSILONS`]).
     ShadowOffset,
+    /// f32 or f64 light math.
     Precision,
     /// The path tracer's largest depth (direct lighting is depth 1).
     Depth,

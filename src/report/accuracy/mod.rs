@@ -34,7 +34,9 @@ use crate::shading::ColorMode;
 /// Image size, sample counts and repetitions of a run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Budget {
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
     /// Samples per pixel of the references.
     pub reference_spp: u32,
@@ -61,6 +63,7 @@ pub struct AccuracyOptions {
     pub scenes: Vec<SceneId>,
     /// Output folder (created if needed); references are cached there.
     pub out: PathBuf,
+    /// Image size, sample counts and repetitions.
     pub budget: Budget,
     /// Folder of the real test data (the repository's `tests/data`); the env scene is skipped,
     /// with the reason, when its map is not there.
@@ -70,14 +73,29 @@ pub struct AccuracyOptions {
 /// Why the report could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum AccuracyError {
+    /// A scene name matches none of the report's scenes.
     #[error("unknown scene '{given}'; accepted: {accepted}")]
-    UnknownScene { given: String, accepted: String },
+    UnknownScene {
+        /// The name given.
+        given: String,
+        /// The accepted names, comma-separated.
+        accepted: String,
+    },
+    /// A folder could not be created or a file (CSV, Markdown, reference metadata) written.
     #[error("{path}: {msg}")]
-    Io { path: String, msg: String },
+    Io {
+        /// The folder or file.
+        path: String,
+        /// The system's error message.
+        msg: String,
+    },
+    /// A reference image could not be written.
     #[error(transparent)]
     ImageOut(#[from] crate::render::film_io::ImageIoError),
+    /// A scene's environment map could not be read.
     #[error(transparent)]
     ImageIn(#[from] crate::scene::image::ImageError),
+    /// A plot could not be drawn or written.
     #[error(transparent)]
     Plot(#[from] crate::report::plot::PlotError),
 }
@@ -94,8 +112,11 @@ pub enum Against {
 /// One setting of one knob, measured.
 #[derive(Clone, Debug)]
 pub struct Row {
+    /// The knob turned.
     pub knob: Knob,
+    /// The setting's label, as in tables and plots.
     pub setting: String,
+    /// The whole configuration rendered.
     pub config: Config,
     /// Fastest render of the setting, s.
     pub seconds: f64,
@@ -107,6 +128,7 @@ pub struct Row {
     pub samples_per_s: f64,
     /// Mean over the renders of [`rel_mse`] and [`max_error`].
     pub rel_mse: f64,
+    /// Mean over the renders of [`max_error`].
     pub max_err: f64,
     /// Estimated squared bias in relative-MSE units, the error left at infinite spp, and its
     /// standard error. From the n renders' mean image, whose MSE is bias^2 + variance / n, and
@@ -114,15 +136,19 @@ pub struct Row {
     /// reference's own noise (about the baseline's relative MSE x base spp / reference spp); NaN
     /// for one render.
     pub bias2: f64,
+    /// Standard error of `bias2`.
     pub bias2_se: f64,
     /// Mean and max CIEDE2000 over the colour-checker patches (checker scenes only).
     pub de00: Option<(f64, f64)>,
+    /// Which reference the row is compared with.
     pub against: Against,
     /// This is the knob's baseline setting.
     pub baseline: bool,
     /// Time, relative MSE and efficiency against the knob's baseline row.
     pub time_ratio: f64,
+    /// Relative MSE over the baseline's.
     pub error_ratio: f64,
+    /// (relative MSE x time) of the baseline over the row's: above 1, a cheaper way to accuracy.
     pub efficiency: f64,
     /// On the Pareto front of (`norm_seconds`, relative MSE) among the rows compared with the main
     /// reference.
@@ -132,12 +158,18 @@ pub struct Row {
 /// The report of one scene.
 #[derive(Clone, Debug)]
 pub struct SceneReport {
+    /// The scene reported on.
     pub scene: SceneId,
+    /// The budget it was run with.
     pub budget: Budget,
+    /// Number of lights in the scene.
     pub n_lights: usize,
+    /// One row per setting of each of the scene's knobs, knob by knob.
     pub rows: Vec<Row>,
     /// The main reference against itself: must be all zeros.
     pub self_check: Row,
+    /// The main reference (in the baseline's colour mode), then the spectral one when the colour
+    /// knob needs it.
     pub references: Vec<Reference>,
     /// Slope of log relative MSE against log spp on the spp ladder (about -1 when unbiased).
     pub spp_slope: f64,

@@ -21,11 +21,15 @@ pub const REFERENCE_SEED: u64 = 0x7e6e_7e6e_0000_0001;
 /// A reference image and where it came from.
 #[derive(Clone, Debug)]
 pub struct Reference {
+    /// Linear RGB pixels, row-major.
     pub pixels: Vec<Vec3>,
+    /// Samples per pixel it was rendered with.
     pub spp: u32,
+    /// Colour mode it was rendered in.
     pub color: ColorMode,
     /// Time of the render that made it, s.
     pub seconds: f64,
+    /// The cached EXR file.
     pub path: PathBuf,
     /// True when read from the cache.
     pub cached: bool,

@@ -97,8 +97,11 @@ impl SceneId {
 
 /// A scene ready to render.
 pub struct BuiltScene {
+    /// Which scene this is.
     pub id: SceneId,
+    /// The scene's entities and the light system's resources, updated once.
     pub world: World,
+    /// The light system's systems, as [`LightingPlugin::build`] adds them.
     pub schedule: Schedule,
     /// The patches, for the colour-checker scenes.
     pub checker: Option<ColorChecker>,

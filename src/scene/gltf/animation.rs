@@ -17,11 +17,21 @@ use super::{Doc, Warnings};
 /// and scale, applied as T * R * S.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LocalTransform {
+    /// The node's `matrix`; channels that target such a node are dropped.
     Matrix(Affine3A),
-    Trs { translation: Vec3, rotation: Quat, scale: Vec3 },
+    /// The node's `translation`, `rotation` and `scale`, which channels may drive.
+    Trs {
+        /// Translation in metres, parent space.
+        translation: Vec3,
+        /// Rotation (unit quaternion).
+        rotation: Quat,
+        /// Per-axis scale.
+        scale: Vec3,
+    },
 }
 
 impl LocalTransform {
+    /// The node-to-parent matrix (T * R * S for TRS).
     pub fn to_affine(self) -> Affine3A {
         match self {
             Self::Matrix(m) => m,
@@ -35,15 +45,20 @@ impl LocalTransform {
 /// What a channel drives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Target {
+    /// The node's translation (xyz).
     Translation,
+    /// The node's rotation (quaternion xyzw, renormalised when sampled).
     Rotation,
+    /// The node's scale (xyz).
     Scale,
 }
 
 /// How values between keyframes are found (glTF 2.0 spec, Appendix C "Interpolation").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Interpolation {
+    /// Holds each keyframe's value until the next keyframe.
     Step,
+    /// Linear between keyframes (spherical linear for rotations).
     Linear,
     /// Hermite spline; each keyframe stores an in-tangent, a value and an out-tangent.
     CubicSpline,
@@ -146,15 +161,20 @@ impl Keyframes {
 /// One channel: a node's property driven by keyframes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Channel {
+    /// Index of the driven node in the file's `nodes`.
     pub node: usize,
+    /// Which of its properties.
     pub target: Target,
+    /// The property's values over time.
     pub keys: Keyframes,
 }
 
 /// An animation of the file: channels played together.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AnimationClip {
+    /// The animation's `name`, if the file gives one.
     pub name: Option<String>,
+    /// The channels kept (bad ones were dropped with a warning).
     pub channels: Vec<Channel>,
 }
 
@@ -174,6 +194,7 @@ pub struct SceneAnimations {
     pub parent: Vec<Option<usize>>,
     /// The scene's nodes, each after its parent.
     pub order: Vec<usize>,
+    /// The file's animations, in file order (a clip's index is its glTF animation index).
     pub clips: Vec<AnimationClip>,
 }
 

@@ -131,6 +131,7 @@ pub struct GltfScene {
 /// A mesh: a list of triangle primitives.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshData {
+    /// The mesh's `name`, if the file gives one.
     pub name: Option<String>,
     /// The primitives that could be read (skipped ones are in the warnings).
     pub primitives: Vec<PrimitiveData>,
@@ -160,12 +161,14 @@ pub struct MeshInstance {
     pub world: Affine3A,
     /// The glTF node that places it.
     pub node: Option<usize>,
+    /// That node's `name`, if the file gives one.
     pub node_name: Option<String>,
 }
 
 /// A metallic-roughness material (glTF 2.0 core plus the extensions kelvin reads).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MaterialData {
+    /// The material's `name`, if the file gives one.
     pub name: Option<String>,
     /// Linear RGBA base colour factor, each in [0, 1]. Defaults to 1.
     pub base_color: Vec4,
@@ -192,6 +195,7 @@ pub struct MaterialData {
     pub specular_factor: f32,
     /// KHR_materials_ior, >= 1. Defaults to 1.5.
     pub ior: f32,
+    /// glTF `doubleSided`: the back face shades (and emits) like the front. Defaults to false.
     pub double_sided: bool,
 }
 
@@ -221,12 +225,16 @@ impl Default for MaterialData {
 /// lights aim along the node's local -Z axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightKind {
+    /// Emits equally in every direction; intensity in candela.
     Point,
     /// Half-angles from the axis in radians, 0 <= inner <= outer <= pi/2, outer > 0.
     Spot {
+        /// Half-angle of the full-intensity cone, radians.
         inner_cone_angle: f32,
+        /// Half-angle beyond which the light is dark, radians.
         outer_cone_angle: f32,
     },
+    /// Parallel light from infinitely far away; intensity in lux.
     Directional,
     /// EXT_lights_ies: a point light whose intensity distribution is the profile in [`LightData::ies`].
     Ies,
@@ -238,12 +246,18 @@ pub enum IesSource {
     /// An external file, resolved relative to the glTF file; it existed at load time.
     File(PathBuf),
     /// A `data:` URI or a buffer view; `what` names it for messages.
-    Embedded { bytes: Arc<[u8]>, what: String },
+    Embedded {
+        /// The profile's text, as stored.
+        bytes: Arc<[u8]>,
+        /// Names the source in messages.
+        what: String,
+    },
 }
 
 /// A light placed in the world.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightData {
+    /// Point, spot, directional or IES.
     pub kind: LightKind,
     /// Linear RGB colour, each in [0, 1]. Defaults to white.
     pub color: Vec3,
@@ -259,6 +273,7 @@ pub struct LightData {
     pub node: Option<usize>,
     /// The light's own name (not the node's).
     pub name: Option<String>,
+    /// The name of the node that places it.
     pub node_name: Option<String>,
     /// The profile of an [`LightKind::Ies`] light; `None` for every other kind.
     pub ies: Option<IesSource>,
@@ -267,6 +282,7 @@ pub struct LightData {
 /// A perspective camera looking along its node's local -Z axis, +Y up.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraData {
+    /// The camera's own name (not the node's).
     pub name: Option<String>,
     /// Vertical field of view in radians, in (0, pi).
     pub yfov: f32,
@@ -276,6 +292,7 @@ pub struct CameraData {
     pub znear: f32,
     /// Far plane distance; `None` means infinite.
     pub zfar: Option<f32>,
+    /// Local-to-world transform of the camera's node.
     pub world: Affine3A,
     /// The glTF node that places it.
     pub node: Option<usize>,
@@ -284,30 +301,115 @@ pub struct CameraData {
 /// Why a glTF file could not be loaded. `what` names the file (or the in-memory source).
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum GltfError {
+    /// The file does not exist.
     #[error("{what}: file not found")]
-    NotFound { what: String },
+    NotFound {
+        /// The file.
+        what: String,
+    },
+    /// The file exists but could not be read.
     #[error("{what}: cannot read: {msg}")]
-    Io { what: String, msg: String },
+    Io {
+        /// The file.
+        what: String,
+        /// The operating system's message.
+        msg: String,
+    },
+    /// A `.glb` container (it starts with the magic `glTF`) is truncated, of another container version, or has
+    /// bad chunks.
     #[error("{what}: truncated or malformed .glb: {msg}")]
-    Glb { what: String, msg: String },
+    Glb {
+        /// The file or source.
+        what: String,
+        /// What is wrong with the container.
+        msg: String,
+    },
+    /// The JSON does not parse.
     #[error("{what}: JSON syntax error at line {line}, column {column}: {msg}")]
-    JsonSyntax { what: String, line: usize, column: usize, msg: String },
+    JsonSyntax {
+        /// The file or source.
+        what: String,
+        /// 1-based line of the error.
+        line: usize,
+        /// 1-based column of the error.
+        column: usize,
+        /// The JSON parser's message.
+        msg: String,
+    },
+    /// The JSON is not a glTF document: not an object, no `asset.version`, or fields of the wrong shape.
     #[error("{what}: not a valid glTF document: {msg}")]
-    Schema { what: String, msg: String },
+    Schema {
+        /// The file or source.
+        what: String,
+        /// What does not fit the schema.
+        msg: String,
+    },
+    /// `asset.version` is not 2.x.
     #[error("{what}: glTF version {version:?} is not supported (2.x needed)")]
-    Version { what: String, version: String },
+    Version {
+        /// The file or source.
+        what: String,
+        /// The version found.
+        version: String,
+    },
+    /// A buffer's data cannot be had: no uri and no `.glb` BIN chunk, a bad `data:` URI, or an external file
+    /// that cannot be read (or no base folder to resolve it against).
     #[error("{what}: buffer {index}: cannot read {source_name}: {msg}")]
-    BufferMissing { what: String, index: usize, source_name: String, msg: String },
+    BufferMissing {
+        /// The file or source.
+        what: String,
+        /// Index of the buffer in `buffers`.
+        index: usize,
+        /// Where its data should come from (a file, the uri, "(no uri)").
+        source_name: String,
+        /// Why it cannot be read.
+        msg: String,
+    },
+    /// A buffer holds fewer bytes than its `byteLength`.
     #[error(
         "{what}: buffer {index} ({source_name}) has {actual} bytes, shorter than its declared byteLength {declared}"
     )]
-    BufferTooShort { what: String, index: usize, source_name: String, declared: u64, actual: u64 },
+    BufferTooShort {
+        /// The file or source.
+        what: String,
+        /// Index of the buffer in `buffers`.
+        index: usize,
+        /// Where its data came from.
+        source_name: String,
+        /// Its `byteLength`.
+        declared: u64,
+        /// The bytes actually there.
+        actual: u64,
+    },
+    /// An accessor, buffer view or sparse index reaches past the data it refers to.
     #[error("{what}: {pointer}: out of bounds: {msg}")]
-    OutOfBounds { what: String, pointer: String, msg: String },
+    OutOfBounds {
+        /// The file or source.
+        what: String,
+        /// JSON pointer (RFC 6901) of the offending object.
+        pointer: String,
+        /// What overruns what.
+        msg: String,
+    },
+    /// Mesh data that cannot be read: a missing accessor, buffer view or buffer, a type or component type not
+    /// allowed for its use, a byteStride below the element size, bad sparse data, or too many vertices.
     #[error("{what}: {pointer}: {msg}")]
-    Invalid { what: String, pointer: String, msg: String },
+    Invalid {
+        /// The file or source.
+        what: String,
+        /// JSON pointer (RFC 6901) of the offending object.
+        pointer: String,
+        /// What is wrong.
+        msg: String,
+    },
+    /// The file, a buffer or an accessor without a buffer view is over the size kelvin reads.
     #[error("{what}: {msg}")]
-    TooLarge { what: String, msg: String },
+    TooLarge {
+        /// The file or source.
+        what: String,
+        /// What is too large, and the limit.
+        msg: String,
+    },
 }
 
 /// Loads a `.gltf` or `.glb` file; external buffers and images are resolved relative to its folder.

@@ -45,28 +45,128 @@ pub const MAX_ANGLES: usize = 100_000;
 /// errors, the 1-based line where reading stopped and what was expected there.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum IesError {
+    /// The file could not be read.
     #[error("{what}: cannot read: {msg}")]
-    Io { what: String, msg: String },
+    Io {
+        /// The file.
+        what: String,
+        /// The operating system's message.
+        msg: String,
+    },
+    /// The file ends before the TILT line, or before all the numbers its counts declare.
     #[error("{what}, line {line}: the file ends early; expected {expected}")]
-    Truncated { what: String, line: usize, expected: String },
+    Truncated {
+        /// The file.
+        what: String,
+        /// The last line of the file.
+        line: usize,
+        /// What was still missing (with the declared angle counts when they are known).
+        expected: String,
+    },
+    /// A field after the TILT line does not parse as a number.
     #[error("{what}, line {line}: expected {expected}, found '{found}'")]
-    NotANumber { what: String, line: usize, expected: String, found: String },
+    NotANumber {
+        /// The file.
+        what: String,
+        /// 1-based line of the field.
+        line: usize,
+        /// The field that was expected there.
+        expected: String,
+        /// The text found (shortened if long).
+        found: String,
+    },
+    /// A number is infinite or NaN.
     #[error("{what}, line {line}: expected a finite number for {expected}, found '{found}'")]
-    NotFinite { what: String, line: usize, expected: String, found: String },
+    NotFinite {
+        /// The file.
+        what: String,
+        /// 1-based line of the number.
+        line: usize,
+        /// The field that was expected there.
+        expected: String,
+        /// The text found.
+        found: String,
+    },
+    /// A header value is out of its allowed range: an empty `TILT=`, a units type other than 1 or 2,
+    /// lumens neither positive nor -1, a candela multiplier or ballast factor not positive, or a
+    /// negative tilt factor.
     #[error("{what}, line {line}: {msg}")]
-    BadValue { what: String, line: usize, msg: String },
+    BadValue {
+        /// The file.
+        what: String,
+        /// 1-based line of the value.
+        line: usize,
+        /// Which value, and what it must be.
+        msg: String,
+    },
+    /// The photometric type is not 1 (C), 2 (B) or 3 (A).
     #[error("{what}, line {line}: unknown photometric type {found} (expected 1 = C, 2 = B or 3 = A)")]
-    UnknownPhotometricType { what: String, line: usize, found: String },
+    UnknownPhotometricType {
+        /// The file.
+        what: String,
+        /// 1-based line of the type.
+        line: usize,
+        /// The number found.
+        found: String,
+    },
+    /// A count (lamps, angles, tilt pairs, tilt geometry) is not a whole number in its range (at most
+    /// [`MAX_ANGLES`] angles), or more tilt pairs are declared than numbers follow.
     #[error("{what}, line {line}: {msg}")]
-    BadCount { what: String, line: usize, msg: String },
+    BadCount {
+        /// The file.
+        what: String,
+        /// 1-based line of the count.
+        line: usize,
+        /// Which count, and what it must be.
+        msg: String,
+    },
+    /// A list of angles does not strictly increase.
     #[error("{what}, line {line}: {which} angles must increase, but {value} follows {previous}")]
-    NonMonotonic { what: String, line: usize, which: String, previous: f64, value: f64 },
+    NonMonotonic {
+        /// The file.
+        what: String,
+        /// 1-based line of the offending angle.
+        line: usize,
+        /// `"vertical"`, `"horizontal"` or `"tilt"`.
+        which: String,
+        /// The angle before, degrees.
+        previous: f64,
+        /// The offending angle, degrees.
+        value: f64,
+    },
+    /// A candela value is negative.
     #[error("{what}, line {line}: candela values must not be negative, found {value}")]
-    NegativeCandela { what: String, line: usize, value: f64 },
+    NegativeCandela {
+        /// The file.
+        what: String,
+        /// 1-based line of the value.
+        line: usize,
+        /// The value as written (cd, before the multiplier).
+        value: f64,
+    },
+    /// The angle ranges are outside what LM-63 allows for the photometric type (e.g. type C vertical
+    /// angles beyond 0..180, or horizontal ones not 0-90, 0-180, 90-270 or 0-360).
     #[error("{what}, line {line}: {msg}")]
-    UnsupportedAngles { what: String, line: usize, msg: String },
+    UnsupportedAngles {
+        /// The file.
+        what: String,
+        /// 1-based line of the offending angle list.
+        line: usize,
+        /// Which range, and what is allowed.
+        msg: String,
+    },
+    /// Numbers follow the last candela value (usually wrong angle counts).
     #[error("{what}, line {line}: found '{found}' after the last candela value; {msg}")]
-    TrailingData { what: String, line: usize, found: String, msg: String },
+    TrailingData {
+        /// The file.
+        what: String,
+        /// 1-based line of the first extra value.
+        line: usize,
+        /// The first extra value (shortened if long).
+        found: String,
+        /// The declared counts and how many values are left over.
+        msg: String,
+    },
 }
 
 impl IesError {
@@ -175,7 +275,9 @@ impl std::fmt::Display for Symmetry {
 /// Units of the luminous opening's width, length and height in the file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Units {
+    /// Units type 1; converted to metres on reading.
     Feet,
+    /// Units type 2.
     Metres,
 }
 

@@ -17,11 +17,15 @@ pub struct IesSummary {
     pub symmetry: String,
     /// "none", "include" or the tilt file's name.
     pub tilt: String,
+    /// Number of vertical angles measured.
     pub vertical_angles: usize,
+    /// Number of horizontal angles measured.
     pub horizontal_angles: usize,
     /// Measured vertical and horizontal ranges, degrees: [first, last].
     pub vertical_range_deg: [f64; 2],
+    /// Horizontal range, degrees: [first, last].
     pub horizontal_range_deg: [f64; 2],
+    /// Number of lamps.
     pub lamps: u32,
     /// None for absolute photometry.
     pub lumens_per_lamp: Option<f64>,
@@ -31,14 +35,19 @@ pub struct IesSummary {
     pub integrated_lumens: f64,
     /// Integrated / stated lumens (luminaire efficiency for relative photometry).
     pub integrated_over_stated: Option<f64>,
+    /// Peak intensity of the grid, cd (multiplier and ballast factor applied).
     pub max_candela: f64,
     /// Beam (50%) and field (10%) full angles in the C0-C180 plane (local XZ), degrees.
     pub beam_angle_deg: Option<f64>,
+    /// Field (10%) full angle in the C0-C180 plane (local XZ), degrees.
     pub field_angle_deg: Option<f64>,
     /// The same in the C90-C270 plane (local YZ).
     pub beam_angle_c90_deg: Option<f64>,
+    /// Field (10%) full angle in the C90-C270 plane (local YZ), degrees.
     pub field_angle_c90_deg: Option<f64>,
+    /// Input power stated in the file, W.
     pub input_watts: f64,
+    /// What the parser noticed but read anyway.
     pub warnings: Vec<String>,
 }
 

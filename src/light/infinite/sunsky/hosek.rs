@@ -192,6 +192,7 @@ impl SkyModel {
 pub struct RgbRow {
     /// (1 + A e^(B / (cos theta + 0.01))) L_M per channel, times 683 (nit).
     pub dome: Vec3,
+    /// Square root of the zenith cosine (clamped to [0, 1]), for the circumsolar factor.
     pub sqrt_cos_theta: f32,
 }
 

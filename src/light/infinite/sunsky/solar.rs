@@ -21,6 +21,7 @@ pub const YEAR_RANGE: (i32, i32) = (1800, 2100);
 /// A date and time in UTC (proleptic Gregorian calendar).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UtcDateTime {
+    /// Year, within [`YEAR_RANGE`] when made by [`Self::new`].
     pub year: i32,
     /// 1..=12.
     pub month: u32,
