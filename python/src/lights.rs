@@ -359,7 +359,7 @@ impl LightSystem {
         threads: Option<usize>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let pn = points_and_normals(&points, &normals)?;
-        let lighting = self.run(py, &pn, spp, threads)?.clone();
+        let lighting = self.run(py, &pn, spp, threads)?;
         let point: Vec<u32> = (0..pn.len()).flat_map(|i| lighting.entries(i).map(move |_| i as u32)).collect();
         let radiance: Vec<f32> = lighting.radiance.iter().flat_map(|r| [r.0[0], r.0[1], r.0[2]]).collect();
         let wi: Vec<f32> = lighting.wi.iter().flat_map(|w| w.to_array()).collect();

@@ -48,6 +48,7 @@ def test_default_scene_with_an_environment_map_equals_the_cli(data, kelvin_bin, 
 def test_a_crop_is_its_region_of_the_full_render_at_any_thread_count(data):
     scene = data / POINTS
     full = kelvin.render(scene, size=(37, 23), spp=2, integrator="direct", threads=2)
+    assert (full[3:19, 5:30] > 0).any(axis=2).sum() > 50, "the region is lit (93 of 400 pixels at 2 spp)"
     tile = kelvin.render(scene, size=(37, 23), spp=2, integrator="direct", threads=1, crop=(5, 3, 30, 19))
     assert np.array_equal(tile, full[3:19, 5:30])
 
