@@ -169,6 +169,10 @@ pub struct LoadedJob {
     pub warnings: Vec<String>,
     /// A one-line summary of the loaded scene file.
     pub summary: Option<String>,
+    /// The scene file's lights as the file describes them (names, glTF units, rest pose).
+    pub lights: Vec<crate::scene::gltf::LightData>,
+    /// The scene file's cameras as the file describes them.
+    pub cameras: Vec<crate::scene::gltf::CameraData>,
 }
 
 fn check_in<T: PartialOrd + std::fmt::Display>(name: &str, v: T, range: RangeInclusive<T>) -> Result<(), JobError> {
@@ -283,10 +287,13 @@ impl RenderJob {
         let mut schedule = Schedule::default();
         world.insert_resource(self.settings());
         LightingPlugin::build(&mut world, &mut schedule);
+        let (mut lights, mut cameras) = (Vec::new(), Vec::new());
         let (mut warnings, file, summary) = match &self.scene {
             Some(path) => {
                 let start = std::time::Instant::now();
-                let report = super::scene_file::spawn_gltf_file(&mut world, path)?;
+                let scene = crate::scene::gltf::load_gltf(path)?;
+                let report = crate::scene::spawn::spawn_gltf(&mut world, &scene);
+                (lights, cameras) = (scene.lights, scene.cameras);
                 let summary = format!(
                     "scene {} (loaded in {:.1} ms): {} meshes ({} triangles, {} emissive), {} lights, {} cameras, {} animations",
                     path.display(),
@@ -311,7 +318,7 @@ impl RenderJob {
         if let Some(light) = sky {
             world.spawn(light);
         }
-        Ok(LoadedJob { world, schedule, file, warnings, summary })
+        Ok(LoadedJob { world, schedule, file, warnings, summary, lights, cameras })
     }
 }
 

@@ -17,11 +17,121 @@ import numpy as np
 
 from . import _kelvin
 
-__all__ = ["render", "write_exr", "write_png", "read_exr", "spectrum", "ies", "LightSystem"]
+__all__ = ["render", "Scene", "write_exr", "write_png", "read_exr", "spectrum", "ies", "LightSystem"]
 
 
 def _path(p) -> Optional[str]:
     return None if p is None else os.fspath(p)
+
+
+_RENDER_DOC = """Every keyword is the ``kelvin render`` option of the same name (``mis=False`` is ``--no-mis``);
+    the same options give the same image, bit for bit. Returns an H x W x 3 float32 array of linear
+    photometric radiance (cd/m^2, linear sRGB), rows top to bottom; with ``crop=(x0, y0, x1, y1)``
+    only that region of the full image. Warnings are issued as ``UserWarning``s; pass a dict as
+    ``stats`` to receive the render's counts and seconds.
+
+    Raises ValueError for an option out of range, OSError for a file that does not load (the message
+    names the file, and for glTF the JSON pointer) and KeyboardInterrupt when Ctrl-C stopped it."""
+
+
+def _warn(said) -> None:
+    for w in said:
+        warnings.warn(w, UserWarning, stacklevel=3)
+
+
+class Scene:
+    """A loaded scene that renders many times: a glTF file (or the embedded default scene) with an
+    environment map and a sun and sky, loaded once. Between renders, ``pose`` moves what an
+    animation moves, and the light system updates only that.
+
+    ``Scene.load("scene.glb", sky="48.1,11.6,2026-06-21T12:00")`` loads; ``scene.render(spp=64)``
+    renders; ``scene.lights``, ``scene.cameras`` and ``scene.animations`` describe the file.
+    """
+
+    def __init__(self, native, summary):
+        self._native = native
+        self.summary = summary
+
+    @classmethod
+    def load(cls, scene=None, *, env=None, env_intensity: float = 1.0, sky: Optional[str] = None,
+             sky_intensity: float = 1.0) -> "Scene":
+        """Load ``scene`` (a .gltf/.glb path; None: the embedded default scene) with an optional
+        lat-long environment map (``env``, .exr or .hdr, ``env_intensity`` nit per texel value 1)
+        and sun and sky (``sky`` = "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]"). The loaders' warnings
+        are issued as ``UserWarning``s; a file that does not load raises OSError naming the file
+        and the JSON pointer, a bad sky ValueError."""
+        native, said = _kelvin.Scene.load(_path(scene), _path(env), env_intensity, sky, sky_intensity)
+        _warn(said)
+        return cls(native, native.summary())
+
+    def render(
+        self,
+        *,
+        size: Tuple[int, int] = (512, 512),
+        spp: int = 32,
+        time: Optional[float] = None,
+        integrator: str = "path",
+        max_depth: int = 16,
+        roulette_depth: int = 3,
+        light_sampler: str = "bvh",
+        candidates: int = 8,
+        neighbours: int = 4,
+        radius: int = 16,
+        biased_reuse: bool = False,
+        color: str = "rgb",
+        all_lights: bool = False,
+        mis: bool = True,
+        seed: int = 0,
+        threads: Optional[int] = None,
+        environment_at: Optional[Sequence[float]] = None,
+        crop: Optional[Tuple[int, int, int, int]] = None,
+        stats: Optional[dict] = None,
+    ) -> np.ndarray:
+        """Render the scene in its current pose through its first camera (or, with
+        ``environment_at=(x, y, z)``, as a lat-long map seen from that point).
+
+        """
+        pixels, width, height, said, info = self._native.render(
+            tuple(size), spp, time, integrator, max_depth, roulette_depth, light_sampler, candidates, neighbours,
+            radius, biased_reuse, color, all_lights, mis, seed, threads,
+            None if environment_at is None else tuple(environment_at), None if crop is None else tuple(crop))
+        _warn(said)
+        if stats is not None:
+            stats.update(info)
+        return pixels.reshape(height, width, 3)
+
+    def pose(self, animation, t: float) -> dict:
+        """Pose ``animation`` (its name or index) at ``t`` seconds, as ``kelvin render --frames`` poses
+        frame ``t * fps``. Returns the counts of entities ``moved``, ``unchanged`` and ``frozen`` (meshes
+        with a singular rest transform, which stay at rest: a UserWarning says so). Raises KeyError
+        for an animation the scene lacks."""
+        report = self._native.pose(animation, t)
+        if report["frozen"]:
+            warnings.warn(f"{report['frozen']} animated meshes have a singular rest transform and stay at rest",
+                          UserWarning, stacklevel=2)
+        return report
+
+    @property
+    def lights(self) -> list:
+        """The lights: the file's punctual lights (``kind`` point, spot, directional or ies; ``name``,
+        ``node``, ``node_name``, ``color``, ``intensity`` in glTF units, ``range``, and ``position`` and
+        ``direction`` in the current pose; spots add their cone half-angles in degrees), then the
+        environment map (``kind`` environment) and the sun and sky (``kind`` sun_sky)."""
+        return self._native.lights()
+
+    @property
+    def cameras(self) -> list:
+        """The file's cameras (``name``, ``node``, ``yfov`` in degrees, ``aspect``, ``znear``, ``zfar``,
+        and ``position`` and ``direction`` in the current pose); renders look through the first."""
+        return self._native.cameras()
+
+    @property
+    def animations(self) -> list:
+        """The file's animations: ``index``, ``name``, ``duration`` (s) and ``channels``."""
+        return self._native.animations()
+
+
+Scene.render.__doc__ += "    " + _RENDER_DOC
 
 
 def render(
@@ -51,26 +161,19 @@ def render(
     crop: Optional[Tuple[int, int, int, int]] = None,
     stats: Optional[dict] = None,
 ) -> np.ndarray:
-    """Render ``scene`` (a .gltf/.glb path; None: the embedded default scene) as ``kelvin render`` does.
+    """Render ``scene`` (a .gltf/.glb path; None: the embedded default scene) as ``kelvin render``
+    does: ``Scene.load(scene, env=..., sky=...).render(...)`` in one call.
 
-    Every keyword is the CLI option of the same name (``mis=False`` is ``--no-mis``); the same
-    options give the same image, bit for bit. Returns an H x W x 3 float32 array of linear
-    photometric radiance (cd/m^2, linear sRGB), rows top to bottom; with ``crop=(x0, y0, x1, y1)``
-    only that region of the full image. The loader's and light system's warnings are issued as
-    ``UserWarning``s; pass a dict as ``stats`` to receive the render's counts and seconds.
-
-    Raises ValueError for an option out of range and OSError for a file that does not load.
     """
-    pixels, width, height, said, info = _kelvin.render(
-        _path(scene), tuple(size), spp, time, _path(env), env_intensity, sky, sky_intensity, integrator,
-        max_depth, roulette_depth, light_sampler, candidates, neighbours, radius, biased_reuse, color,
-        all_lights, mis, seed, threads, None if environment_at is None else tuple(environment_at),
-        None if crop is None else tuple(crop))
-    for w in said:
-        warnings.warn(w, UserWarning, stacklevel=2)
-    if stats is not None:
-        stats.update(info)
-    return pixels.reshape(height, width, 3)
+    loaded = Scene.load(scene, env=env, env_intensity=env_intensity, sky=sky, sky_intensity=sky_intensity)
+    return loaded.render(size=size, spp=spp, time=time, integrator=integrator, max_depth=max_depth,
+                         roulette_depth=roulette_depth, light_sampler=light_sampler, candidates=candidates,
+                         neighbours=neighbours, radius=radius, biased_reuse=biased_reuse, color=color,
+                         all_lights=all_lights, mis=mis, seed=seed, threads=threads,
+                         environment_at=environment_at, crop=crop, stats=stats)
+
+
+render.__doc__ += "    " + _RENDER_DOC
 
 
 def _image(image) -> Tuple[np.ndarray, int, int]:
