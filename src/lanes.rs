@@ -1,8 +1,8 @@
-//! Lane kernels: code written as loops over fixed-size arrays of [`LANES`] values, which LLVM
+//! Lane kernels: code written as loops over fixed-size arrays of `LANES` values, which LLVM
 //! turns into vector instructions, and a run-time choice of the widest instruction set the CPU
 //! has to compile them for. Without `-C target-cpu`, Rust targets baseline x86-64 (SSE2, 4 f32
-//! lanes); [`widest`] runs its closure as AVX-512 or AVX2 code where the CPU has every feature
-//! that code is compiled with ([`Level`]).
+//! lanes); `widest` runs its closure as AVX-512 or AVX2 code where the CPU has every feature
+//! that code is compiled with (`Level`).
 //!
 //! Results do not depend on the choice: Rust never contracts a * b + c into an FMA, and the
 //! vector forms of +, -, *, / and sqrt round exactly as the scalar ones do.

@@ -87,7 +87,7 @@ impl SampleStream {
         self
     }
 
-    /// The first `D` numbers (dimensions 0..D) of [`LANES`] streams at once, for lane kernels:
+    /// The first `D` numbers (dimensions 0..D) of `LANES` streams at once, for lane kernels:
     /// `[d][l]` is number `d` of `SampleStream::new(seed, pixel[l], sample[l])`, bit for bit.
     #[inline(always)]
     pub fn lanes<const D: usize>(seed: u64, pixel: &[u32; LANES], sample: &[u32; LANES]) -> [[f32; LANES]; D] {

@@ -57,18 +57,12 @@ pub enum LightingSet {
 /// needs to embed the light system. Without bevy_app, call [`LightingPlugin::build`]; with the
 /// `bevy` feature it is also a `bevy_app::Plugin` (`app.add_plugins(LightingPlugin::default())`).
 #[derive(Clone, Debug)]
+#[cfg_attr(not(feature = "bevy"), derive(Default))]
 pub struct LightingPlugin {
     /// The schedule the systems run in (with the `bevy` feature). Defaults to `PostUpdate`,
     /// where they run after Bevy's transform propagation.
     #[cfg(feature = "bevy")]
     pub schedule: bevy_ecs::schedule::InternedScheduleLabel,
-}
-
-#[cfg(not(feature = "bevy"))]
-impl Default for LightingPlugin {
-    fn default() -> Self {
-        Self {}
-    }
 }
 
 impl LightingPlugin {

@@ -27,7 +27,7 @@ impl<F: FnMut(usize, Option<Hit>)> HitSink for F {
     }
 }
 
-/// Up to [`LANES`] rays as the lane columns the packet queries take: origins, directions and
+/// Up to `LANES` rays as the lane columns the packet queries take: origins, directions and
 /// t_max (lanes past `rays.len()` are zero, and a query told `n = rays.len()` ignores them).
 pub fn ray_columns(rays: &[Ray]) -> ([[f32; LANES]; 3], [[f32; LANES]; 3], [f32; LANES]) {
     let (mut o, mut d, mut t) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3], [0f32; LANES]);
@@ -41,9 +41,9 @@ pub fn ray_columns(rays: &[Ray]) -> ([[f32; LANES]; 3], [[f32; LANES]; 3], [f32;
 }
 
 impl SceneBvh {
-    /// The closest hit of each of the first `n` rays `origin[l] + t dir[l]`, t in (0, t_max[l]],
+    /// The closest hit of each of the first `n` rays `origin[l] + t dir[l]`, t in (0, `t_max[l]`],
     /// handed to `out` lane by lane (lanes past `n` are not reported). Run it inside
-    /// [`crate::lanes::widest`] so that the lane loops compile to vector code.
+    /// `lanes::widest` so that the lane loops compile to vector code.
     #[inline(always)]
     pub fn closest_hits_packet(
         &self,
@@ -155,8 +155,8 @@ impl SceneBvh {
     }
 
     /// Whether something other than a flat origin blocks each of the first `n` rays over
-    /// (0, t_max[l]]: bit l is [`SceneBvh::occluded_from`]`(ray l, origins[l])`. Lanes leave the
-    /// packet at their first blocker. Run it inside [`crate::lanes::widest`].
+    /// (0, `t_max[l]`]: bit l is [`SceneBvh::occluded_from`]`(ray l, origins[l])`. Lanes leave the
+    /// packet at their first blocker. Run it inside `lanes::widest`.
     #[inline(always)]
     pub fn occluded_packet(
         &self,

@@ -169,7 +169,7 @@ pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     Vec3::new(step_toward(po.x, offset.x), step_toward(po.y, offset.y), step_toward(po.z, offset.z))
 }
 
-/// [`ShadowOffset::ErrorBound`]'s [`ShadowOffset::spawn_ray_to_point`] from [`LANES`] surface
+/// [`ShadowOffset::ErrorBound`]'s [`ShadowOffset::spawn_ray_to_point`] from `LANES` surface
 /// points (lane columns x, y, z of position, error bound and normal) to `target`: the segments'
 /// origins and directions (each t_max is `1 - SHADOW_EPSILON`). The operations of
 /// [`offset_ray_origin`] in the same order, so the rays are the same bit for bit.
@@ -207,7 +207,7 @@ pub fn spawn_rays_to_points_lanes(from: [&Lanes3; 3], target: &Lanes3) -> [Lanes
     [origin, dir]
 }
 
-/// Lane columns x, y, z of [`LANES`] vectors.
+/// Lane columns x, y, z of `LANES` vectors.
 pub type Lanes3 = [[f32; LANES]; 3];
 
 /// Finite `v` moved one float in the direction of `towards` (`next_up` for positive `towards`,

@@ -101,7 +101,7 @@ impl SceneBvh {
     }
 
     /// [`Self::occluded`] for a ray leaving a point on primitive `origin` (or
-    /// [`GeometryId::NONE`]): a flat `origin` does not block it (see [`Self::ignores`]).
+    /// [`GeometryId::NONE`]): a flat `origin` does not block it (see `SceneBvh::ignores`).
     pub fn occluded_from(&self, ray: &Ray, origin: GeometryId) -> bool {
         if !ray.is_valid() || self.leaf.is_empty() {
             return false;

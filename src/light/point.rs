@@ -219,7 +219,7 @@ impl crate::light::table::Block for PointColumns {
     }
 }
 
-/// Sample_Li of [`LANES`] points toward point lights in RGB mode, as lane columns (x, y, z).
+/// Sample_Li of `LANES` points toward point lights in RGB mode, as lane columns (x, y, z).
 #[derive(Clone, Copy, Debug)]
 #[repr(align(64))]
 pub struct PointLanes {

@@ -31,7 +31,7 @@ pub struct LaneChoices {
 impl BvhSampler {
     /// [`BvhSampler::sample`] of the lanes of `active`, at points `p` with shading normals `n` (lane
     /// columns; zero normals for none) and numbers `u`. Lanes outside `active` choose nothing.
-    /// Run it inside [`crate::lanes::widest`].
+    /// Run it inside `lanes::widest`.
     #[inline(always)]
     pub fn sample_lanes(
         &self,

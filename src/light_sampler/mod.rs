@@ -81,10 +81,10 @@ impl LightSampler {
         .filter(|_| ctx.p.is_finite())
     }
 
-    /// [`Self::sample`] for [`LANES`] points (`p`, shading normals `n` as lane columns, zero for none)
+    /// [`Self::sample`] for `LANES` points (`p`, shading normals `n` as lane columns, zero for none)
     /// with numbers `u`, in the lanes of `active`: the same choices and pmfs, lane by lane. The
     /// BVH sampler weighs each node's clusters for all the points at it at once. Run it inside
-    /// [`crate::lanes::widest`].
+    /// `lanes::widest`.
     #[inline(always)]
     pub fn sample_lanes(
         &self,

@@ -95,7 +95,7 @@ pub struct RenderJob {
     pub env: Option<PathBuf>,
     /// Luminance (nit) of an environment texel of value 1.
     pub env_intensity: f32,
-    /// A sun and sky: "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]", and a multiplier of its radiance.
+    /// A sun and sky: `"LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]"`, and a multiplier of its radiance.
     pub sky: Option<String>,
     /// Multiplier of the sun and sky's physical radiance.
     pub sky_intensity: f32,

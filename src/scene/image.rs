@@ -25,7 +25,7 @@
 //!
 //! # Equirectangular (lat-long) maps
 //!
-//! In kelvin's frame (+Y up, right-handed), for `uv` in [0,1]^2 with v = 0 on the top row:
+//! In kelvin's frame (+Y up, right-handed), for `uv` in \[0,1\]^2 with v = 0 on the top row:
 //! - v = 0 is the zenith (+Y), v = 0.5 the horizon, v = 1 the nadir (-Y): polar angle theta = pi v.
 //! - u = 0.5 (the image centre) looks along +X, u = 0.75 along +Z, u = 0 and 1 along -X, and u = 0.25 along -Z
 //!   (glTF forward: what a default glTF camera sees): azimuth phi = 2 pi (u - 0.5), measured from +X toward +Z.
@@ -226,7 +226,7 @@ impl RgbImage {
         self.get(x, y).dot(LUMINANCE_WEIGHTS)
     }
 
-    /// Bilinear lookup at `uv` in [0,1]^2 (v = 0 at the top), pixel centres at ((x + 0.5) / w, (y + 0.5) / h).
+    /// Bilinear lookup at `uv` in \[0,1\]^2 (v = 0 at the top), pixel centres at ((x + 0.5) / w, (y + 0.5) / h).
     /// u wraps around (the lat-long seam) and v is clamped (the poles). Non-finite `uv` gives a defined pixel,
     /// never a panic.
     pub fn bilinear(&self, uv: Vec2) -> Vec3 {

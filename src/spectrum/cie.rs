@@ -113,7 +113,7 @@ pub fn illuminant_a(lambda_nm: f64) -> f64 {
     100.0 * (560.0 / lambda_nm).powi(5) * (c / 560.0).exp_m1() / (c / lambda_nm).exp_m1()
 }
 
-/// Names accepted by [`named_illuminant`], for help and error messages.
+/// Names accepted by [`Spectrum::illuminant`](crate::spectrum::Spectrum::illuminant), for help and error messages.
 pub const ILLUMINANT_NAMES: &[&str] = &[
     "A", "B", "C", "D50", "D55", "D65", "D75", "E", "F1", "F2", "F3", "F4", "F5", "F6", "F7", "F8", "F9", "F10", "F11",
     "F12", "LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1", "LED-RGB1", "LED-V1", "LED-V2",

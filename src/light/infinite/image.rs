@@ -245,7 +245,7 @@ impl ResolvedImageInfinite {
 
     /// Radiant power through the scene's bounding disc, W: pi R^2 * integral of L over the
     /// sphere (pbrt-v4 `ImageInfiniteLight::Phi`), with the integral of the lookup's radiance
-    /// taken exactly (see [`texel_solid_angle_integral`]). Coloured texels are weighted by their
+    /// taken exactly (see `texel_solid_angle_integral`). Coloured texels are weighted by their
     /// luminance relative to a white texel's (exact in RGB mode; in spectral mode the texel's
     /// reflectance spectrum shifts the luminous efficacy slightly).
     pub fn phi(&self) -> f32 {

@@ -1,4 +1,4 @@
-//! Sun and sky: a physical daylight (Hosek and Wilkie 2012, 2013; see [`hosek`]) with the sun
+//! Sun and sky: a physical daylight (Hosek and Wilkie 2012, 2013; see `sunsky/hosek.rs`) with the sun
 //! placed by direction or by place and UTC time (NOAA; see [`solar`]).
 //!
 //! Design: one light, one `LightTable` row of kind `SunSky`, holding two sampling techniques
@@ -289,7 +289,7 @@ pub struct SunDisc {
     /// Radiance factor keeping the illuminance of a sun of [`SUN_ANGULAR_DIAMETER`].
     pub size_factor: f32,
     /// Photometric linear sRGB radiance (nit) as a polynomial in the limb cosine mu:
-    /// L(mu) = sum_k rgb_limb[k] mu^k (size factor included, `scale` not).
+    /// L(mu) = sum_k `rgb_limb[k]` mu^k (size factor included, `scale` not).
     pub rgb_limb: [Vec3; 6],
     /// Normal illuminance (lx) and irradiance (W/m^2) of the disc, before `scale`.
     pub illuminance: f64,
