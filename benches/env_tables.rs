@@ -1,7 +1,8 @@
 //! Environment-map tables against the memory they touch: the build of a 2048 x 1024 and an
 //! 8192 x 4096 map (luminance, footprint filter, row weights, conditional and marginal CDFs, the
 //! MIS-compensated variant) beside a parallel memcpy of the same pixels, a 16-row partial
-//! rebuild, the f64 reference build, and decoding the real maps in tests/data/env.
+//! rebuild, the f64 reference build, and decoding the real maps in tests/data/env and an 8k EXR
+//! on one thread and on all.
 //!
 //! Timings swing on a shared 2-core machine, so before criterion's groups `alternating` times
 //! memcpy and build in turn in one process and prints the median of each and their ratio.
@@ -102,6 +103,37 @@ fn alternating() {
     }
 }
 
+/// An 8192 x 4096 OpenEXR (32-bit float, ZIP, as `kelvin render` writes) decoded on one thread and
+/// on all of rayon's, alternating: the gain of decompressing its blocks in parallel.
+fn decode_8k_threads() {
+    let (w, h) = MAPS[1];
+    let path = std::env::temp_dir().join(format!("kelvin-bench-{}-8k.exr", std::process::id()));
+    kelvin::render::film_io::write_exr(&path, w, h, &map(w, h).pixels).expect("writes the 8k map");
+    let bytes = std::fs::read(&path).expect("reads it back");
+    let _ = std::fs::remove_file(&path);
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a pool");
+    let (mut single, mut all) = (Vec::new(), Vec::new());
+    for _ in 0..5 {
+        let s = Instant::now();
+        black_box(one.install(|| load_image_from_bytes(&bytes, "exr", "8k.exr").expect("decodes")));
+        single.push(s.elapsed());
+        let s = Instant::now();
+        black_box(load_image_from_bytes(&bytes, "exr", "8k.exr").expect("decodes"));
+        all.push(s.elapsed());
+    }
+    let (a, b) = (median(single), median(all));
+    eprintln!(
+        "decode 8k exr ({} MB): 1 thread {:.0} ms ({:.1} ns/px), {} threads {:.0} ms ({:.1} ns/px): {:.2}x",
+        bytes.len() >> 20,
+        a.as_secs_f64() * 1e3,
+        a.as_secs_f64() * 1e9 / (w * h) as f64,
+        rayon::current_num_threads(),
+        b.as_secs_f64() * 1e3,
+        b.as_secs_f64() * 1e9 / (w * h) as f64,
+        a.as_secs_f64() / b.as_secs_f64()
+    );
+}
+
 fn tables(c: &mut Criterion) {
     for (w, h) in MAPS {
         let img = map(w, h);
@@ -136,6 +168,7 @@ fn decode(c: &mut Criterion) {
 
 fn main() {
     alternating();
+    decode_8k_threads();
     let mut c = Criterion::default().configure_from_args();
     tables(&mut c);
     decode(&mut c);

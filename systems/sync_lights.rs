@@ -208,6 +208,9 @@ pub fn sync_sun_sky_lights(
 ) {
     for (entity, light) in &query {
         let row = if light.is_changed() {
+            if let Ok(Some(dark)) = light.dark_reason() {
+                report.warnings.push(format!("sun and sky {entity}: {dark}"));
+            }
             let buffers = table.take_sun_sky_buffers(entity);
             light.resolve_reusing(bounds.sphere, buffers)
         } else if bounds.is_changed() {

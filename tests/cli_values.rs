@@ -169,6 +169,8 @@ fn bad_arguments_name_the_file_and_whether_reading_or_writing_failed() {
         (&["render", "no-such-scene.glb", "--size", "8x8", "-o", "never-written.png"], "no-such-scene.glb"),
         (&["render", "--size", "8x8", "--spp", "1", "-o", "/proc/no-such-dir/x.png"], "cannot write"),
         (&["report", "accuracy", "no-such-scene", "--out", "never-written"], "no-such-scene"),
+        // An installed crate has no tests/data: the benchmark says where the scenes are.
+        (&["bench", "render", "--data", "no-such-data", "--scenes", "sponza"], "--data no-such-data: not a folder"),
     ];
     for &(args, says) in cases {
         let (ok, err) = kelvin(args);

@@ -327,10 +327,14 @@ fn the_ecs_rebuilds_the_sky_only_when_it_changes_and_reuses_its_buffers() {
         assert!((row.sun_dir - direction_from_angles(50.0, 210.0)).length() < 1e-6);
         assert_eq!(pixels_ptr(&world, e), ptr, "the rebuild reused the image buffer");
 
-        // Night: the light stays, black, with no warning and no NaN.
+        // Night: the light stays, black, with no NaN, and a warning says why it is dark.
         world.get_mut::<SunSkyLight>(e).unwrap().sun = SunPosition::Direction(direction_from_angles(-10.0, 0.0));
         schedule.run(&mut world);
-        assert!(world.resource::<RunReport>().warnings.is_empty());
+        let warnings = &world.resource::<RunReport>().warnings;
+        assert!(
+            warnings.len() == 1 && warnings[0].contains("the sun is 10.0 degrees below the horizon: the sun and sky give no light"),
+            "{warnings:?}"
+        );
         assert!(world.resource::<LightTable>().sun_sky_of(e).unwrap().is_night());
         let direct = world.resource::<DirectLighting>();
         assert!(direct.radiance.iter().all(|s| s.is_finite() && s.0.iter().all(|&v| v == 0.0)));

@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 use bevy_ecs::prelude::*;
 use glam::{Affine3A, Vec3};
 use kelvin::geometry::Transform;
-use kelvin::light::{DistantLight, GoniometricLight, PointLight, SpotLight};
+use kelvin::light::{DistantLight, GoniometricLight, PointLight, SpotLight, SunSkyLight};
 use kelvin::render::camera::Camera;
 use kelvin::render::job::{IntegratorChoice, JobError, LoadedJob, RenderJob};
 use kelvin::render::tiles::Crop;
@@ -179,7 +179,8 @@ impl Scene {
     }
 
     /// The scene's lights, each a dict: the file's punctual lights (name, node, kind, colour,
-    /// intensity in glTF units, where they are now), then the environment map and the sun and sky.
+    /// intensity in glTF units, where they are now), then the environment map and the sun and sky
+    /// (the job's, or the file's `KELVIN_sun_sky`).
     fn lights<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let file = self.loaded.file;
         let world = &mut self.loaded.world;
@@ -219,11 +220,14 @@ impl Scene {
             d.set_item("intensity", self.base.env_intensity)?;
             list.append(d)?;
         }
-        if let Some(sky) = &self.base.sky {
+        let mut skies = self.loaded.world.query::<&SunSkyLight>();
+        for sky in skies.iter(&self.loaded.world) {
             let d = PyDict::new(py);
             d.set_item("kind", "sun_sky")?;
-            d.set_item("spec", sky)?;
-            d.set_item("intensity", self.base.sky_intensity)?;
+            d.set_item("direction", sky.sun_direction().ok().map(tuple))?;
+            d.set_item("turbidity", sky.turbidity)?;
+            d.set_item("intensity", sky.scale)?;
+            d.set_item("below_horizon", sky.dark_reason().ok().flatten().is_some())?;
             list.append(d)?;
         }
         Ok(list)

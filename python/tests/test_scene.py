@@ -1,5 +1,6 @@
 """kelvin.Scene: a scene loaded once, described, posed and rendered many times; against
 `kelvin render --frames` bit for bit, and against the closed form of its animation."""
+import json
 import subprocess
 
 import numpy as np
@@ -93,6 +94,26 @@ def test_environment_and_sky_are_listed_with_the_file_lights(data):
     kinds = [(light["kind"], light["intensity"]) for light in scene.lights]
     assert kinds[-2:] == [("environment", 2.0), ("sun_sky", 0.5)]
     assert scene.animations == [] and scene.summary is None
+    assert scene.lights[-1]["direction"][1] > 0 and not scene.lights[-1]["below_horizon"]
+
+
+def test_a_sky_in_the_scene_file_is_listed_and_renders_as_the_same_sky_given_to_load(data, tmp_path):
+    doc = json.loads((data / LAMP).read_text())
+    del doc["nodes"][3]["extensions"], doc["extensions"]  # the lamp
+    doc["extensions"] = {"KELVIN_sun_sky": {"latitude": 48.1, "longitude": 11.6, "time": "2024-06-21T22:00"}}
+    path = tmp_path / "night.gltf"
+    path.write_text(json.dumps(doc))
+    with pytest.warns(UserWarning, match="degrees below the horizon at 48.1, 11.6"):
+        scene = kelvin.Scene.load(path)
+    [sky] = scene.lights
+    assert sky["kind"] == "sun_sky" and sky["below_horizon"]
+    doc["extensions"]["KELVIN_sun_sky"]["time"] = "2024-06-21T10:00"
+    path.write_text(json.dumps(doc))
+    by_file = kelvin.render(path, size=(12, 8), spp=2, integrator="direct")
+    del doc["extensions"]
+    path.write_text(json.dumps(doc))
+    by_option = kelvin.render(path, size=(12, 8), spp=2, integrator="direct", sky="48.1,11.6,2024-06-21T10:00")
+    assert by_file.mean() > 0 and np.array_equal(bits(by_file), bits(by_option))
 
 
 def test_bad_poses_are_errors_that_say_what_exists(data):

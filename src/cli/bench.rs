@@ -99,6 +99,7 @@ fn render(a: RenderArgs) -> Result<(), CliError> {
         }
         return Ok(());
     }
+    values::data_dir(&a.data)?;
     if let Some(t) = a.threads {
         rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
     }

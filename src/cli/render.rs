@@ -43,10 +43,12 @@ pub struct RenderArgs {
     env_intensity: f32,
     /// A physical sun and sky (Hosek-Wilkie) for a place and a UTC time: latitude (degrees north),
     /// longitude (degrees east), UTC date-time, optional turbidity 1-10 (default 3), e.g.
-    /// 48.86,2.35,2024-06-21T10:00 or 48.86,2.35,2024-06-21T10:00,5. +Y is up, -Z north.
+    /// 48.86,2.35,2024-06-21T10:00 or 48.86,2.35,2024-06-21T10:00,5. +Y is up, -Z north. Replaces
+    /// the sky a scene file carries (its KELVIN_sun_sky extension).
     #[arg(long, value_name = "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]")]
     sky: Option<String>,
-    /// Multiplies the sky's physical radiance (1 = real daylight, ~100 klx in full sun).
+    /// Multiplies the sky's physical radiance (1 = real daylight, ~100 klx in full sun); also a
+    /// scene file's own sky.
     #[arg(long, default_value_t = 1.0, value_parser = values::intensity())]
     sky_intensity: f32,
     /// How light reaches the camera: paths of up to --max-depth bounces, every bounce through the
@@ -329,6 +331,12 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             stats.shadow_rays as f64 / secs / 1e6,
             stats.bsdf_rays as f64 / secs / 1e6
         );
+        if !args.report {
+            // The light system's warnings (lights skipped, a sky at night); --report prints them in the report.
+            for w in &stats.report.warnings {
+                eprintln!("warning: {w}");
+            }
+        }
         if args.report {
             eprint!("{}", stats.report);
             let p = stats.passes;

@@ -79,3 +79,17 @@ pub(super) fn exposure() -> impl Fn(&str) -> Result<f32, String> + Clone + Send 
 pub(super) fn intensity() -> impl Fn(&str) -> Result<f32, String> + Clone + Send + Sync + 'static {
     finite_in(*job::INTENSITY.start(), *job::INTENSITY.end())
 }
+
+/// The folder of real test data that `bench` and `report` read: it must exist. A crate installed
+/// from the registry ships without it (it lives in the repository), so the message says where to get it.
+pub(super) fn data_dir(path: &std::path::Path) -> Result<(), String> {
+    if path.is_dir() {
+        Ok(())
+    } else {
+        Err(format!(
+            "--data {}: not a folder; the scenes are the kelvin repository's tests/data (not shipped in the crate): clone \
+             the repository and pass --data <clone>/tests/data",
+            path.display()
+        ))
+    }
+}

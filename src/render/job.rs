@@ -97,7 +97,7 @@ pub struct RenderJob {
     pub env_intensity: f32,
     /// A sun and sky: `"LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]"`, and a multiplier of its radiance.
     pub sky: Option<String>,
-    /// Multiplier of the sun and sky's physical radiance.
+    /// Multiplier of the sun and sky's physical radiance (the job's sky, or the scene file's `KELVIN_sun_sky`).
     pub sky_intensity: f32,
     /// Path tracing or direct lighting.
     pub integrator: IntegratorChoice,
@@ -282,7 +282,7 @@ impl RenderJob {
     /// environment map and the sun and sky.
     pub fn load(&self) -> Result<LoadedJob, JobError> {
         self.check()?;
-        let sky = self.sun_sky()?;
+        let mut sky = self.sun_sky()?;
         let mut world = World::new();
         let mut schedule = Schedule::default();
         world.insert_resource(self.settings());
@@ -291,7 +291,19 @@ impl RenderJob {
         let (mut warnings, file, summary) = match &self.scene {
             Some(path) => {
                 let start = std::time::Instant::now();
-                let scene = crate::scene::gltf::load_gltf(path)?;
+                let mut scene = crate::scene::gltf::load_gltf(path)?;
+                // The job's sky replaces the file's; `sky_intensity` scales whichever is used.
+                match (scene.sky.take(), &mut sky) {
+                    (Some(_), Some(_)) => scene.warnings.push(format!(
+                        "{}: the file's {} is replaced by the job's sky",
+                        path.display(),
+                        crate::scene::gltf::sky::SUN_SKY
+                    )),
+                    (Some(file_sky), None) => {
+                        sky = Some(SunSkyLight { scale: file_sky.scale * self.sky_intensity, ..file_sky })
+                    }
+                    (None, _) => {}
+                }
                 let report = crate::scene::spawn::spawn_gltf(&mut world, &scene);
                 (lights, cameras) = (scene.lights, scene.cameras);
                 let summary = format!(

@@ -40,6 +40,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 
 /// The largest image accepted, in pixels (2^28, e.g. 23170 x 23170; 3 GiB as linear f32 RGB).
 pub const MAX_PIXELS: usize = 1 << 28;
@@ -430,43 +431,55 @@ fn decode_with_image_crate(
     Ok(RgbImage { width, height, pixels })
 }
 
-/// OpenEXR through the `exr` crate: headers are checked before any pixel is decoded; blocks are decompressed on
-/// this thread.
+/// OpenEXR through the `exr` crate: headers are checked before any pixel is decoded; blocks are decompressed in
+/// parallel on rayon's pool (a panic there reaches the caller, and load_image_from_bytes' catch_unwind, where one
+/// in the crate's own thread pool would abort the process: found by fuzzing a B44 block).
 fn decode_exr(bytes: &[u8], what: &str) -> Result<RgbImage, ImageError> {
-    use exr::prelude::{FlatSamples, ReadChannels, ReadLayers};
+    use exr::block::reader::ChunksReader;
+    use exr::image::read::image::{LayersReader, ReadLayers};
+    use exr::prelude::{FlatSamples, ReadChannels};
     let decode_error =
         |e: exr::error::Error| ImageError::Decode { what: what.into(), format: "OpenEXR", msg: e.to_string() };
 
-    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(decode_error)?;
+    let reader = exr::block::read(Cursor::new(bytes), false).map_err(decode_error)?;
     let mut claimed = 0usize;
-    for header in &meta.headers {
+    for header in reader.headers() {
         check_size(header.layer_size.0, header.layer_size.1, what)?;
         claimed = claimed.saturating_add(header.layer_size.0 * header.layer_size.1);
     }
     check_plausible(claimed, bytes.len(), ImageFormat::Exr, what)?;
-    let image = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        // On the calling thread: a panic in the crate's own thread pool aborts the process, out of reach of
-        // load_image_from_bytes' catch_unwind (found by fuzzing a B44 block).
-        .non_parallel()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(decode_error)?;
+    let spec = exr::prelude::read().no_deep_data().largest_resolution_level().all_channels().all_layers();
+    let mut layers = spec.create_layers_reader(reader.headers()).map_err(decode_error)?;
+    let chunks = reader.filter_chunks(false, |meta, tile, block| layers.filter_block(meta, tile, block));
+    let chunks = chunks.map_err(decode_error)?;
+    let meta = chunks.meta_data().clone();
+    let chunks: Vec<exr::block::chunk::Chunk> = chunks.collect::<Result<_, _>>().map_err(decode_error)?;
+    // Decompressed in batches, so at most a batch of blocks is held beside the image.
+    let batch = 64 * rayon::current_num_threads();
+    let mut chunks = chunks.into_iter().peekable();
+    while chunks.peek().is_some() {
+        let some: Vec<_> = chunks.by_ref().take(batch).collect();
+        let blocks: Vec<_> = some
+            .into_par_iter()
+            .map(|chunk| exr::block::UncompressedBlock::decompress_chunk(chunk, &meta, false))
+            .collect::<Result<_, _>>()
+            .map_err(decode_error)?;
+        for block in blocks {
+            layers.read_block(&meta.headers, block).map_err(decode_error)?;
+        }
+    }
+    let layer_data = layers.into_layers();
 
     let names = |layer: &exr::prelude::Layer<exr::prelude::AnyChannels<FlatSamples>>| -> Vec<String> {
         layer.channel_data.list.iter().map(|c| c.name.to_string()).collect()
     };
     // The first layer with R, G and B; else the first with Y (grey).
-    let choice = image
-        .layer_data
+    let choice = layer_data
         .iter()
         .find_map(|l| pick_channels(&names(l), &["R", "G", "B"]).map(|i| (l, i)))
-        .or_else(|| image.layer_data.iter().find_map(|l| pick_channels(&names(l), &["Y"]).map(|i| (l, i))));
+        .or_else(|| layer_data.iter().find_map(|l| pick_channels(&names(l), &["Y"]).map(|i| (l, i))));
     let Some((layer, indices)) = choice else {
-        let channels = image.layer_data.iter().flat_map(names).collect::<Vec<_>>().join(", ");
+        let channels = layer_data.iter().flat_map(names).collect::<Vec<_>>().join(", ");
         return Err(ImageError::NoColorChannels { what: what.into(), channels });
     };
 

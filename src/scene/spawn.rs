@@ -181,6 +181,10 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
         }
         report.cameras += 1;
     }
+    if let Some(sky) = &scene.sky {
+        world.spawn((sky.clone(), Transform::IDENTITY));
+        report.lights += 1;
+    }
     report
 }
 

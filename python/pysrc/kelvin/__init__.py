@@ -116,7 +116,9 @@ class Scene:
         """The lights: the file's punctual lights (``kind`` point, spot, directional or ies; ``name``,
         ``node``, ``node_name``, ``color``, ``intensity`` in glTF units, ``range``, and ``position`` and
         ``direction`` in the current pose; spots add their cone half-angles in degrees), then the
-        environment map (``kind`` environment) and the sun and sky (``kind`` sun_sky)."""
+        environment map (``kind`` environment) and the sun and sky (``kind`` sun_sky, given to ``load`` or
+        carried by the file's ``KELVIN_sun_sky`` extension: ``direction`` toward the sun, ``turbidity``,
+        ``intensity``, ``below_horizon``)."""
         return self._native.lights()
 
     @property

@@ -169,6 +169,28 @@ impl SunSkyLight {
         }
     }
 
+    /// Why this light gives no light, when the sun is at or below the horizon: the Hosek-Wilkie
+    /// model covers a sun above it, and kelvin models neither twilight nor the night sky, so the
+    /// light is black there. None by day.
+    pub fn dark_reason(&self) -> Result<Option<String>, LightError> {
+        let d = self.sun_direction()?;
+        if d.y > 0.0 {
+            return Ok(None);
+        }
+        let at = match self.sun {
+            SunPosition::Location { latitude_deg, longitude_deg, time: t } => format!(
+                " at {latitude_deg}, {longitude_deg} on {:04}-{:02}-{:02}T{:02}:{:02} UTC",
+                t.year, t.month, t.day, t.hour, t.minute
+            ),
+            SunPosition::Direction(_) => String::new(),
+        };
+        Ok(Some(format!(
+            "the sun is {:.1} degrees below the horizon{at}: the sun and sky give no light (the Hosek-Wilkie \
+             model covers a sun above the horizon; twilight and night skies are not modelled)",
+            -d.y.clamp(-1.0, 1.0).asin().to_degrees()
+        )))
+    }
+
     /// Checks every field is in range (what [`Self::resolve`] checks first).
     pub fn validate(&self) -> Result<(), LightError> {
         let (t, a, d) = (self.turbidity, self.ground_albedo, self.sun_angular_diameter);

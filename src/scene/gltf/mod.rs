@@ -16,6 +16,7 @@
 //!   ignored with a warning.
 //! - Node animations (translation, rotation, scale; STEP, LINEAR, CUBICSPLINE) as [`animation::SceneAnimations`];
 //!   a bad channel is dropped with a warning.
+//! - A sun and sky from kelvin's root extension `KELVIN_sun_sky` ([`sky`]).
 //! - Metallic-roughness materials with KHR_materials_emissive_strength, KHR_materials_specular (`specularFactor`)
 //!   and KHR_materials_ior; textures on UV set 0 (PNG/JPEG, also EXR/HDR by file extension).
 //!
@@ -80,6 +81,7 @@ mod lights;
 mod material;
 mod mesh;
 mod nodes;
+pub mod sky;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -102,6 +104,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_ior",
     "KHR_mesh_quantization",
     "EXT_lights_ies",
+    sky::SUN_SKY,
 ];
 
 /// A loaded glTF scene as plain data.
@@ -124,6 +127,8 @@ pub struct GltfScene {
     /// The chosen scene's node tree at rest and the file's animations (`clips` is empty for a
     /// still scene).
     pub animations: animation::SceneAnimations,
+    /// The sun and sky of the `KELVIN_sun_sky` root extension (see [`sky`]).
+    pub sky: Option<crate::light::SunSkyLight>,
     /// What was ignored, fixed or dropped, one line each: `<file>: <JSON pointer>: <what and the fallback>`.
     pub warnings: Vec<String>,
 }
@@ -438,6 +443,7 @@ pub fn load_gltf_from_bytes(bytes: &[u8], base_dir: Option<&Path>, what: &str) -
     let light_table = lights::LightTable::new(&doc, raw_lights, &mut warnings);
     let mut placed = nodes::flatten(&doc, &light_table, &mut warnings);
     placed.tree.clips = animation::read_clips(&doc, &placed.tree.rest, &mut warnings);
+    let sky = sky::read_sky(&json, &mut warnings);
     Ok(GltfScene {
         meshes,
         instances: placed.instances,
@@ -446,6 +452,7 @@ pub fn load_gltf_from_bytes(bytes: &[u8], base_dir: Option<&Path>, what: &str) -
         lights: placed.lights,
         cameras: placed.cameras,
         animations: placed.tree,
+        sky,
         warnings: warnings.list,
     })
 }
