@@ -1,13 +1,13 @@
 //! Piecewise-constant distributions in 1D and 2D (pbrt-v4 §A.4.4-A.4.5): sample a tabulated
 //! function (an environment map, a goniometric profile) in proportion to its value.
 //!
-//! The CDF is accumulated and stored in f64, so a table with one value of 1e9 (the sun's pixel)
-//! among values of ~1 keeps the mass of the rest: in f32, 1e9 + 1 == 1e9 and every bin after the
-//! sun would get probability 0 while its pdf says otherwise. (A sample `u` is still an f32: a bin
-//! whose probability is below its ~6e-8 spacing is hit only as often as the f32 grid allows.)
-
-use glam::Vec2;
-use rayon::prelude::*;
+//! The CDF is accumulated in f64, so a table with one value of 1e9 (the sun's pixel) among
+//! values of ~1 keeps the mass of the rest: in f32, 1e9 + 1 == 1e9 and every bin after the sun
+//! would get probability 0. 1D CDFs are stored in f64; a 2D table's rows are stored in f32 where
+//! that keeps every nonzero bin's width positive, in f64 where it does not (distribution_2d.rs).
+//! A bin's density is its CDF width, so the pdf is the density sampled, whichever the storage.
+//! (A sample `u` is still an f32: a bin whose probability is below its ~6e-8 spacing is hit only
+//! as often as the f32 grid allows.)
 
 use super::SamplingError;
 
@@ -21,42 +21,71 @@ pub struct PiecewiseConstant1D {
     func: Vec<f32>,
     cdf: Vec<f64>,
     /// Integral of |f| over [min, max].
-    integral: f64,
+    pub(super) integral: f64,
     min: f32,
     max: f32,
 }
 
-/// One row of bins borrowed from a [`PiecewiseConstant1D`] or a row of a [`PiecewiseConstant2D`]:
-/// the sampling, density and inversion of both, written once.
+/// One row of bins borrowed from a [`PiecewiseConstant1D`] or a row of a
+/// [`PiecewiseConstant2D`](super::PiecewiseConstant2D): the sampling, density and inversion of
+/// both, written once.
 #[derive(Clone, Copy, Debug)]
 pub struct Bins<'a> {
-    func: &'a [f32],
-    cdf: &'a [f64],
-    integral: f64,
-    min: f32,
-    max: f32,
+    pub(super) edges: Edges<'a>,
+    pub(super) integral: f64,
+    pub(super) min: f32,
+    pub(super) max: f32,
 }
 
-/// Turns a row's raw values, held in `cdf[1..]` on entry, into its sanitised `func` and normalised
-/// `cdf`; returns the sum of the values. Values in the cdf slot keep the row in one cache-resident
-/// buffer and let 2D rows and the f64 marginal share this code. `func.len() + 1 == cdf.len()`.
+/// A row's normalised CDF at its bin edges, as stored.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Edges<'a> {
+    Wide(&'a [f64]),
+    Narrow(&'a [f32]),
+}
+
+impl Edges<'_> {
+    #[inline(always)]
+    fn at(&self, i: usize) -> f64 {
+        match self {
+            Edges::Wide(c) => c[i],
+            Edges::Narrow(c) => c[i] as f64,
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Edges::Wide(c) => c.len(),
+            Edges::Narrow(c) => c.len(),
+        }
+    }
+
+    /// The number of edges at or below `u`.
+    fn count_up_to(&self, u: f64) -> usize {
+        match self {
+            Edges::Wide(c) => c.partition_point(|&x| x <= u),
+            Edges::Narrow(c) => c.partition_point(|&x| x as f64 <= u),
+        }
+    }
+}
+
+/// Turns raw values (`cdf[1..]` on entry) into the normalised CDF from exactly 0 to exactly 1 in
+/// place; returns their sum. Values are taken as |v| with NaN as 0 and +inf as `f32::MAX`.
 #[inline(always)]
-fn finish_bins(func: &mut [f32], cdf: &mut [f64]) -> f64 {
-    let n = func.len();
+pub(super) fn normalise(cdf: &mut [f64]) -> f64 {
+    let n = cdf.len() - 1;
     cdf[0] = 0.0;
     // Three loops rather than one: the first and last vectorise; only the running sum is serial.
-    for (f, c) in func.iter_mut().zip(&mut cdf[1..]) {
-        let v = if c.is_nan() { 0.0 } else { c.abs().min(f32::MAX as f64) };
-        *f = v as f32;
-        *c = v;
+    for c in &mut cdf[1..] {
+        *c = if c.is_nan() { 0.0 } else { c.abs().min(f32::MAX as f64) };
     }
+    let last = cdf[1..].iter().rposition(|&v| v > 0.0).unwrap_or(n - 1);
     let sum = prefix_sum(&mut cdf[1..]);
     if sum > 0.0 {
         // Multiplying is monotone, so the CDF still rises; min(1) keeps it within [0, 1].
         let inv = 1.0 / sum;
         cdf.iter_mut().for_each(|c| *c = (*c * inv).min(1.0));
         // From the end of the last nonzero bin on, exactly 1: trailing zero bins are never hit.
-        let last = func.iter().rposition(|&f| f > 0.0).unwrap_or(n - 1);
         cdf[last + 1..].fill(1.0);
     } else {
         cdf.iter_mut().enumerate().for_each(|(i, c)| *c = i as f64 / n as f64);
@@ -122,26 +151,27 @@ impl PiecewiseConstant1D {
     }
 
     /// Builds from f64 values (the 2D marginal passes its row integrals unrounded).
-    fn build(values: impl Iterator<Item = f64>, len: usize, min: f32, max: f32) -> Self {
+    pub(super) fn build(values: impl Iterator<Item = f64>, len: usize, min: f32, max: f32) -> Self {
         let mut d = Self { func: Vec::new(), cdf: Vec::new(), integral: 0.0, min, max };
         d.rebuild(values, len);
         d
     }
 
     /// [`Self::build`] into the existing buffers.
-    fn rebuild(&mut self, values: impl Iterator<Item = f64>, len: usize) {
+    pub(super) fn rebuild(&mut self, values: impl Iterator<Item = f64>, len: usize) {
         let n = len.max(1);
         self.cdf.clear();
         self.cdf.push(0.0);
         self.cdf.extend(values.take(n));
         self.cdf.resize(n + 1, 0.0);
-        self.func.resize(n, 0.0);
-        let sum = finish_bins(&mut self.func, &mut self.cdf);
+        self.func.clear();
+        self.func.extend(self.cdf[1..].iter().map(|&c| if c.is_nan() { 0.0 } else { c.abs().min(f32::MAX as f64) as f32 }));
+        let sum = normalise(&mut self.cdf);
         self.integral = sum * (self.max as f64 - self.min as f64) / n as f64;
     }
 
-    fn bins(&self) -> Bins<'_> {
-        Bins { func: &self.func, cdf: &self.cdf, integral: self.integral, min: self.min, max: self.max }
+    pub(super) fn bins(&self) -> Bins<'_> {
+        Bins { edges: Edges::Wide(&self.cdf), integral: self.integral, min: self.min, max: self.max }
     }
 
     /// Integral of |f| over the domain (0 for an all-zero function).
@@ -192,7 +222,7 @@ impl PiecewiseConstant1D {
     }
 }
 
-impl<'a> Bins<'a> {
+impl Bins<'_> {
     /// Integral of |f| over the domain (0 for an all-zero row).
     pub fn integral(&self) -> f32 {
         self.integral as f32
@@ -200,31 +230,24 @@ impl<'a> Bins<'a> {
 
     /// Number of bins (at least 1).
     pub fn len(&self) -> usize {
-        self.func.len()
+        self.edges.len() - 1
     }
 
     /// Always false: there is at least one bin.
     pub fn is_empty(&self) -> bool {
-        self.func.is_empty()
-    }
-
-    /// The stored |f| per bin.
-    pub fn func(&self) -> &'a [f32] {
-        self.func
-    }
-
-    /// The normalised CDF at the `len() + 1` bin edges, from 0 to 1.
-    pub fn cdf(&self) -> &'a [f64] {
-        self.cdf
+        self.len() == 0
     }
 
     fn width(&self) -> f64 {
         self.max as f64 - self.min as f64
     }
 
-    fn density(&self, offset: usize) -> f32 {
+    /// The density of bin `offset`: its probability (CDF width) over its width, so that it is
+    /// the density [`Self::sample`] draws from, bit for bit.
+    pub(super) fn density(&self, offset: usize) -> f32 {
         if self.integral > 0.0 {
-            (self.func[offset] as f64 / self.integral) as f32
+            let p = self.edges.at(offset + 1) - self.edges.at(offset);
+            (p * self.len() as f64 / self.width()) as f32
         } else {
             (1.0 / self.width()) as f32
         }
@@ -235,14 +258,14 @@ impl<'a> Bins<'a> {
         // u < 1 keeps us inside a bin of positive width: cdf[o] <= u < cdf[o + 1].
         let u = (u as f64).clamp(0.0, 1.0 - f64::EPSILON / 2.0);
         let n = self.len();
-        let offset = (self.cdf.partition_point(|&c| c <= u) - 1).min(n - 1);
-        let (c0, c1) = (self.cdf[offset], self.cdf[offset + 1]);
+        let offset = (self.edges.count_up_to(u) - 1).min(n - 1);
+        let (c0, c1) = (self.edges.at(offset), self.edges.at(offset + 1));
         let du = if c1 > c0 { ((u - c0) / (c1 - c0)).clamp(0.0, 1.0) } else { 0.0 };
         let x = self.min as f64 + (offset as f64 + du) / n as f64 * self.width();
         ((x as f32).clamp(self.min, self.max), self.density(offset), offset)
     }
 
-    fn offset_of(&self, x: f32) -> Option<(usize, f64)> {
+    pub(super) fn offset_of(&self, x: f32) -> Option<(usize, f64)> {
         if !(self.min..=self.max).contains(&x) {
             return None;
         }
@@ -263,251 +286,20 @@ impl<'a> Bins<'a> {
         if self.pdf(x) <= 0.0 {
             return None;
         }
-        let u = self.cdf[o] + delta * (self.cdf[o + 1] - self.cdf[o]);
-        Some(u as f32)
+        let (c0, c1) = (self.edges.at(o), self.edges.at(o + 1));
+        Some((c0 + delta * (c1 - c0)) as f32)
     }
 }
 
-fn valid_domain(min: f32, max: f32) -> bool {
+pub(super) fn valid_domain(min: f32, max: f32) -> bool {
     min.is_finite() && max.is_finite() && min < max
-}
-
-/// A piecewise-constant density over a rectangle (by default [0, 1]^2) proportional to |f| on an
-/// `nu` x `nv` grid: a marginal over v of row integrals, and one conditional over u per row.
-///
-/// The rows live in two flat buffers (`func`: nu per row, `cdf`: nu + 1 per row) so that they can
-/// be built in parallel, rebuilt in part ([`Self::fill_rows`]) and reused across rebuilds.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PiecewiseConstant2D {
-    nu: usize,
-    nv: usize,
-    func: Vec<f32>,
-    cdf: Vec<f64>,
-    /// Per row, the integral of |f| over [min.x, max.x].
-    row_integral: Vec<f64>,
-    marginal: PiecewiseConstant1D,
-    min: Vec2,
-    max: Vec2,
-}
-
-/// Rows per parallel task: enough to amortise a task (and a filter's halo rows), few enough to
-/// split 1024 rows evenly over the cores.
-const ROWS_PER_TASK: usize = 32;
-
-impl PiecewiseConstant2D {
-    /// The distribution of |`func`| over [0, 1]^2; `func` is row-major: `nv` rows of `nu` values,
-    /// row v covering y in [v / nv, (v + 1) / nv]. For tables from data prefer [`Self::try_new`]:
-    /// here `nu` or `nv` of 0 count as 1, missing values as 0, and extra values are ignored.
-    pub fn new(func: &[f32], nu: usize, nv: usize) -> Self {
-        Self::with_domain(func, nu, nv, Vec2::ZERO, Vec2::ONE)
-    }
-
-    /// As [`Self::new`] over the rectangle [`min`, `max`] (replaced by [0, 1]^2 unless finite with
-    /// min < max on both axes).
-    pub fn with_domain(func: &[f32], nu: usize, nv: usize, min: Vec2, max: Vec2) -> Self {
-        let mut d = Self::zeros(nu, nv, min, max);
-        let nu = d.nu;
-        Self::fill_rows(
-            &mut [&mut d],
-            0..nv,
-            |_| (),
-            |_, v, rows| {
-                for (x, out) in rows[0].iter_mut().enumerate() {
-                    *out = *func.get(v * nu + x).unwrap_or(&0.0) as f64;
-                }
-            },
-        );
-        d
-    }
-
-    /// An all-zero `nu` x `nv` distribution (samples uniformly) over [`min`, `max`], to be filled
-    /// by [`Self::fill_rows`]; `nu` or `nv` of 0 count as 1, a bad domain as [0, 1]^2.
-    pub fn zeros(nu: usize, nv: usize, min: Vec2, max: Vec2) -> Self {
-        let (min, max) =
-            if valid_domain(min.x, max.x) && valid_domain(min.y, max.y) { (min, max) } else { (Vec2::ZERO, Vec2::ONE) };
-        let mut d = Self {
-            nu: 0,
-            nv: 0,
-            func: Vec::new(),
-            cdf: Vec::new(),
-            row_integral: Vec::new(),
-            marginal: PiecewiseConstant1D::build(std::iter::empty(), 1, min.y, max.y),
-            min,
-            max,
-        };
-        d.reset(nu, nv);
-        d
-    }
-
-    /// Resizes to `nu` x `nv` all-zero rows, keeping the buffers' memory (0 counts as 1).
-    pub fn reset(&mut self, nu: usize, nv: usize) {
-        let (nu, nv) = (nu.max(1), nv.max(1));
-        (self.nu, self.nv) = (nu, nv);
-        self.func.clear();
-        self.func.resize(nu * nv, 0.0);
-        self.cdf.clear();
-        self.cdf.resize((nu + 1) * nv, 0.0);
-        self.row_integral.clear();
-        self.row_integral.resize(nv, 0.0);
-        self.cdf.par_chunks_mut(nu + 1).zip(self.func.par_chunks_mut(nu)).for_each(|(c, f)| {
-            finish_bins(f, c);
-        });
-        self.finish_marginal();
-    }
-
-    /// Refills `rows` (clamped to the grid) of every distribution in `dists` in parallel, in
-    /// tasks of consecutive rows: `init(rows)` makes a task's state, then `fill(state, row,
-    /// values)` writes each row's raw values (|f| is taken after), one slice of `nu` per
-    /// distribution, so that one pass over a source serves them all; each row's CDF is built
-    /// while the row is in cache, and the marginals at the end. Rows outside `rows` are kept.
-    /// Every distribution must have the grid of the first; one that does not is left unchanged.
-    pub fn fill_rows<S>(
-        dists: &mut [&mut Self],
-        rows: std::ops::Range<usize>,
-        init: impl Fn(std::ops::Range<usize>) -> S + Sync,
-        fill: impl Fn(&mut S, usize, &mut [&mut [f64]]) + Sync,
-    ) {
-        let Some((nu, nv)) = dists.first().map(|d| (d.nu, d.nv)) else { return };
-        let (lo, hi) = (rows.start.min(nv), rows.end.min(nv));
-        // Per distribution, its tasks' rows; then regrouped task by task.
-        let k = ROWS_PER_TASK;
-        let mut per_dist: Vec<_> = dists
-            .iter_mut()
-            .filter(|d| (d.nu, d.nv) == (nu, nv))
-            .map(|d| {
-                let d = &mut **d;
-                let span = d.max.x as f64 - d.min.x as f64;
-                let f = d.func[lo * nu..hi * nu].chunks_mut(k * nu);
-                let c = d.cdf[lo * (nu + 1)..hi * (nu + 1)].chunks_mut(k * (nu + 1));
-                let r = d.row_integral[lo..hi].chunks_mut(k);
-                f.zip(c).zip(r).map(move |((f, c), r)| (span, f, c, r)).collect::<Vec<_>>().into_iter()
-            })
-            .collect();
-        let mut tasks = Vec::new();
-        while let Some(task) = per_dist.iter_mut().map(|it| it.next()).collect::<Option<Vec<_>>>() {
-            if task.is_empty() {
-                break;
-            }
-            tasks.push(task);
-        }
-        // Each task's rows compiled for the widest instruction set: `fill` and the row finish
-        // are inlined into it (see `lanes::widest`).
-        tasks.into_par_iter().enumerate().for_each(|(t, mut task)| {
-            crate::lanes::widest(
-                #[inline(always)]
-                || {
-                    let first = lo + t * k;
-                    let n = task[0].3.len();
-                    let mut state = init(first..first + n);
-                    for i in 0..n {
-                        let mut values: Vec<&mut [f64]> =
-                            task.iter_mut().map(|(_, _, c, _)| &mut c[i * (nu + 1) + 1..(i + 1) * (nu + 1)]).collect();
-                        fill(&mut state, first + i, &mut values);
-                        drop(values);
-                        for (span, f, c, r) in task.iter_mut() {
-                            let row = i * (nu + 1)..(i + 1) * (nu + 1);
-                            let sum = finish_bins(&mut f[i * nu..(i + 1) * nu], &mut c[row]);
-                            r[i] = sum * *span / nu as f64;
-                        }
-                    }
-                },
-            )
-        });
-        drop(per_dist);
-        for d in dists.iter_mut().filter(|d| (d.nu, d.nv) == (nu, nv)) {
-            d.finish_marginal();
-        }
-    }
-
-    fn finish_marginal(&mut self) {
-        let Self { marginal, row_integral, nv, .. } = self;
-        marginal.rebuild(row_integral.iter().copied(), *nv);
-    }
-
-    /// As [`Self::with_domain`], but a wrong-sized `func` or a bad domain is an error.
-    pub fn try_new(func: &[f32], nu: usize, nv: usize, min: Vec2, max: Vec2) -> Result<Self, SamplingError> {
-        if nu == 0 || nv == 0 || nu.checked_mul(nv) != Some(func.len()) {
-            return Err(SamplingError::BadGrid { what: "PiecewiseConstant2D", len: func.len(), nu, nv });
-        }
-        for (lo, hi) in [(min.x, max.x), (min.y, max.y)] {
-            if !valid_domain(lo, hi) {
-                return Err(SamplingError::BadDomain { what: "PiecewiseConstant2D", min: lo, max: hi });
-            }
-        }
-        Ok(Self::with_domain(func, nu, nv, min, max))
-    }
-
-    /// Integral of |f| over the domain.
-    pub fn integral(&self) -> f32 {
-        self.marginal.integral()
-    }
-
-    /// Grid size [nu, nv].
-    pub fn resolution(&self) -> [usize; 2] {
-        [self.nu, self.nv]
-    }
-
-    /// The domain (min, max).
-    pub fn domain(&self) -> (Vec2, Vec2) {
-        (self.min, self.max)
-    }
-
-    /// The marginal distribution over v (of row integrals).
-    pub fn marginal(&self) -> &PiecewiseConstant1D {
-        &self.marginal
-    }
-
-    /// The conditional distribution over u in row `v`, if that row exists.
-    pub fn conditional(&self, v: usize) -> Option<Bins<'_>> {
-        (v < self.nv).then(|| Bins {
-            func: &self.func[v * self.nu..(v + 1) * self.nu],
-            cdf: &self.cdf[v * (self.nu + 1)..(v + 1) * (self.nu + 1)],
-            integral: self.row_integral[v],
-            min: self.min.x,
-            max: self.max.x,
-        })
-    }
-
-    fn row(&self, v: usize) -> Bins<'_> {
-        self.conditional(v.min(self.nv - 1)).unwrap_or(self.marginal.bins())
-    }
-
-    /// Samples a point with density f / integral; returns (point, pdf, [u bin, v bin]).
-    pub fn sample(&self, u: Vec2) -> (Vec2, f32, [usize; 2]) {
-        let (y, pdf_v, iv) = self.marginal.sample(u.y);
-        let (x, pdf_u, iu) = self.row(iv).sample(u.x);
-        (Vec2::new(x, y), pdf_u * pdf_v, [iu, iv])
-    }
-
-    /// Density at `p`; 0 outside the domain.
-    pub fn pdf(&self, p: Vec2) -> f32 {
-        let (Some((iu, _)), Some((iv, _))) = (self.row(0).offset_of(p.x), self.marginal.bins().offset_of(p.y)) else {
-            return 0.0;
-        };
-        if self.marginal.integral > 0.0 {
-            (self.func[iv * self.nu + iu] as f64 / self.marginal.integral) as f32
-        } else {
-            let area = (self.max.x as f64 - self.min.x as f64) * (self.max.y as f64 - self.min.y as f64);
-            (1.0 / area) as f32
-        }
-    }
-
-    /// The unit-square sample that [`Self::sample`] maps to `p`; None outside the domain or where
-    /// the density is 0.
-    pub fn invert(&self, p: Vec2) -> Option<Vec2> {
-        if self.pdf(p) <= 0.0 {
-            return None;
-        }
-        let v = self.marginal.invert(p.y)?;
-        let (iv, _) = self.marginal.bins().offset_of(p.y)?;
-        let u = self.row(iv).invert(p.x)?;
-        Some(Vec2::new(u, v))
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::PiecewiseConstant2D;
+    use glam::Vec2;
 
     #[test]
     fn negative_and_nan_values_count_as_their_magnitude_and_zero() {

@@ -14,13 +14,15 @@
 
 pub mod alias;
 pub mod distribution;
+pub mod distribution_2d;
 pub mod frame;
 pub mod spherical;
 pub mod spherical_f32;
 pub mod warp;
 
 pub use alias::AliasTable;
-pub use distribution::{Bins, PiecewiseConstant1D, PiecewiseConstant2D};
+pub use distribution::{Bins, PiecewiseConstant1D};
+pub use distribution_2d::PiecewiseConstant2D;
 pub use frame::Frame;
 pub use spherical::{
     invert_spherical_rectangle_sample, invert_spherical_triangle_sample, sample_spherical_rectangle,

@@ -154,6 +154,51 @@ fn piecewise_2d_sun_pixel_1e9_env_map_keeps_sky_rows() {
     assert!(rel(1.0 - cdf[11], (nv - 11) as f64 * nu as f64 / total) < 1e-6);
     let (p, pdf, [iu, iv]) = d.sample(Vec2::new(0.3, 1.0 - f32::EPSILON / 2.0));
     assert!(iv > 10 && rel(pdf as f64, sky_pdf) < 1e-6 && d.pdf(p) == pdf, "{iu} {iv} {pdf}");
+    // The sun's own row: in an f32 CDF the sky bins after the sun would close (1 - 1e-9 rounds
+    // to 1); that row alone keeps its f64 CDF, and its sky bins keep their density.
+    assert_eq!(d.wide_rows(), 1);
+    for x in [0.05, 0.5, 0.7, 0.99] {
+        let row_sky = d.pdf(Vec2::new(x, 10.5 / nv as f32)) as f64;
+        assert!(rel(row_sky, sky_pdf) < 1e-6, "x = {x}: {row_sky} against {sky_pdf}");
+    }
+}
+
+#[test]
+fn piecewise_2d_rows_in_f32_sample_the_density_they_report_within_f32_of_the_function() {
+    // Rows of 4096 bumpy values spanning six decades: the hard case for f32 edges is the dim
+    // bins, whose width is a few ulps of the CDF near 1.
+    let mut rng = SplitMix64::new(9);
+    let (nu, nv) = (4096, 6);
+    let f: Vec<f32> = (0..nu * nv).map(|i| 10f32.powf(6.0 * rng.f32()) * ((i % 7 != 0) as u8 as f32)).collect();
+    let d = PiecewiseConstant2D::new(&f, nu, nv);
+    // Dim bins are widened to one f32 step; only a row whose last bins are dim enough to need
+    // more steps than are left below 1 keeps its f64 CDF (one of these six).
+    assert!(d.wide_rows() <= 1, "{} rows in f64", d.wide_rows());
+    let total: f64 = f.iter().map(|&v| v as f64).sum();
+    // Per row, the total variation distance between the sampled distribution (the f32 widths)
+    // and the function's: rounding moves an edge by half an f32 step (3e-8 below 1), widening a
+    // dim bin by at most a step; over 4096 bins that stays below 1e-4.
+    let mut worst_tv = 0.0f64;
+    for (r, row) in f.chunks(nu).enumerate() {
+        let row_sum: f64 = row.iter().map(|&x| x as f64).sum();
+        let row_p = row_sum / total;
+        let mut tv = 0.0;
+        for (x, &v) in row.iter().enumerate() {
+            let p = Vec2::new((x as f32 + 0.5) / nu as f32, (r as f32 + 0.5) / nv as f32);
+            let pdf = d.pdf(p) as f64;
+            assert_eq!(pdf > 0.0, v > 0.0, "row {r} bin {x}: density {pdf} for value {v}");
+            // The bin's probability within its row, as sampled and as the function has it.
+            tv += 0.5 * (pdf / (nu * nv) as f64 / row_p - v as f64 / row_sum).abs();
+        }
+        worst_tv = worst_tv.max(tv);
+    }
+    println!("f32 rows: worst total variation from the function {worst_tv:.1e}");
+    assert!(worst_tv < 1e-4, "{worst_tv}");
+    // Sampling returns the density `pdf` reports, bit for bit.
+    for _ in 0..20_000 {
+        let (p, pdf, _) = d.sample(rng.vec2());
+        assert_eq!(d.pdf(p), pdf);
+    }
 }
 
 #[test]

@@ -311,10 +311,15 @@ impl EnvMapTables {
         let mean = solid_angle_mean(&s.row_lum_sum, &s.band, w, lookup);
         let halo = usize::from(lookup == EnvLookup::Bilinear);
         let mut table_rows = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
-        let mut plain = self
-            .distribution
-            .take()
-            .unwrap_or_else(|| PiecewiseConstant2D::zeros(w, h, glam::Vec2::ZERO, glam::Vec2::ONE));
+        // Tables of another size (or none yet) are made afresh and filled whole.
+        let fresh = |d: Option<PiecewiseConstant2D>| {
+            d.filter(|d| d.resolution() == [w, h])
+                .ok_or_else(|| PiecewiseConstant2D::unfilled(w, h, glam::Vec2::ZERO, glam::Vec2::ONE))
+        };
+        let mut plain = fresh(self.distribution.take()).unwrap_or_else(|new| {
+            table_rows = 0..h;
+            new
+        });
         let comp = if s.compensate {
             let kept = keep_mean.filter(|&m| (mean - m).abs() <= MEAN_TOLERANCE * m && self.compensated.is_some());
             if kept.is_none() {
@@ -322,18 +327,13 @@ impl EnvMapTables {
                 table_rows = 0..h;
                 s.mean = mean;
             }
-            Some(
-                self.compensated
-                    .take()
-                    .unwrap_or_else(|| PiecewiseConstant2D::zeros(w, h, glam::Vec2::ZERO, glam::Vec2::ONE)),
-            )
+            Some(fresh(self.compensated.take()).unwrap_or_else(|new| {
+                table_rows = 0..h;
+                new
+            }))
         } else {
             None
         };
-        // Every row is rewritten below; only a change of size needs the buffers reset.
-        if plain.resolution() != [w, h] {
-            plain.reset(w, h);
-        }
         let bad: Vec<AtomicUsize> = (0..h).map(|_| AtomicUsize::new(0)).collect();
         let threshold = s.compensate.then_some(s.mean);
         let band = &s.band;
@@ -341,12 +341,7 @@ impl EnvMapTables {
         let mut comp = comp;
         let init = |own: Range<usize>| Window::new(image, lookup, own, w, h);
         let mut dists: Vec<&mut PiecewiseConstant2D> = vec![&mut plain];
-        if let Some(c) = comp.as_mut() {
-            if c.resolution() != [w, h] {
-                c.reset(w, h);
-            }
-            dists.push(c);
-        }
+        dists.extend(comp.as_mut());
         PiecewiseConstant2D::fill_rows(
             &mut dists,
             table_rows.clone(),
