@@ -40,7 +40,6 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
-use rayon::prelude::*;
 
 /// The largest image accepted, in pixels (2^28, e.g. 23170 x 23170; 3 GiB as linear f32 RGB).
 pub const MAX_PIXELS: usize = 1 << 28;
@@ -317,7 +316,7 @@ pub fn load_image_from_bytes(bytes: &[u8], format_hint: &str, what: &str) -> Res
         return Err(ImageError::Empty { what: what.into() });
     }
     let decoded = catch_unwind(AssertUnwindSafe(|| match format {
-        ImageFormat::Exr => decode_exr(bytes, what),
+        ImageFormat::Exr => super::exr_decode::decode_exr(bytes, what),
         ImageFormat::Hdr => decode_with_image_crate(bytes, image::ImageFormat::Hdr, format, what),
         ImageFormat::Png => decode_with_image_crate(bytes, image::ImageFormat::Png, format, what),
         ImageFormat::Jpeg => decode_with_image_crate(bytes, image::ImageFormat::Jpeg, format, what),
@@ -363,7 +362,7 @@ fn validate(image: RgbImage, what: &str) -> Result<LoadedImage, ImageError> {
 }
 
 /// Refuses a header claiming far more pixels than `file_len` bytes can encode (see [`MAX_PIXELS_PER_BYTE`]).
-fn check_plausible(pixels: usize, file_len: usize, format: ImageFormat, what: &str) -> Result<(), ImageError> {
+pub(super) fn check_plausible(pixels: usize, file_len: usize, format: ImageFormat, what: &str) -> Result<(), ImageError> {
     if pixels > file_len.saturating_mul(MAX_PIXELS_PER_BYTE) {
         return Err(ImageError::Decode {
             what: what.into(),
@@ -377,7 +376,7 @@ fn check_plausible(pixels: usize, file_len: usize, format: ImageFormat, what: &s
     Ok(())
 }
 
-fn check_size(width: usize, height: usize, what: &str) -> Result<(), ImageError> {
+pub(super) fn check_size(width: usize, height: usize, what: &str) -> Result<(), ImageError> {
     if width == 0 || height == 0 {
         return Err(ImageError::ZeroSize { what: what.into(), width, height });
     }
@@ -431,98 +430,6 @@ fn decode_with_image_crate(
     Ok(RgbImage { width, height, pixels })
 }
 
-/// OpenEXR through the `exr` crate: headers are checked before any pixel is decoded; blocks are decompressed in
-/// parallel on rayon's pool (a panic there reaches the caller, and load_image_from_bytes' catch_unwind, where one
-/// in the crate's own thread pool would abort the process: found by fuzzing a B44 block).
-fn decode_exr(bytes: &[u8], what: &str) -> Result<RgbImage, ImageError> {
-    use exr::block::reader::ChunksReader;
-    use exr::image::read::image::{LayersReader, ReadLayers};
-    use exr::prelude::{FlatSamples, ReadChannels};
-    let decode_error =
-        |e: exr::error::Error| ImageError::Decode { what: what.into(), format: "OpenEXR", msg: e.to_string() };
-
-    let reader = exr::block::read(Cursor::new(bytes), false).map_err(decode_error)?;
-    let mut claimed = 0usize;
-    for header in reader.headers() {
-        check_size(header.layer_size.0, header.layer_size.1, what)?;
-        claimed = claimed.saturating_add(header.layer_size.0 * header.layer_size.1);
-    }
-    check_plausible(claimed, bytes.len(), ImageFormat::Exr, what)?;
-    let spec = exr::prelude::read().no_deep_data().largest_resolution_level().all_channels().all_layers();
-    let mut layers = spec.create_layers_reader(reader.headers()).map_err(decode_error)?;
-    let chunks = reader.filter_chunks(false, |meta, tile, block| layers.filter_block(meta, tile, block));
-    let chunks = chunks.map_err(decode_error)?;
-    let meta = chunks.meta_data().clone();
-    let chunks: Vec<exr::block::chunk::Chunk> = chunks.collect::<Result<_, _>>().map_err(decode_error)?;
-    // Decompressed in batches, so at most a batch of blocks is held beside the image.
-    let batch = 64 * rayon::current_num_threads();
-    let mut chunks = chunks.into_iter().peekable();
-    while chunks.peek().is_some() {
-        let some: Vec<_> = chunks.by_ref().take(batch).collect();
-        let blocks: Vec<_> = some
-            .into_par_iter()
-            .map(|chunk| exr::block::UncompressedBlock::decompress_chunk(chunk, &meta, false))
-            .collect::<Result<_, _>>()
-            .map_err(decode_error)?;
-        for block in blocks {
-            layers.read_block(&meta.headers, block).map_err(decode_error)?;
-        }
-    }
-    let layer_data = layers.into_layers();
-
-    let names = |layer: &exr::prelude::Layer<exr::prelude::AnyChannels<FlatSamples>>| -> Vec<String> {
-        layer.channel_data.list.iter().map(|c| c.name.to_string()).collect()
-    };
-    // The first layer with R, G and B; else the first with Y (grey).
-    let choice = layer_data
-        .iter()
-        .find_map(|l| pick_channels(&names(l), &["R", "G", "B"]).map(|i| (l, i)))
-        .or_else(|| layer_data.iter().find_map(|l| pick_channels(&names(l), &["Y"]).map(|i| (l, i))));
-    let Some((layer, indices)) = choice else {
-        let channels = layer_data.iter().flat_map(names).collect::<Vec<_>>().join(", ");
-        return Err(ImageError::NoColorChannels { what: what.into(), channels });
-    };
-
-    let (width, height) = (layer.size.0, layer.size.1);
-    check_size(width, height, what)?;
-    let n = width * height;
-    let mut planes = Vec::with_capacity(indices.len());
-    for &i in &indices {
-        let channel = &layer.channel_data.list[i];
-        if channel.sample_data.len() != n {
-            return Err(ImageError::Unsupported {
-                what: what.into(),
-                msg: format!("EXR channel {} is subsampled ({:?}); not supported", channel.name, channel.sampling),
-            });
-        }
-        planes.push(channel.sample_data.values_as_f32().collect::<Vec<f32>>());
-    }
-    let pixels = match planes.as_slice() {
-        [r, g, b, ..] => (0..n).map(|i| Vec3::new(r[i], g[i], b[i])).collect(),
-        [y, ..] => y.iter().map(|&v| Vec3::splat(v)).collect(),
-        [] => Vec::new(), // pick_channels never returns no channel; validate() would reject this
-    };
-    Ok(RgbImage { width, height, pixels })
-}
-
-/// Indices of the wanted channels (e.g. R, G, B) among `names`, all from one channel-name layer: the unprefixed
-/// ones ("R") first, then the alphabetically first prefix ("diffuse.R"). Channel names compare case-insensitively.
-fn pick_channels(names: &[String], wanted: &[&str]) -> Option<Vec<usize>> {
-    let split = |name: &str| match name.rsplit_once('.') {
-        Some((prefix, base)) => (prefix.to_string(), base.to_ascii_uppercase()),
-        None => (String::new(), name.to_ascii_uppercase()),
-    };
-    let mut prefixes: Vec<String> = names.iter().map(|n| split(n).0).collect();
-    prefixes.sort();
-    prefixes.dedup(); // "" sorts first
-    prefixes.iter().find_map(|prefix| {
-        wanted
-            .iter()
-            .map(|w| names.iter().position(|n| split(n) == (prefix.clone(), w.to_string())))
-            .collect::<Option<Vec<usize>>>()
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -536,15 +443,6 @@ mod tests {
         }
         // 50% grey in 8 bit (128/255) is 21.586% linear (IEC 61966-2-1).
         assert!((srgb_decode(128.0 / 255.0) - 0.2158605).abs() < 1e-6);
-    }
-
-    #[test]
-    fn pick_channels_prefers_unprefixed_then_first_prefix() {
-        let names: Vec<String> = ["A", "B", "G", "R", "diffuse.B", "diffuse.G", "diffuse.R"].map(String::from).into();
-        assert_eq!(pick_channels(&names, &["R", "G", "B"]), Some(vec![3, 2, 1]));
-        let names: Vec<String> = ["a.R", "a.G", "b.R", "b.G", "b.B"].map(String::from).into();
-        assert_eq!(pick_channels(&names, &["R", "G", "B"]), Some(vec![2, 3, 4]));
-        assert_eq!(pick_channels(&names, &["Y"]), None);
     }
 
     #[test]

@@ -312,14 +312,14 @@ impl EnvMapTables {
         let halo = usize::from(lookup == EnvLookup::Bilinear);
         let mut table_rows = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
         // Tables of another size (or none yet) are made afresh and filled whole.
-        let fresh = |d: Option<PiecewiseConstant2D>| {
-            d.filter(|d| d.resolution() == [w, h])
-                .ok_or_else(|| PiecewiseConstant2D::unfilled(w, h, glam::Vec2::ZERO, glam::Vec2::ONE))
+        let reuse = |d: Option<PiecewiseConstant2D>| match d.filter(|d| d.resolution() == [w, h]) {
+            Some(d) => (d, false),
+            None => (PiecewiseConstant2D::unfilled(w, h, glam::Vec2::ZERO, glam::Vec2::ONE), true),
         };
-        let mut plain = fresh(self.distribution.take()).unwrap_or_else(|new| {
+        let (mut plain, made) = reuse(self.distribution.take());
+        if made {
             table_rows = 0..h;
-            new
-        });
+        }
         let comp = if s.compensate {
             let kept = keep_mean.filter(|&m| (mean - m).abs() <= MEAN_TOLERANCE * m && self.compensated.is_some());
             if kept.is_none() {
@@ -327,10 +327,11 @@ impl EnvMapTables {
                 table_rows = 0..h;
                 s.mean = mean;
             }
-            Some(fresh(self.compensated.take()).unwrap_or_else(|new| {
+            let (comp, made) = reuse(self.compensated.take());
+            if made {
                 table_rows = 0..h;
-                new
-            }))
+            }
+            Some(comp)
         } else {
             None
         };
