@@ -70,7 +70,8 @@ pub struct LightmapOptions {
     /// How far (texels) dilation fills from valid texels ([`MARGIN`]). Defaults to 4.
     pub margin: u32,
     /// A sample whose first ray meets a back face nearer than this (m) is dropped as a leak;
-    /// None: the scene's bounding radius.
+    /// None: any back face in the scene (the diameter of its bounding sphere). A shorter
+    /// distance keeps samples that see single-sided geometry from behind, farther away.
     pub leak_distance: Option<f32>,
 }
 

@@ -57,8 +57,8 @@ impl SurfaceTracer {
 
     /// Brings the world's BVH and light tables up to date (one run of `schedule`) and prepares
     /// paths of `depth` that count direct light at their first surface or not (`direct`), and
-    /// call a first ray that meets a back face nearer than `leak_distance` (m; None: the scene's
-    /// bounding radius) leaked.
+    /// call a first ray that meets a back face nearer than `leak_distance` (m; None: any back
+    /// face in the scene) leaked.
     pub(crate) fn new(
         world: &mut World,
         schedule: &mut Schedule,
@@ -78,7 +78,8 @@ impl SurfaceTracer {
         let white = Material::lambertian(Vec3::ONE);
         materials.uniform_bsdfs.push(white.uniform_rgb_bsdf());
         materials.materials.push(white);
-        let leak_distance = leak_distance.unwrap_or_else(|| world.resource::<SceneBounds>().sphere.radius);
+        // Any back face in the scene: no two of its points are farther apart than its diameter.
+        let leak_distance = leak_distance.unwrap_or_else(|| 2.0 * world.resource::<SceneBounds>().sphere.radius);
         let entities = &world.resource::<GeometryIndex>().entities;
         let instance_of = entities.iter().enumerate().map(|(i, e)| (e.index_u32(), i as u32)).collect();
         Self {
