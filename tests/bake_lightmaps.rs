@@ -82,7 +82,8 @@ impl Doc {
     fn accessor(&mut self, bytes: Vec<u8>, count: usize, ty: &str, component: u32) -> usize {
         self.views.push(json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() }));
         self.bin.extend(bytes);
-        let mut a = json!({ "bufferView": self.views.len() - 1, "componentType": component, "count": count, "type": ty });
+        let mut a =
+            json!({ "bufferView": self.views.len() - 1, "componentType": component, "count": count, "type": ty });
         if ty == "VEC3" {
             let p: Vec<f32> = self.bin[self.bin.len() - count * 12..]
                 .chunks(4)
@@ -162,7 +163,12 @@ impl Doc {
 }
 
 /// Bakes `doc` (written into `dir`) with `opts`; `extra` may spawn more lights into the world.
-fn bake(dir: &TempDir, doc: &Doc, opts: &LightmapOptions, extra: impl FnOnce(&mut bevy_ecs::world::World)) -> BakeReport {
+fn bake(
+    dir: &TempDir,
+    doc: &Doc,
+    opts: &LightmapOptions,
+    extra: impl FnOnce(&mut bevy_ecs::world::World),
+) -> BakeReport {
     let path = dir.join("scene.gltf");
     doc.write(&path);
     let mut loaded = RenderJob { scene: Some(path), seed: 7, ..RenderJob::default() }.load().unwrap();
@@ -194,7 +200,9 @@ fn check_texels(map: &Lightmap, expected: impl Fn(usize) -> Option<f64>, floor: 
     assert!(n > 0, "{what}: no texel checked");
     let (mean_err, sigma) = (err_sum / n as f64, var_sum.sqrt() / n as f64);
     let (z, worst) = worst.unwrap_or_default();
-    eprintln!("{what}: {n} texels, mean error {mean_err:.3e} (sigma of the mean {sigma:.3e}), {within3} within 3 sigma, worst {worst} at {z:.2} sigma");
+    eprintln!(
+        "{what}: {n} texels, mean error {mean_err:.3e} (sigma of the mean {sigma:.3e}), {within3} within 3 sigma, worst {worst} at {z:.2} sigma"
+    );
     // f32 sums of many samples round at a few parts in 10^7.
     let rounding = 1e-5 * e_sum / n as f64;
     assert!(mean_err.abs() <= 3.0 * sigma + rounding, "{what}: mean error {mean_err} vs sigma {sigma}");
@@ -254,7 +262,8 @@ fn a_spot_light_gives_e_over_pi_inside_and_nothing_outside_its_cone() {
     let dir = TempDir::new("bake", "spot");
     let mut doc = quad_doc();
     let (height, intensity, inner, outer) = (1.2f64, 20.0, 0.3f64, 0.6f64);
-    let spot = json!({ "type": "spot", "intensity": intensity, "spot": { "innerConeAngle": inner, "outerConeAngle": outer } });
+    let spot =
+        json!({ "type": "spot", "intensity": intensity, "spot": { "innerConeAngle": inner, "outerConeAngle": outer } });
     // Aimed down: -Z turned onto -Y (a quarter turn about X).
     let half = std::f32::consts::FRAC_1_SQRT_2;
     doc.light(spot, Vec3::new(0.0, height as f32, 0.0), [-half, 0.0, 0.0, half]);
@@ -353,7 +362,11 @@ fn no_light_passes_under_a_wall() {
     doc.light(json!({ "type": "point", "intensity": 50.0 }), Vec3::new(-1.0, 1.0, 0.0), [0.0, 0.0, 0.0, 1.0]);
     let report = bake(&dir, &doc, &LightmapOptions { size: 16, spp: 32, ..LightmapOptions::default() }, |_| {});
     assert_eq!(report.lightmaps.len(), 1);
-    assert!(report.skipped.iter().any(|s| s.contains("mesh wall") && s.contains("no TEXCOORD_1")), "{:?}", report.skipped);
+    assert!(
+        report.skipped.iter().any(|s| s.contains("mesh wall") && s.contains("no TEXCOORD_1")),
+        "{:?}",
+        report.skipped
+    );
     let map = &report.lightmaps[0];
     assert!(map.leaked_samples > 0);
     let column_x = |i: usize| -2.0 + 0.25 * ((i % 16) as f64 + 0.5);
@@ -435,12 +448,18 @@ fn ktx2_files_read_back_bit_for_bit() {
                     Format::E5B9G9R9 => ::ktx2::Format::E5B9G9R9_UFLOAT_PACK32,
                 };
                 assert_eq!(header.format, Some(expected_format), "{what}");
-                assert_eq!((header.type_size, header.pixel_width, header.pixel_height, header.pixel_depth), (4, width, height, depth));
+                assert_eq!(
+                    (header.type_size, header.pixel_width, header.pixel_height, header.pixel_depth),
+                    (4, width, height, depth)
+                );
                 assert_eq!((header.layer_count, header.face_count, header.level_count), (0, 1, 1), "{what}");
                 let zstd = supercompression != Supercompression::None;
                 let scheme = zstd.then_some(::ktx2::SupercompressionScheme::Zstandard);
                 assert_eq!(header.supercompression_scheme, scheme, "{what}");
-                assert_eq!(reader.writer().map(|w| w.trim_end_matches('\0')), Some(concat!("kelvin ", env!("CARGO_PKG_VERSION"))));
+                assert_eq!(
+                    reader.writer().map(|w| w.trim_end_matches('\0')),
+                    Some(concat!("kelvin ", env!("CARGO_PKG_VERSION")))
+                );
                 // The descriptor is the one the ktx2 crate derives from the format on its own.
                 let (expected_dfd, _) = ::ktx2::dfd::Basic::from_format(expected_format).unwrap();
                 assert_eq!(reader.basic_dfd(), Some(&expected_dfd), "{what}");
@@ -470,7 +489,9 @@ fn ktx2_files_read_back_bit_for_bit() {
         }
     }
     let bad = Texture { format: Format::E5B9G9R9, width: 2, height: 2, depth: 0, texels: &[Vec3::ONE; 3] };
-    assert!(ktx2::encode(&bad, Supercompression::None).unwrap_err().to_string().contains("3 texels given for a 2 x 2 x 0"));
+    assert!(
+        ktx2::encode(&bad, Supercompression::None).unwrap_err().to_string().contains("3 texels given for a 2 x 2 x 0")
+    );
 }
 
 /// The program bakes Bevy's CornellBox: one EXR and one KTX2 per mesh (their texels the same
@@ -480,7 +501,8 @@ fn cornell_box_bakes_end_to_end_through_the_program() {
     let dir = TempDir::new("bake", "cornell");
     let out = dir.join("maps");
     let scene = test_data("gltf/bevy/CornellBox.glb");
-    let args = ["bake", "lightmaps", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--size", "32", "--spp", "8"];
+    let args =
+        ["bake", "lightmaps", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--size", "32", "--spp", "8"];
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_kelvin")).args(args).output().unwrap();
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let index: Value = serde_json::from_slice(&std::fs::read(out.join("lightmaps.json")).unwrap()).unwrap();
@@ -490,7 +512,10 @@ fn cornell_box_bakes_end_to_end_through_the_program() {
     assert_eq!(meshes, ["Light", "cornell_box", "large_box", "small_box"]);
     for (name, map) in maps {
         assert_eq!(map["uv_rect"], json!([0.0, 0.0, 1.0, 1.0]));
-        assert!(map["lightmap_exposure"].as_f64().unwrap() > 0.0 && map["mean_luminance"].as_f64().unwrap() > 0.0, "{name}");
+        assert!(
+            map["lightmap_exposure"].as_f64().unwrap() > 0.0 && map["mean_luminance"].as_f64().unwrap() > 0.0,
+            "{name}"
+        );
         let (w, h, exr) = kelvin::render::film_io::read_exr(&out.join(map["exr"].as_str().unwrap())).unwrap();
         assert_eq!((w, h), (32, 32));
         let bytes = std::fs::read(out.join(map["image"].as_str().unwrap())).unwrap();

@@ -58,9 +58,9 @@ impl Format {
         match self {
             // Per channel a 9-bit mantissa with explicit 1 (1.0 = mantissa 256 with exponent 16:
             // 0x2100) and the shared exponent, bias 15, no infinity or NaN encodings.
-            Self::E5B9G9R9 => (0..3u8)
-                .flat_map(|c| [(c, 9 * c as u16, 9, 0, 0x2100), (c | EXPONENT, 27, 5, 15, 31)])
-                .collect(),
+            Self::E5B9G9R9 => {
+                (0..3u8).flat_map(|c| [(c, 9 * c as u16, 9, 0, 0x2100), (c | EXPONENT, 27, 5, 15, 31)]).collect()
+            }
             // Unsigned floats in [0.0, 1.0] terms: sampleLower 0.0f, sampleUpper 1.0f.
             Self::B10G11R11 => {
                 let one = 1.0f32.to_bits();

@@ -77,14 +77,7 @@ pub struct LightmapOptions {
 
 impl Default for LightmapOptions {
     fn default() -> Self {
-        Self {
-            size: 256,
-            spp: 128,
-            depth: PathDepth::DEFAULT,
-            light: BakedLight::All,
-            margin: 4,
-            leak_distance: None,
-        }
+        Self { size: 256, spp: 128, depth: PathDepth::DEFAULT, light: BakedLight::All, margin: 4, leak_distance: None }
     }
 }
 
@@ -198,13 +191,19 @@ pub fn bake_lightmaps(
         return Err(BakeError::Invalid("lightmaps are baked in RGB; the job's colour mode is spectral".into()));
     }
     let (targets, mut report) = targets::gather(&loaded.world, &loaded.primitives)?;
-    let coverages: Vec<texels::Coverage> = targets.iter().map(|t| texels::Coverage::of(&t.surfaces, opts.size)).collect();
+    let coverages: Vec<texels::Coverage> =
+        targets.iter().map(|t| texels::Coverage::of(&t.surfaces, opts.size)).collect();
     for (t, c) in targets.iter().zip(&coverages) {
         if c.outside > 0 {
-            report.warnings.push(format!("{}: {} triangle(s) reach outside uv1 [0, 1]; that part is not baked", t.name, c.outside));
+            report.warnings.push(format!(
+                "{}: {} triangle(s) reach outside uv1 [0, 1]; that part is not baked",
+                t.name, c.outside
+            ));
         }
         if c.degenerate > 0 {
-            report.warnings.push(format!("{}: {} triangle(s) of zero area in uv1 or in the world skipped", t.name, c.degenerate));
+            report
+                .warnings
+                .push(format!("{}: {} triangle(s) of zero area in uv1 or in the world skipped", t.name, c.degenerate));
         }
     }
     // Texel ordinals over all lightmaps key the random streams: lightmap i's are first[i]..first[i + 1].

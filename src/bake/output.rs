@@ -26,7 +26,8 @@ pub fn write_lightmaps(dir: &Path, report: &BakeReport, opts: &LightmapOptions) 
         let side = map.size as usize;
         let (exr, ktx2) = (dir.join(format!("{}.exr", map.name)), dir.join(format!("{}.ktx2", map.name)));
         write_exr(&exr, side, side, &map.texels)?;
-        let texture = Texture { format: Format::B10G11R11, width: map.size, height: map.size, depth: 0, texels: &map.texels };
+        let texture =
+            Texture { format: Format::B10G11R11, width: map.size, height: map.size, depth: 0, texels: &map.texels };
         let bytes = ktx2::encode(&texture, Supercompression::Zstd(ZSTD_LEVEL))?;
         write_file(&ktx2, &ktx2.display().to_string(), &bytes)?;
         let count = |s: TexelState| map.state.iter().filter(|t| **t == s).count();

@@ -43,7 +43,10 @@ pub(super) fn gather(world: &World, primitives: &[SpawnedPrimitive]) -> Result<(
         for p in group {
             let (Some(uvs1), Some(mesh)) = (&p.uvs1, world.get::<Mesh>(p.entity)) else { continue };
             if uvs1.len() != mesh.positions().len() {
-                report.warnings.push(format!("mesh {label} primitive {}: TEXCOORD_1 count differs from the mesh's vertices; not baked", p.primitive));
+                report.warnings.push(format!(
+                    "mesh {label} primitive {}: TEXCOORD_1 count differs from the mesh's vertices; not baked",
+                    p.primitive
+                ));
                 continue;
             }
             surfaces.push(Surface { mesh: mesh.clone(), uvs1: uvs1.clone(), entity_index: p.entity.index_u32() });
@@ -54,7 +57,10 @@ pub(super) fn gather(world: &World, primitives: &[SpawnedPrimitive]) -> Result<(
         }
         if surfaces.len() < group.len() {
             let missing = group.len() - surfaces.len();
-            report.warnings.push(format!("mesh {label}: {missing} of its {} primitives have no TEXCOORD_1; they are not baked", group.len()));
+            report.warnings.push(format!(
+                "mesh {label}: {missing} of its {} primitives have no TEXCOORD_1; they are not baked",
+                group.len()
+            ));
         }
         let mut name = file_safe(&label);
         if placements[&p0.mesh] > 1 {

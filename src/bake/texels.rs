@@ -142,10 +142,8 @@ impl Barycentric {
     fn new(uv: [DVec2; 3]) -> Option<Self> {
         let (e1, e2) = (uv[1] - uv[0], uv[2] - uv[0]);
         let det = e1.perp_dot(e2);
-        (det.abs() > MIN_PIECE_AREA).then(|| Self {
-            origin: uv[0],
-            inverse: [DVec2::new(e2.y, -e2.x) / det, DVec2::new(-e1.y, e1.x) / det],
-        })
+        (det.abs() > MIN_PIECE_AREA)
+            .then(|| Self { origin: uv[0], inverse: [DVec2::new(e2.y, -e2.x) / det, DVec2::new(-e1.y, e1.x) / det] })
     }
 
     fn at(&self, p: DVec2) -> Vec2 {

@@ -324,7 +324,8 @@ fn render_on_pool(
                     job.shade(world, schedule, (&mut film, first, opts.spp as usize), &mut contributions, &mut stats);
                 }
                 Integrator::Path(depth) => {
-                    let job = PathJob { depth, materials: &materials, seed, strategy: opts.strategy, start: Start::Camera };
+                    let job =
+                        PathJob { depth, materials: &materials, seed, strategy: opts.strategy, start: Start::Camera };
                     paths.trace(world, schedule, &mut columns, &job, &mut contributions, &mut stats);
                     let film_start = std::time::Instant::now();
                     film.par_add_samples(first, opts.spp as usize, &contributions);

@@ -104,7 +104,12 @@ impl SurfaceTracer {
     /// Traces one path from each of `points` (at most [`Self::BATCH`] of them, or the light
     /// system takes them in larger batches): each path's radiance (linear sRGB, nit) and whether
     /// its first ray leaked, indexed like `points`.
-    pub(crate) fn trace(&mut self, world: &mut World, schedule: &mut Schedule, points: &[StartPoint]) -> (&[Vec3], &[bool]) {
+    pub(crate) fn trace(
+        &mut self,
+        world: &mut World,
+        schedule: &mut Schedule,
+        points: &[StartPoint],
+    ) -> (&[Vec3], &[bool]) {
         let start = std::time::Instant::now();
         self.write_batch(&mut world.resource_mut::<ShadingBatch>(), points);
         self.stats.passes.camera += start.elapsed().as_secs_f64();
