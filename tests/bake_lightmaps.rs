@@ -251,7 +251,7 @@ fn a_point_light_gives_e_over_pi_at_every_texel() {
     // E = I cos(theta) / d^2 = I h / d^3; the texel holds E / pi.
     let e = |x: f64, z: f64| {
         let d = Vec3::new(light.x - x as f32, light.y, light.z - z as f32).as_dvec3();
-        intensity as f64 * d.y / d.length().powi(3) / std::f64::consts::PI
+        intensity * d.y / d.length().powi(3) / std::f64::consts::PI
     };
     assert!(map.state.iter().all(|s| *s == TexelState::Baked));
     check_texels(map, |i| Some(texel_mean(i, SIZE, e)), 1e-3, "point light");

@@ -200,6 +200,11 @@ pub fn bake_lightmaps(
                 t.name, c.outside
             ));
         }
+        if c.texels.is_empty() {
+            report
+                .warnings
+                .push(format!("{}: no texel covered (uv1 outside [0, 1] or of zero area); left empty", t.name));
+        }
         if c.degenerate > 0 {
             report
                 .warnings
