@@ -78,6 +78,15 @@ const BAD_OPTIONS: &[(&[&str], &str, &str, &str)] = &[
     (&["bake", "lightmaps"], "--light", "direct", "possible values"),
     (&["bake", "lightmaps"], "--seed", "-3", "invalid digit"),
     (&["bake", "lightmaps"], "--threads", "0", "1..=1024"),
+    (&["bake", "volume"], "--resolution", "0,2,2", "each in 1..=256"),
+    (&["bake", "volume"], "--resolution", "2,2", "three whole numbers"),
+    (&["bake", "volume"], "--bounds", "1,1,1,0,0,0", "must be below"),
+    (&["bake", "volume"], "--bounds", "0,0,0,1,nan,1", "six finite numbers"),
+    (&["bake", "volume"], "--spp", "0", "1..=1048576"),
+    (&["bake", "volume"], "--max-depth", "2000", "0..=1024"),
+    (&["bake", "volume"], "--light", "direct", "possible values"),
+    (&["bake", "volume"], "--seed", "-3", "invalid digit"),
+    (&["bake", "volume"], "--threads", "0", "1..=1024"),
 ];
 
 /// Options whose value is a path the command writes or a folder it reads at the end of its work,
@@ -90,6 +99,7 @@ const PATH_OPTIONS: &[(&[&str], &str, &str)] = &[
     (&["bench", "lights"], "--out", "an output folder, created"),
     (&["bench", "render"], "--data", "read when each scene loads"),
     (&["bake", "lightmaps"], "--output", "an output folder, created after the bake"),
+    (&["bake", "volume"], "--output", "the .ktx2 written after the bake; its extension is checked first"),
 ];
 
 /// Arguments that make a run of `subcommand` cheap and valid, apart from the option under test.
@@ -125,6 +135,7 @@ fn every_option_with_a_bad_value_is_refused_naming_the_option_the_value_and_the_
         &["bench", "lights"],
         &["bench", "render"],
         &["bake", "lightmaps"],
+        &["bake", "volume"],
     ];
     for &sub in subcommands {
         let name = |o: &str| format!("{} {o}", sub.join(" "));

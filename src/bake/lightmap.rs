@@ -30,6 +30,30 @@ impl Accumulator {
     }
 }
 
+impl Accumulator {
+    /// The mean of the valid samples and its standard error (zero from one sample); None
+    /// without a valid sample.
+    pub(super) fn mean(&self) -> Option<(Vec3, Vec3)> {
+        if self.valid == 0 {
+            return None;
+        }
+        let count = self.valid as f64;
+        let mean = self.sum / count;
+        let mut std_error = DVec3::ZERO;
+        if self.valid > 1 {
+            // The unbiased sample variance over the count: the variance of the mean.
+            let variance = ((self.sum2 - mean * mean * count) / (count - 1.0)).max(DVec3::ZERO);
+            std_error = (variance / count).map(f64::sqrt);
+        }
+        Some((mean.as_vec3(), std_error.as_vec3()))
+    }
+
+    /// Valid samples, and samples dropped as leaks.
+    pub(super) fn counts(&self) -> (u32, u32) {
+        (self.valid, self.leaked)
+    }
+}
+
 /// Luminance (nit) of a linear sRGB value.
 pub(super) fn luminance(c: Vec3) -> f32 {
     c.dot(LUMINANCE_WEIGHTS)
@@ -42,17 +66,9 @@ pub(super) fn finish(target: Target, coverage: &Coverage, sums: &[Accumulator], 
     let mut leaked_samples = 0;
     for (&texel, a) in coverage.texels.iter().zip(sums) {
         leaked_samples += a.leaked as u64;
-        if a.valid == 0 {
-            continue;
-        }
-        let (i, count) = (texel as usize, a.valid as f64);
-        let mean = a.sum / count;
-        texels[i] = mean.as_vec3();
-        state[i] = TexelState::Baked;
-        if a.valid > 1 {
-            // The unbiased sample variance over the count: the variance of the mean.
-            let variance = ((a.sum2 - mean * mean * count) / (count - 1.0)).max(DVec3::ZERO);
-            std_error[i] = (variance / count).map(f64::sqrt).as_vec3();
+        if let Some((mean, error)) = a.mean() {
+            let i = texel as usize;
+            (texels[i], std_error[i], state[i]) = (mean, error, TexelState::Baked);
         }
     }
     dilate(&mut texels, &mut state, opts.size as usize, opts.margin);

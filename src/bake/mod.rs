@@ -18,19 +18,24 @@
 //!
 //! Output (`output.rs`): per lightmap an EXR (linear f32) and a zstd-supercompressed KTX2
 //! (`B10G11R11_UFLOAT`, as Bevy's own lightmaps; [`ktx2`]), and `lightmaps.json`.
+//!
+//! [`bake_volume`] bakes an irradiance volume (ambient cubes for Bevy's `IrradianceVolume`) the
+//! same way, from voxel centres instead of texels ([`volume`]).
 
 pub mod ktx2;
 mod lightmap;
 mod output;
 mod targets;
 mod texels;
+pub mod volume;
 
 use std::ops::RangeInclusive;
 
 use glam::Vec3;
 use rayon::prelude::*;
 
-pub use output::{LIGHTMAPS_JSON, write_lightmaps};
+pub use output::{LIGHTMAPS_JSON, write_lightmaps, write_volume};
+pub use volume::{IrradianceVolume, VolumeOptions, bake_volume};
 
 use crate::render::job::{self, LoadedJob};
 use crate::render::path::PathDepth;

@@ -132,12 +132,15 @@ impl Doc {
             "scene": 0,
             "scenes": [{ "nodes": (0..self.nodes.len()).collect::<Vec<_>>() }],
             "nodes": self.nodes,
-            "meshes": self.meshes,
-            "materials": self.materials,
-            "buffers": [{ "uri": uri, "byteLength": self.bin.len() }],
-            "bufferViews": self.views,
-            "accessors": self.accessors,
         });
+        // glTF allows no empty arrays: a scene of lights alone has no meshes, buffers or accessors.
+        if !self.meshes.is_empty() {
+            doc["meshes"] = json!(self.meshes);
+            doc["materials"] = json!(self.materials);
+            doc["buffers"] = json!([{ "uri": uri, "byteLength": self.bin.len() }]);
+            doc["bufferViews"] = json!(self.views);
+            doc["accessors"] = json!(self.accessors);
+        }
         if !self.lights.is_empty() {
             doc["extensions"] = json!({ "KHR_lights_punctual": { "lights": self.lights } });
         }
