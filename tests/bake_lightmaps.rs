@@ -458,3 +458,31 @@ fn written_files_hold_the_baked_texels() {
     let (_, _, exr) = kelvin::render::film_io::read_exr(&written[0]).unwrap();
     assert_eq!(exr, report.lightmaps[0].texels);
 }
+
+/// Under a time budget the bake takes whole passes of `spp`, each continuing every texel's
+/// streams: P passes of 4 paths hold the samples of one pass of 4 P (the same texels but for the
+/// order of the sums). A budget of 0 is one pass.
+#[test]
+fn a_time_budget_takes_whole_passes_of_new_samples() {
+    let dir = TempDir::new("bake", "time");
+    let mut doc = quad_doc();
+    doc.light(json!({ "type": "point", "intensity": 10.0 }), Vec3::new(0.3, 1.0, -0.2), [0.0, 0.0, 0.0, 1.0]);
+    let opts = |spp, time| LightmapOptions { size: 8, spp, time, ..LightmapOptions::default() };
+    let once = bake(&dir, &doc, &opts(4, Some(0.0)), |_| {});
+    assert_eq!(once.stats.spp, 4);
+    let timed = bake(&dir, &doc, &opts(4, Some(0.2)), |_| {});
+    let spp = timed.stats.spp;
+    assert!(spp > 4 && spp % 4 == 0 && timed.stats.seconds >= 0.2, "{spp} spp in {} s", timed.stats.seconds);
+    let whole = bake(&dir, &doc, &opts(spp, None), |_| {});
+    for (a, b) in timed.lightmaps[0].texels.iter().zip(&whole.lightmaps[0].texels) {
+        assert!((*a - *b).abs().max_element() <= 1e-6 * b.max_element(), "{a} vs {b}");
+    }
+    assert_ne!(timed.lightmaps[0].texels, once.lightmaps[0].texels);
+    let err = bake_lightmaps(
+        &mut RenderJob { scene: Some(dir.join("scene.gltf")), ..RenderJob::default() }.load().unwrap(),
+        &opts(4, Some(-1.0)),
+        |_| {},
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("time = -1 is outside [0, 10000000)"), "{err}");
+}

@@ -141,7 +141,7 @@ fn voxels_inside_geometry_are_filled_from_their_neighbours() {
 fn bad_input_gives_clear_errors() {
     let dir = TempDir::new("volume", "bad");
     let cases = [
-        (options(UVec3::new(0, 1, 1), (Vec3::ZERO, Vec3::ONE)), "resolution x = 0 is outside 1..=256"),
+        (options(UVec3::new(0, 1, 1), (Vec3::ZERO, Vec3::ONE)), "resolution x = 0 is outside 1..=128"),
         (options(UVec3::ONE, (Vec3::ONE, Vec3::ZERO)), "need finite corners with min < max"),
         (VolumeOptions { spp: 0, ..VolumeOptions::default() }, "spp = 0 is outside 1..=1048576"),
         (VolumeOptions::default(), "nothing to bake: the scene has no geometry to bound the volume; give bounds"),

@@ -74,6 +74,9 @@ pub struct LightmapOptions {
     pub light: BakedLight,
     /// How far (texels) dilation fills from valid texels ([`MARGIN`]). Defaults to 4.
     pub margin: u32,
+    /// Passes of `spp` paths per texel until this many seconds have passed (at least one pass;
+    /// [`job::SECONDS`]); None: one pass.
+    pub time: Option<f64>,
     /// A sample whose first ray meets a back face nearer than this (m) is dropped as a leak;
     /// None: any back face in the scene (the diameter of its bounding sphere). A shorter
     /// distance keeps samples that see single-sided geometry from behind, farther away.
@@ -82,7 +85,15 @@ pub struct LightmapOptions {
 
 impl Default for LightmapOptions {
     fn default() -> Self {
-        Self { size: 256, spp: 128, depth: PathDepth::DEFAULT, light: BakedLight::All, margin: 4, leak_distance: None }
+        Self {
+            size: 256,
+            spp: 128,
+            depth: PathDepth::DEFAULT,
+            light: BakedLight::All,
+            margin: 4,
+            time: None,
+            leak_distance: None,
+        }
     }
 }
 
@@ -138,7 +149,8 @@ pub struct BakeReport {
     /// What else was dropped (uv1 outside [0, 1], degenerate triangles) and the light system's
     /// warnings.
     pub warnings: Vec<String>,
-    /// Time, paths (`camera_samples`), shadow and BSDF rays, the light system's run report.
+    /// Time, paths per texel (`spp`, more than asked under a time budget) and in all
+    /// (`camera_samples`), shadow and BSDF rays, the light system's run report.
     pub stats: RenderStats,
 }
 
@@ -167,6 +179,16 @@ fn check_in<T: PartialOrd + std::fmt::Display>(name: &str, v: T, range: RangeInc
     }
 }
 
+/// A time budget in [`job::SECONDS`], or none.
+fn check_time(time: Option<f64>) -> Result<(), BakeError> {
+    match time {
+        Some(t) if !(t.is_finite() && job::SECONDS.contains(&t)) => {
+            Err(BakeError::Invalid(format!("time = {t} is outside [0, {})", job::SECONDS.end)))
+        }
+        _ => Ok(()),
+    }
+}
+
 impl LightmapOptions {
     /// Checks every option's range.
     pub fn check(&self) -> Result<(), BakeError> {
@@ -175,6 +197,7 @@ impl LightmapOptions {
         check_in("max_depth", self.depth.max_depth, job::DEPTH)?;
         check_in("roulette_depth", self.depth.roulette_depth, job::DEPTH)?;
         check_in("margin", self.margin, MARGIN)?;
+        check_time(self.time)?;
         match self.leak_distance {
             Some(d) if !(d > 0.0 && d.is_finite()) => {
                 Err(BakeError::Invalid(format!("leak_distance = {d} must be a positive finite distance")))
@@ -231,19 +254,18 @@ pub fn bake_lightmaps(
         let direct = opts.light == BakedLight::All;
         let mut tracer = SurfaceTracer::new(world, schedule, opts.depth, direct, opts.leak_distance);
         let seed = tracer.seed();
-        let place = |g: u64| {
-            let (t, s) = (g / opts.spp as u64, (g % opts.spp as u64) as u32);
+        let place = |t: u64, s: u32| {
             let map = first.partition_point(|&f| f <= t) - 1;
             let k = (t - first[map]) as usize;
             let mut rng = SampleStream::new(seed, t as u32, s).at_dimension(0);
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
             coverages[map].point(&targets[map].surfaces, k, u, t as u32, s)
         };
-        let accumulators = trace_all(world, schedule, &mut tracer, texels * opts.spp as u64, place, opts.spp, progress);
-        (accumulators, tracer.stats)
+        let passes = Passes { cells: texels, spp: opts.spp, time: opts.time };
+        let (accumulators, spp) = trace_all(world, schedule, &mut tracer, passes, place, progress);
+        (accumulators, RenderStats { spp, ..tracer.stats })
     });
     report.stats = stats;
-    report.stats.spp = opts.spp;
     report.warnings.extend(report.stats.report.warnings.iter().cloned());
     for (i, (target, coverage)) in targets.into_iter().zip(&coverages).enumerate() {
         let range = first[i] as usize..first[i + 1] as usize;
@@ -252,31 +274,52 @@ pub fn bake_lightmaps(
     Ok(report)
 }
 
-/// Traces `total` samples, sample g placed by `place(g)` (texel g / spp), in batches, and sums
-/// each texel's valid samples.
+/// The sample counts of a bake: `spp` samples of each of `cells` cells per pass, one pass, or
+/// passes until `time` (seconds) has passed.
+#[derive(Clone, Copy)]
+struct Passes {
+    cells: u64,
+    spp: u32,
+    time: Option<f64>,
+}
+
+/// Traces the samples of `passes` in batches, sample `s` of cell `c` placed by `place(c, s)`, and
+/// sums each cell's valid samples. Returns the sums and the samples per cell taken.
 fn trace_all(
     world: &mut bevy_ecs::world::World,
     schedule: &mut bevy_ecs::schedule::Schedule,
     tracer: &mut SurfaceTracer,
-    total: u64,
-    place: impl Fn(u64) -> StartPoint + Sync,
-    spp: u32,
+    passes: Passes,
+    place: impl Fn(u64, u32) -> StartPoint + Sync,
     mut progress: impl FnMut(f32),
-) -> Vec<Accumulator> {
+) -> (Vec<Accumulator>, u32) {
     let start = std::time::Instant::now();
-    let mut accumulators = vec![Accumulator::default(); (total / spp as u64) as usize];
+    let Passes { cells, spp, time } = passes;
+    let mut accumulators = vec![Accumulator::default(); cells as usize];
     let mut points = Vec::with_capacity(SurfaceTracer::BATCH);
-    let mut first = 0u64;
-    while first < total {
-        let end = (first + SurfaceTracer::BATCH as u64).min(total);
-        (0..(end - first) as usize).into_par_iter().map(|i| place(first + i as u64)).collect_into_vec(&mut points);
-        let (rgb, leaked) = tracer.trace(world, schedule, &points);
-        for (g, (rgb, leaked)) in (first..end).zip(rgb.iter().zip(leaked)) {
-            accumulators[(g / spp as u64) as usize].add(rgb.as_dvec3(), *leaked);
+    let total = cells * spp as u64;
+    for pass in 0u32.. {
+        let mut first = 0u64;
+        while first < total {
+            let end = (first + SurfaceTracer::BATCH as u64).min(total);
+            // Pass k takes samples k spp.. of each cell's streams.
+            let sample = |g: u64| (g / spp as u64, pass * spp + (g % spp as u64) as u32);
+            let batch = (0..(end - first) as usize).into_par_iter().map(|i| sample(first + i as u64));
+            batch.map(|(c, s)| place(c, s)).collect_into_vec(&mut points);
+            let (rgb, leaked) = tracer.trace(world, schedule, &points);
+            for (g, (rgb, leaked)) in (first..end).zip(rgb.iter().zip(leaked)) {
+                accumulators[(g / spp as u64) as usize].add(rgb.as_dvec3(), *leaked);
+            }
+            first = end;
+            let elapsed = start.elapsed().as_secs_f64();
+            progress(time.map_or(first as f32 / total as f32, |t| (elapsed / t.max(1e-9)).min(1.0) as f32));
         }
-        first = end;
-        progress(first as f32 / total as f32);
+        // Sample indices are u32: a pass that would run past them is not started.
+        let room = pass.checked_add(2).and_then(|p| p.checked_mul(spp)).is_some();
+        if time.is_none_or(|t| start.elapsed().as_secs_f64() >= t) || !room {
+            tracer.stats.seconds = start.elapsed().as_secs_f64() + tracer.stats.update_seconds;
+            return (accumulators, (pass + 1) * spp);
+        }
     }
-    tracer.stats.seconds = start.elapsed().as_secs_f64() + tracer.stats.update_seconds;
-    accumulators
+    unreachable!("the pass loop returns")
 }

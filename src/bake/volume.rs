@@ -20,7 +20,7 @@ use std::ops::RangeInclusive;
 use glam::{IVec3, UVec3, Vec3};
 
 use super::lightmap::Accumulator;
-use super::{BakeError, BakedLight, TexelState, trace_all};
+use super::{BakeError, BakedLight, Passes, TexelState, check_time, trace_all};
 use crate::geometry::{GeometryId, SceneBvh, SurfacePoint};
 use crate::render::job::{self, LoadedJob};
 use crate::render::path::PathDepth;
@@ -28,7 +28,7 @@ use crate::render::renderer::RenderStats;
 use crate::render::surface_paths::{StartPoint, SurfaceTracer};
 
 /// Accepted voxels per axis.
-pub const RESOLUTION: RangeInclusive<u32> = 1..=256;
+pub const RESOLUTION: RangeInclusive<u32> = 1..=128;
 
 /// The six sides of a voxel, in the order of [`IrradianceVolume::sides`]: +X, -X, +Y, -Y, +Z, -Z.
 pub const SIDES: [Vec3; 6] = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
@@ -46,11 +46,21 @@ pub struct VolumeOptions {
     pub light: BakedLight,
     /// The box the grid fills (min, max corners, m); None: the scene's geometry.
     pub bounds: Option<(Vec3, Vec3)>,
+    /// Passes of `spp` paths per side until this many seconds have passed (at least one pass);
+    /// None: one pass.
+    pub time: Option<f64>,
 }
 
 impl Default for VolumeOptions {
     fn default() -> Self {
-        Self { resolution: UVec3::splat(8), spp: 256, depth: PathDepth::DEFAULT, light: BakedLight::All, bounds: None }
+        Self {
+            resolution: UVec3::splat(8),
+            spp: 256,
+            depth: PathDepth::DEFAULT,
+            light: BakedLight::All,
+            bounds: None,
+            time: None,
+        }
     }
 }
 
@@ -117,12 +127,13 @@ pub fn bake_volume(
 ) -> Result<IrradianceVolume, BakeError> {
     for (axis, r) in ["x", "y", "z"].iter().zip(opts.resolution.to_array()) {
         if !RESOLUTION.contains(&r) {
-            return Err(BakeError::Invalid(format!("resolution {axis} = {r} is outside 1..=256")));
+            return Err(BakeError::Invalid(format!("resolution {axis} = {r} is outside 1..=128")));
         }
     }
     if !job::SPP.contains(&opts.spp) {
         return Err(BakeError::Invalid(format!("spp = {} is outside 1..=1048576", opts.spp)));
     }
+    check_time(opts.time)?;
     if let Some((lo, hi)) = opts.bounds
         && !(lo.is_finite() && hi.is_finite() && lo.cmplt(hi).all())
     {
@@ -147,8 +158,8 @@ pub fn bake_volume(
             stats: RenderStats::default(),
         };
         let r = opts.resolution;
-        let place = |g: u64| {
-            let (cell, sample) = ((g / opts.spp as u64) as u32, (g % opts.spp as u64) as u32);
+        let place = |cell: u64, sample: u32| {
+            let cell = cell as u32;
             let v = cell / 6;
             let voxel = UVec3::new(v % r.x, v / r.x % r.y, v / (r.x * r.y));
             let p = volume.voxel_center(voxel);
@@ -157,9 +168,9 @@ pub fn bake_volume(
             let p_error = SurfacePoint::from_point(p, n).p_error;
             StartPoint { p, p_error, ng: n, ns: n, geometry: GeometryId::NONE, pixel: cell, sample }
         };
-        let sums = trace_all(world, schedule, &mut tracer, cells * opts.spp as u64, place, opts.spp, progress);
-        volume.stats = tracer.stats;
-        volume.stats.spp = opts.spp;
+        let passes = Passes { cells, spp: opts.spp, time: opts.time };
+        let (sums, spp) = trace_all(world, schedule, &mut tracer, passes, place, progress);
+        volume.stats = RenderStats { spp, ..tracer.stats };
         finish(&mut volume, &sums);
         Ok(volume)
     })

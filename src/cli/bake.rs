@@ -1,5 +1,5 @@
-//! `kelvin bake lightmaps SCENE -o DIR [--size N] [--spp N] [--max-depth N] [--light all|indirect]
-//! [--seed S] [--threads T]`: a lightmap per mesh with TEXCOORD_1; `kelvin bake volume SCENE -o
+//! `kelvin bake lightmaps SCENE -o DIR [--size N] [--spp N] [--time SECONDS] [--max-depth N]
+//! [--light all|indirect] [--seed S] [--threads T]`: a lightmap per mesh with TEXCOORD_1; `kelvin bake volume SCENE -o
 //! FILE.ktx2 --resolution RX,RY,RZ [--bounds X0,Y0,Z0,X1,Y1,Z1] [...]`: an irradiance volume
 //! (`kelvin::bake`).
 
@@ -46,9 +46,12 @@ pub struct VolumeArgs {
     /// The box the grid fills (default: the scene's geometry).
     #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", value_parser = values::bounds)]
     bounds: Option<(glam::Vec3, glam::Vec3)>,
-    /// Paths per voxel side.
+    /// Paths per voxel side (per pass, with --time).
     #[arg(long, default_value_t = 256, value_parser = values::whole(job::SPP))]
     spp: u32,
+    /// Bake passes of --spp paths per side until this many seconds have passed (at least one).
+    #[arg(long, value_name = "SECONDS", value_parser = values::seconds)]
+    time: Option<f64>,
     /// Surfaces after the voxel's a path may reach (1 = direct light only).
     #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth, value_parser = values::whole(job::DEPTH))]
     max_depth: u32,
@@ -73,9 +76,12 @@ pub struct LightmapArgs {
     /// Side of each lightmap, texels.
     #[arg(long, default_value_t = 256, value_parser = values::whole(bake::SIZE))]
     size: u32,
-    /// Paths per texel.
+    /// Paths per texel (per pass, with --time).
     #[arg(long, default_value_t = 128, value_parser = values::whole(job::SPP))]
     spp: u32,
+    /// Bake passes of --spp paths per texel until this many seconds have passed (at least one).
+    #[arg(long, value_name = "SECONDS", value_parser = values::seconds)]
+    time: Option<f64>,
     /// Surfaces after the texel's a path may reach (1 = direct light only).
     #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth, value_parser = values::whole(job::DEPTH))]
     max_depth: u32,
@@ -123,6 +129,7 @@ fn volume(args: VolumeArgs) -> Result<(), CliError> {
         depth: PathDepth { max_depth: args.max_depth, ..PathDepth::DEFAULT },
         light: args.light,
         bounds: args.bounds,
+        time: args.time,
     };
     let mut loaded = load(&args.scene, args.seed, args.threads)?;
     let bar = progress_bar();
@@ -139,7 +146,7 @@ fn volume(args: VolumeArgs) -> Result<(), CliError> {
         r.x,
         r.y,
         r.z,
-        args.spp,
+        volume.stats.spp,
         volume.stats.seconds,
         volume.inside,
         volume.center(),
@@ -157,6 +164,7 @@ fn lightmaps(args: LightmapArgs) -> Result<(), CliError> {
         spp: args.spp,
         depth: PathDepth { max_depth: args.max_depth, ..PathDepth::DEFAULT },
         light: args.light,
+        time: args.time,
         ..LightmapOptions::default()
     };
     let mut loaded = load(&args.scene, args.seed, args.threads)?;
@@ -177,7 +185,7 @@ fn lightmaps(args: LightmapArgs) -> Result<(), CliError> {
         report.lightmaps.len(),
         args.size,
         args.size,
-        args.spp,
+        stats.spp,
         stats.seconds,
         stats.camera_samples as f64 / stats.seconds.max(1e-9) / 1e6,
         stats.shadow_rays as f64 / stats.seconds.max(1e-9) / 1e6,

@@ -26,14 +26,14 @@ pub(super) fn point(s: &str) -> Result<glam::Vec3, String> {
     }
 }
 
-/// RX,RY,RZ voxels, each in 1..=256.
+/// RX,RY,RZ voxels, each in 1..=128.
 pub(super) fn resolution(s: &str) -> Result<glam::UVec3, String> {
     let v: Vec<u32> = s.split(',').filter_map(|c| c.trim().parse().ok()).collect();
     match v[..] {
         [x, y, z] if s.split(',').count() == 3 && v.iter().all(|r| kelvin::bake::volume::RESOLUTION.contains(r)) => {
             Ok(glam::UVec3::new(x, y, z))
         }
-        _ => Err(format!("'{s}': expected three whole numbers RX,RY,RZ, each in 1..=256")),
+        _ => Err(format!("'{s}': expected three whole numbers RX,RY,RZ, each in 1..=128")),
     }
 }
 
