@@ -4,6 +4,7 @@
 //! `src/` holds what things are (data and pure math); `systems/` holds what happens each update.
 #![warn(missing_docs)]
 
+pub mod bake;
 pub mod geometry;
 /// Lane kernels' plumbing (16 f32 per array, the run-time instruction-set choice): public only with the
 /// `internals` feature, for the crate's own lane benchmarks and tests.

@@ -72,6 +72,23 @@ const BAD_OPTIONS: &[(&[&str], &str, &str, &str)] = &[
     (&["bench", "render"], "--scenes", "no-such-scene", "no-such-scene"),
     (&["bench", "render"], "--repeat", "0", "1..=1000"),
     (&["bench", "render"], "--threads", "0", "1..=1024"),
+    (&["bake", "lightmaps"], "--size", "0", "1..=4096"),
+    (&["bake", "lightmaps"], "--spp", "0", "1..=1048576"),
+    (&["bake", "lightmaps"], "--max-depth", "2000", "0..=1024"),
+    (&["bake", "lightmaps"], "--light", "direct", "possible values"),
+    (&["bake", "lightmaps"], "--seed", "-3", "invalid digit"),
+    (&["bake", "lightmaps"], "--threads", "0", "1..=1024"),
+    (&["bake", "lightmaps"], "--time", "-1", "[0, 10000000)"),
+    (&["bake", "volume"], "--time", "nan", "[0, 10000000)"),
+    (&["bake", "volume"], "--resolution", "0,2,2", "each in 1..=128"),
+    (&["bake", "volume"], "--resolution", "2,2", "three whole numbers"),
+    (&["bake", "volume"], "--bounds", "1,1,1,0,0,0", "must be below"),
+    (&["bake", "volume"], "--bounds", "0,0,0,1,nan,1", "six finite numbers"),
+    (&["bake", "volume"], "--spp", "0", "1..=1048576"),
+    (&["bake", "volume"], "--max-depth", "2000", "0..=1024"),
+    (&["bake", "volume"], "--light", "direct", "possible values"),
+    (&["bake", "volume"], "--seed", "-3", "invalid digit"),
+    (&["bake", "volume"], "--threads", "0", "1..=1024"),
 ];
 
 /// Options whose value is a path the command writes or a folder it reads at the end of its work,
@@ -83,6 +100,8 @@ const PATH_OPTIONS: &[(&[&str], &str, &str)] = &[
     (&["report", "accuracy"], "--data", "read only for the env-map scene"),
     (&["bench", "lights"], "--out", "an output folder, created"),
     (&["bench", "render"], "--data", "read when each scene loads"),
+    (&["bake", "lightmaps"], "--output", "an output folder, created after the bake"),
+    (&["bake", "volume"], "--output", "the .ktx2 written after the bake; its extension is checked first"),
 ];
 
 /// Arguments that make a run of `subcommand` cheap and valid, apart from the option under test.
@@ -117,6 +136,8 @@ fn every_option_with_a_bad_value_is_refused_naming_the_option_the_value_and_the_
         &["report", "accuracy"],
         &["bench", "lights"],
         &["bench", "render"],
+        &["bake", "lightmaps"],
+        &["bake", "volume"],
     ];
     for &sub in subcommands {
         let name = |o: &str| format!("{} {o}", sub.join(" "));
@@ -169,6 +190,7 @@ fn bad_arguments_name_the_file_and_whether_reading_or_writing_failed() {
         (&["render", "no-such-scene.glb", "--size", "8x8", "-o", "never-written.png"], "no-such-scene.glb"),
         (&["render", "--size", "8x8", "--spp", "1", "-o", "/proc/no-such-dir/x.png"], "cannot write"),
         (&["report", "accuracy", "no-such-scene", "--out", "never-written"], "no-such-scene"),
+        (&["bake", "lightmaps", "no-such-scene.glb", "-o", "never-written"], "no-such-scene.glb: file not found"),
         // An installed crate has no tests/data: the benchmark says where the scenes are.
         (&["bench", "render", "--data", "no-such-data", "--scenes", "sponza"], "--data no-such-data: not a folder"),
     ];

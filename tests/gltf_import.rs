@@ -108,6 +108,14 @@ fn cornell_box_has_an_emitter_of_strength_100() {
     assert_eq!(emitters[0].emissive_strength, 100.0);
     assert_eq!(emitters[0].emissive, Vec3::splat(100.0));
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    // Bevy's lightmap example: every primitive carries lightmap uvs (TEXCOORD_1) inside [0, 1].
+    for p in scene.meshes.iter().flat_map(|m| &m.primitives) {
+        let uvs1 = p.uvs1.as_ref().expect("TEXCOORD_1");
+        assert_eq!(uvs1.len(), p.positions.len());
+        assert!(uvs1.iter().all(|uv| uv.cmpge(glam::Vec2::ZERO).all() && uv.cmple(glam::Vec2::ONE).all()));
+    }
+    let second_sets = scene.meshes.iter().flat_map(|m| &m.primitives).filter(|p| p.uvs1 != p.uvs).count();
+    assert!(second_sets >= 3, "a second set, not a copy of the first ({second_sets} differ)");
 }
 
 #[test]

@@ -1,4 +1,5 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
+mod bake;
 mod batch;
 mod bench;
 mod frames;
@@ -36,6 +37,8 @@ enum Command {
     Report(report::ReportArgs),
     /// Benchmarks: `bench lights` (many-lights table and plots), `bench render` (the render suite).
     Bench(bench::BenchArgs),
+    /// Baked light for game engines: `bake lightmaps` writes a lightmap per mesh with TEXCOORD_1.
+    Bake(bake::BakeArgs),
 }
 
 /// Errors the CLI reports: a message that names what failed.
@@ -51,5 +54,6 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Batch(args) => batch::run(args),
         Command::Report(args) => report::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Bake(args) => bake::run(args),
     }
 }

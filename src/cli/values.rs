@@ -26,6 +26,33 @@ pub(super) fn point(s: &str) -> Result<glam::Vec3, String> {
     }
 }
 
+/// RX,RY,RZ voxels, each in 1..=128.
+pub(super) fn resolution(s: &str) -> Result<glam::UVec3, String> {
+    let v: Vec<u32> = s.split(',').filter_map(|c| c.trim().parse().ok()).collect();
+    match v[..] {
+        [x, y, z] if s.split(',').count() == 3 && v.iter().all(|r| kelvin::bake::volume::RESOLUTION.contains(r)) => {
+            Ok(glam::UVec3::new(x, y, z))
+        }
+        _ => Err(format!("'{s}': expected three whole numbers RX,RY,RZ, each in 1..=128")),
+    }
+}
+
+/// X0,Y0,Z0,X1,Y1,Z1: the corners of a box, finite, each of the first three below its partner.
+pub(super) fn bounds(s: &str) -> Result<(glam::Vec3, glam::Vec3), String> {
+    let v: Vec<f32> = s.split(',').filter_map(|c| c.trim().parse().ok()).collect();
+    match v[..] {
+        [x0, y0, z0, x1, y1, z1] if s.split(',').count() == 6 && v.iter().all(|c| c.is_finite()) => {
+            let (lo, hi) = (glam::Vec3::new(x0, y0, z0), glam::Vec3::new(x1, y1, z1));
+            if lo.cmplt(hi).all() {
+                Ok((lo, hi))
+            } else {
+                Err(format!("'{s}': each of X0,Y0,Z0 must be below X1,Y1,Z1"))
+            }
+        }
+        _ => Err(format!("'{s}': expected six finite numbers X0,Y0,Z0,X1,Y1,Z1")),
+    }
+}
+
 /// Seconds in 0..1e7.
 pub(super) fn seconds(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {

@@ -46,7 +46,8 @@ pub(super) struct CameraColumns {
 }
 
 impl CameraColumns {
-    fn resize(&mut self, n: usize) {
+    /// Sizes every column to `n` slots, keeping what they held.
+    pub(super) fn resize(&mut self, n: usize) {
         for column in self.dir.iter_mut().chain(&mut self.uv) {
             column.resize(n, 0.0);
         }

@@ -267,7 +267,9 @@ fn check_dimensions(
     Ok(())
 }
 
-fn write_file(path: &Path, what: &str, bytes: &[u8]) -> Result<(), ImageIoError> {
+/// Writes `bytes` to a temporary file beside `path` and renames it onto `path` (see the module's doc);
+/// `what` names the file in the error.
+pub(crate) fn write_file(path: &Path, what: &str, bytes: &[u8]) -> Result<(), ImageIoError> {
     let io = |e: std::io::Error| ImageIoError::Io { what: what.into(), msg: e.to_string() };
     // A temporary name in the same directory, so the rename stays on one file system.
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();

@@ -173,6 +173,8 @@ pub struct LoadedJob {
     pub lights: Vec<crate::scene::gltf::LightData>,
     /// The scene file's cameras as the file describes them.
     pub cameras: Vec<crate::scene::gltf::CameraData>,
+    /// The scene file's mesh entities with their glTF names and lightmap uvs (what `kelvin bake` reads).
+    pub primitives: Vec<crate::scene::spawn::SpawnedPrimitive>,
 }
 
 fn check_in<T: PartialOrd + std::fmt::Display>(name: &str, v: T, range: RangeInclusive<T>) -> Result<(), JobError> {
@@ -287,7 +289,7 @@ impl RenderJob {
         let mut schedule = Schedule::default();
         world.insert_resource(self.settings());
         LightingPlugin::build(&mut world, &mut schedule);
-        let (mut lights, mut cameras) = (Vec::new(), Vec::new());
+        let (mut lights, mut cameras, mut primitives) = (Vec::new(), Vec::new(), Vec::new());
         let (mut warnings, file, summary) = match &self.scene {
             Some(path) => {
                 let start = std::time::Instant::now();
@@ -304,8 +306,8 @@ impl RenderJob {
                     }
                     (None, _) => {}
                 }
-                let report = crate::scene::spawn::spawn_gltf(&mut world, &scene);
-                (lights, cameras) = (scene.lights, scene.cameras);
+                let mut report = crate::scene::spawn::spawn_gltf(&mut world, &scene);
+                (lights, cameras, primitives) = (scene.lights, scene.cameras, std::mem::take(&mut report.primitives));
                 let summary = format!(
                     "scene {} (loaded in {:.1} ms): {} meshes ({} triangles, {} emissive), {} lights, {} cameras, {} animations",
                     path.display(),
@@ -330,7 +332,7 @@ impl RenderJob {
         if let Some(light) = sky {
             world.spawn(light);
         }
-        Ok(LoadedJob { world, schedule, file, warnings, summary, lights, cameras })
+        Ok(LoadedJob { world, schedule, file, warnings, summary, lights, cameras, primitives })
     }
 }
 

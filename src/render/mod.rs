@@ -12,4 +12,5 @@ pub mod renderer;
 pub mod scene_file;
 mod shade;
 mod shade_lanes;
+pub(crate) mod surface_paths;
 pub mod tiles;

@@ -45,11 +45,29 @@ pub fn bounce_seed(seed: u64, depth: u32) -> u64 {
     if depth == 0 { seed } else { mix64(seed ^ mix64(depth as u64 + 0x9e37_79b9)) }
 }
 
+/// Where a batch's paths start.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Start {
+    /// At the surfaces the camera rays hit: their emission counts.
+    Camera,
+    /// At given surface points (a lightmap's texels, `render::surface_paths`): their own emission
+    /// never counts, the light reaching them straight from the lights only if `direct`, and each
+    /// path notes whether its first ray met a back face within `leak_distance` (m).
+    Surfaces {
+        /// Whether light from the lights straight to the point counts (false: bounced light only).
+        direct: bool,
+        /// A first ray that meets a back face nearer than this marks its path as leaked.
+        leak_distance: f32,
+    },
+}
+
 /// Per-batch path state, reused across batches.
 #[derive(Default)]
 pub(super) struct Paths {
     /// Per camera sample of the batch: the light its path has gathered.
     radiance: Vec<SampledSpectrum>,
+    /// Per camera sample (`Start::Surfaces` only): whether its first ray met a back face nearby.
+    leaked: Vec<bool>,
     /// Per camera sample: its pixel, sample and (spectral mode) wavelengths.
     pixel: Vec<u32>,
     sample: Vec<u32>,
@@ -72,6 +90,7 @@ pub(super) struct PathJob<'a> {
     /// Seed of the renderer's own streams.
     pub(super) seed: u64,
     pub(super) strategy: Strategy,
+    pub(super) start: Start,
 }
 
 impl Paths {
@@ -98,9 +117,11 @@ impl Paths {
                 emission_only: depth == max_depth,
                 last: depth + 1 >= max_depth,
                 roulette: depth + 1 >= roulette_depth,
+                emission: depth == 0 && job.start == Start::Camera,
+                direct: depth > 0 || !matches!(job.start, Start::Surfaces { direct: false, .. }),
             };
             let light_start = std::time::Instant::now();
-            if !rules.emission_only {
+            if !rules.emission_only && rules.direct {
                 world.resource_mut::<Settings>().seed = bounce_seed(seed, depth);
                 schedule.run(world);
                 stats.report.add(world.resource::<RunReport>());
@@ -111,6 +132,9 @@ impl Paths {
             let ctx = ShadeContext::new(world, columns, job.materials, job.seed, job.strategy);
             self.shade(&ctx, depth, rules);
             self.follow(&ctx, rules);
+            if let (0, Start::Surfaces { leak_distance, .. }) = (depth, job.start) {
+                self.note_leaks(leak_distance);
+            }
             stats.bsdf_rays += self.continuations.len() as u64;
             drop(ctx);
             world.resource_scope(|world, mut batch: Mut<ShadingBatch>| {
@@ -127,9 +151,17 @@ impl Paths {
         }));
     }
 
+    /// Per camera sample of the last batch traced from `Start::Surfaces`: whether its first ray
+    /// met a back face within the leak distance (the point is inside geometry or behind a wall).
+    pub(super) fn leaked(&self) -> &[bool] {
+        &self.leaked
+    }
+
     /// Starts one path per camera sample of `batch`; returns their number.
     fn start(&mut self, batch: &ShadingBatch) -> usize {
         let n = batch.len();
+        self.leaked.clear();
+        self.leaked.resize(n, false);
         self.radiance.clear();
         self.radiance.resize(n, SampledSpectrum::default());
         self.pixel.clone_from(&batch.pixel);
@@ -173,6 +205,9 @@ impl Paths {
         let wavelengths = &self.wavelengths;
         self.found.clear();
         self.found.par_extend(self.continuations.par_iter().zip(&self.hits).with_min_len(64).map(|((p, c), hit)| {
+            if !rules.direct {
+                return SampledSpectrum::default();
+            }
             let query = wavelengths.get(*p as usize).map_or(ColorQuery::Rgb, ColorQuery::Spectral);
             c.beta.mul(ctx.found_by_bsdf_ray(&c.from, c.wi, c.bsdf_pdf, hit.as_ref(), query))
         }));
@@ -191,6 +226,16 @@ impl Paths {
             }
         }
         (self.path, self.beta) = (path, beta);
+    }
+
+    /// Marks the paths whose first ray (the continuations just followed) met a back face nearer
+    /// than `leak_distance`.
+    fn note_leaks(&mut self, leak_distance: f32) {
+        for ((p, c), hit) in self.continuations.iter().zip(&self.hits) {
+            // The ray's direction is unit length, so t is the distance.
+            let back = hit.is_some_and(|h| h.ng.dot(c.wi) > 0.0 && h.t < leak_distance);
+            self.leaked[*p as usize] = back;
+        }
     }
 
     /// Writes the next bounce's surfaces into the batch (with their paths' wavelengths).

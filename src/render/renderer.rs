@@ -12,7 +12,7 @@ use super::camera::{Camera, CameraModel, PinholeCamera};
 use super::camera_pass::{CameraColumns, SampleRange, trace_camera_rays};
 use super::film::Film;
 use super::normal_map::apply_normal_maps;
-use super::path::{PathDepth, PathJob, Paths};
+use super::path::{PathDepth, PathJob, Paths, Start};
 use super::shade::{Materials, ShadeContext};
 use super::tiles::{Crop, TileError};
 use crate::geometry::{RAY_CHUNK, SceneBvh};
@@ -22,9 +22,9 @@ use crate::shading::{ColorMode, LightSelection, RunReport, RunSummary, SceneBoun
 use crate::spectrum::{SampledSpectrum, SampledWavelengths, color};
 
 /// Camera samples per batch handed to the light system.
-const BATCH_SAMPLES: usize = 1 << 14;
+pub(super) const BATCH_SAMPLES: usize = 1 << 14;
 /// Salt that keeps the renderer's random dimensions apart from the light systems'.
-const RENDER_SALT: u64 = 0x5eed_ca3e_7a11_0b0e;
+pub(super) const RENDER_SALT: u64 = 0x5eed_ca3e_7a11_0b0e;
 
 /// How direct light is estimated at a surface point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -324,7 +324,8 @@ fn render_on_pool(
                     job.shade(world, schedule, (&mut film, first, opts.spp as usize), &mut contributions, &mut stats);
                 }
                 Integrator::Path(depth) => {
-                    let job = PathJob { depth, materials: &materials, seed, strategy: opts.strategy };
+                    let job =
+                        PathJob { depth, materials: &materials, seed, strategy: opts.strategy, start: Start::Camera };
                     paths.trace(world, schedule, &mut columns, &job, &mut contributions, &mut stats);
                     let film_start = std::time::Instant::now();
                     film.par_add_samples(first, opts.spp as usize, &contributions);

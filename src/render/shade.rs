@@ -287,20 +287,28 @@ pub(super) struct BounceRules {
     pub(super) last: bool,
     /// Whether Russian roulette may end the path here.
     pub(super) roulette: bool,
+    /// Whether the surface's own emission counts (a camera's first surface; no later one, whose
+    /// emission the BSDF ray that found it weighs, and no lightmap texel).
+    pub(super) emission: bool,
+    /// Whether light that reaches the surface straight from a light counts: its light samples and
+    /// the emitters its BSDF ray finds (false only for a texel baked as bounced light alone).
+    pub(super) direct: bool,
 }
 
 impl ShadeContext<'_> {
-    /// Sample `j` as surface `depth` (0 = the camera's) of a path with throughput `beta`: its
-    /// emission when the camera sees it, its light samples, and the BSDF sample that continues
+    /// Sample `j` as surface `depth` (0 = the path's first) of a path with throughput `beta`: its
+    /// emission when the rules count it, its light samples, and the BSDF sample that continues
     /// the path (always traced, for MIS, unless roulette ends it).
     pub(super) fn shade_path_vertex(&self, j: usize, depth: u32, beta: SampledSpectrum, rules: BounceRules) -> Bounce {
         let (surface, bsdf) = self.surface_and_bsdf(j);
         // Emission found by later BSDF rays is added, MIS-weighted, where they are traced.
-        let mut l = if depth == 0 { self.emitted_toward_viewer(j, &surface) } else { SampledSpectrum::default() };
+        let mut l = if rules.emission { self.emitted_toward_viewer(j, &surface) } else { SampledSpectrum::default() };
         if rules.emission_only {
             return Bounce { radiance: beta.mul(l), next: None };
         }
-        l = l.add(self.light_samples(j, &bsdf));
+        if rules.direct {
+            l = l.add(self.light_samples(j, &bsdf));
+        }
         let radiance = beta.mul(l);
         let dim = BSDF_DIMENSION + depth * BSDF_DIMENSIONS;
         let Some((bs, ray)) = self.sample_bsdf(j, &bsdf, dim) else { return Bounce { radiance, next: None } };

@@ -13,7 +13,7 @@
 use std::sync::Arc;
 
 use bevy_ecs::prelude::*;
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Vec2, Vec3};
 
 use super::animate::{GltfAnimations, GltfNode};
 use super::gltf::{GltfScene, IesSource, LightKind, MaterialData};
@@ -43,6 +43,29 @@ pub struct SpawnReport {
     pub animations: usize,
     /// The loader's warnings, then what spawning skipped and why.
     pub warnings: Vec<String>,
+    /// Every spawned mesh entity, in the order spawned, with where it came from in the file.
+    pub primitives: Vec<SpawnedPrimitive>,
+}
+
+/// A mesh entity spawned from a glTF mesh primitive, with what a lightmap baker needs that the
+/// world's `Mesh` does not keep: the file's names and the primitive's TEXCOORD_1. The entity's
+/// `Mesh` has the primitive's vertices in the same order, and its triangles in the same order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpawnedPrimitive {
+    /// The entity with the primitive's `Mesh` (world space) and `Material`.
+    pub entity: Entity,
+    /// Index of the glTF mesh in [`GltfScene::meshes`].
+    pub mesh: usize,
+    /// The glTF mesh's name, if the file gives one.
+    pub mesh_name: Option<String>,
+    /// Index of the placement in [`GltfScene::instances`].
+    pub instance: usize,
+    /// The name of the node that places it, if the file gives one.
+    pub node_name: Option<String>,
+    /// Index of the primitive in its mesh's (read) primitives.
+    pub primitive: usize,
+    /// The primitive's TEXCOORD_1, one per vertex.
+    pub uvs1: Option<Vec<Vec2>>,
 }
 
 /// Rec. 709 luminance of linear RGB.
@@ -85,7 +108,7 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
     let file = report.file;
     let at_node = |node: Option<usize>, rest_inverse| node.map(|node| GltfNode { file, node, rest_inverse });
     let materials: Vec<Material> = scene.materials.iter().map(|m| material_of(m, scene)).collect();
-    for inst in &scene.instances {
+    for (i, inst) in scene.instances.iter().enumerate() {
         let Some(mesh) = scene.meshes.get(inst.mesh) else { continue };
         // Normals take the inverse transpose (right under mirrors too). A mirroring transform (negative
         // determinant) reverses the winding (glTF 2.0 spec, section 3.7.4), so the world-space triangles
@@ -123,6 +146,15 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
             if let Some(node) = node {
                 entity.insert(node);
             }
+            report.primitives.push(SpawnedPrimitive {
+                entity: entity.id(),
+                mesh: inst.mesh,
+                mesh_name: mesh.name.clone(),
+                instance: i,
+                node_name: inst.node_name.clone(),
+                primitive: p,
+                uvs1: prim.uvs1.clone(),
+            });
             if let Some(area) =
                 prim.material.and_then(|i| scene.materials.get(i)).and_then(|m| emissive_light(m, scene))
             {
@@ -223,6 +255,7 @@ mod tests {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
             normals: Some(vec![Vec3::Z; 3]),
             uvs: None,
+            uvs1: None,
             indices: vec![0, 1, 2],
             material: None,
         };

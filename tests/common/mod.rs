@@ -5,6 +5,7 @@
 pub mod area;
 pub mod chi_square;
 pub mod files;
+pub mod gltf_doc;
 pub mod lobe_grid;
 
 use kelvin::light::ColorQuery;

@@ -392,6 +392,43 @@ fn hard_cases_strips_points_cycles_and_bad_references() {
     assert_eq!(scene.warnings.len(), expect.len(), "{:#?}", scene.warnings);
 }
 
+/// TEXCOORD_1 (lightmap uvs) is read as TEXCOORD_0 is: a set with the wrong count is dropped with
+/// a warning at the primitive's pointer, non-finite values become (0, 0) with one.
+#[test]
+fn lightmap_uvs_are_read_and_checked_as_the_first_set() {
+    let mut bin = triangle_bin(TRIANGLE);
+    // Two more uv sets after the indices (and 2 bytes of padding): 2 uvs, and 3 with a NaN.
+    bin.extend([0u8; 2]);
+    [0.5f32, 0.5, 1.0, 1.0, 0.25, f32::NAN, 0.5, 0.5, 0.75, 0.75].iter().for_each(|x| bin.extend(x.to_le_bytes()));
+    let mut json = triangle_json(&data_uri(&bin), bin.len(), "", "");
+    let root = json.as_object_mut().unwrap();
+    root.remove("materials");
+    root.remove("textures");
+    root.remove("images");
+    json["bufferViews"].as_array_mut().unwrap().extend([
+        json!({ "buffer": 0, "byteOffset": 68, "byteLength": 16 }),
+        json!({ "buffer": 0, "byteOffset": 84, "byteLength": 24 }),
+    ]);
+    json["accessors"].as_array_mut().unwrap().extend([
+        json!({ "bufferView": 3, "componentType": 5126, "count": 2, "type": "VEC2" }),
+        json!({ "bufferView": 4, "componentType": 5126, "count": 3, "type": "VEC2" }),
+    ]);
+    let primitive = |uv1: usize| json!({ "attributes": { "POSITION": 0, "TEXCOORD_0": 1, "TEXCOORD_1": uv1 }, "indices": 2 });
+    json["meshes"][0]["primitives"] = json!([primitive(1), primitive(3), primitive(4)]);
+    let scene = load_gltf_from_bytes(&serde_json::to_vec(&json).unwrap(), None, "uv1.gltf").unwrap();
+    let prims = &scene.meshes[0].primitives;
+    let uv = |x: f32, y: f32| glam::Vec2::new(x, y);
+    assert_eq!(prims[0].uvs1, Some(vec![uv(0.0, 0.0), uv(1.0, 0.0), uv(0.0, 1.0)]));
+    assert_eq!(prims[1].uvs1, None);
+    assert_eq!(prims[2].uvs1, Some(vec![uv(0.0, 0.0), uv(0.5, 0.5), uv(0.75, 0.75)]));
+    assert_eq!(prims[1].uvs, prims[0].uvs, "TEXCOORD_0 is kept when TEXCOORD_1 is dropped");
+    let expect = [
+        "uv1.gltf: /meshes/0/primitives/1: TEXCOORD_1 count differs from POSITION count 3; uvs dropped",
+        "uv1.gltf: /meshes/0/primitives/2: 1 NaN or infinite TEXCOORD_1 value(s) set to (0, 0)",
+    ];
+    assert_eq!(scene.warnings, expect);
+}
+
 #[test]
 fn ies_lights_are_resolved_relative_to_the_file() {
     let dir = temp_dir("ies");

@@ -1,4 +1,4 @@
-//! Meshes: triangle primitives with positions, normals and UV set 0; strips and fans become lists, bad triangles
+//! Meshes: triangle primitives with positions, normals and UV sets 0 and 1 (textures, lightmaps); strips and fans become lists, bad triangles
 //! are dropped with a warning.
 
 use ::gltf::json::mesh::{Mode, Semantic};
@@ -78,21 +78,8 @@ fn read_primitive(
         normals = None;
     }
 
-    let mut uvs = match attribute(Semantic::TexCoords(0)) {
-        Some(a) => Some(read_vectors::<2>(doc, a, "TEXCOORD_0")?.into_iter().map(Vec2::from_array).collect::<Vec<_>>()),
-        None => None,
-    };
-    if uvs.as_ref().is_some_and(|v| v.len() != n) {
-        warnings.push(pointer, format!("TEXCOORD_0 count differs from POSITION count {n}; uvs dropped"));
-        uvs = None;
-    }
-    if let Some(uvs) = &mut uvs {
-        let bad = uvs.iter().filter(|uv| !uv.is_finite()).count();
-        if bad > 0 {
-            warnings.push(pointer, format!("{bad} NaN or infinite TEXCOORD_0 value(s) set to (0, 0)"));
-            uvs.iter_mut().filter(|uv| !uv.is_finite()).for_each(|uv| *uv = Vec2::ZERO);
-        }
-    }
+    let uvs = read_uv_set(doc, attribute(Semantic::TexCoords(0)), 0, n, pointer, warnings)?;
+    let uvs1 = read_uv_set(doc, attribute(Semantic::TexCoords(1)), 1, n, pointer, warnings)?;
 
     let vertex_order = match primitive.indices {
         Some(a) => read_indices(doc, a.value())?,
@@ -128,7 +115,32 @@ fn read_primitive(
         }
         exists
     });
-    Ok(Some(PrimitiveData { positions, normals, uvs, indices, material }))
+    Ok(Some(PrimitiveData { positions, normals, uvs, uvs1, indices, material }))
+}
+
+/// Reads TEXCOORD_`set` (accessor `accessor`, if any) of a primitive with `n` vertices: a count other than `n`
+/// drops the set with a warning, and non-finite values become (0, 0) with a warning.
+fn read_uv_set(
+    doc: &Doc,
+    accessor: Option<usize>,
+    set: u32,
+    n: usize,
+    pointer: &str,
+    warnings: &mut Warnings,
+) -> Result<Option<Vec<Vec2>>, GltfError> {
+    let Some(a) = accessor else { return Ok(None) };
+    let name = format!("TEXCOORD_{set}");
+    let mut uvs: Vec<Vec2> = read_vectors::<2>(doc, a, &name)?.into_iter().map(Vec2::from_array).collect();
+    if uvs.len() != n {
+        warnings.push(pointer, format!("{name} count differs from POSITION count {n}; uvs dropped"));
+        return Ok(None);
+    }
+    let bad = uvs.iter().filter(|uv| !uv.is_finite()).count();
+    if bad > 0 {
+        warnings.push(pointer, format!("{bad} NaN or infinite {name} value(s) set to (0, 0)"));
+        uvs.iter_mut().filter(|uv| !uv.is_finite()).for_each(|uv| *uv = Vec2::ZERO);
+    }
+    Ok(Some(uvs))
 }
 
 /// Drops triangles with an index out of range or a non-finite vertex, with one warning per cause.

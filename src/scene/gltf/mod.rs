@@ -11,7 +11,7 @@
 //! - `.gltf` (JSON with external `.bin` / image files or `data:` URIs, resolved relative to the file) and `.glb`.
 //! - The default scene, else the first scene, else every root node; its node tree is flattened into
 //!   [`MeshInstance`]s, lights and cameras with world transforms (glTF node matrices or T * R * S).
-//! - Triangles (lists, strips and fans; strips and fans become lists), POSITION, NORMAL and TEXCOORD_0, in any
+//! - Triangles (lists, strips and fans; strips and fans become lists), POSITION, NORMAL, TEXCOORD_0 and TEXCOORD_1 (lightmap uvs), in any
 //!   component type (so KHR_mesh_quantization works), sparse accessors included. Skins and morph targets are
 //!   ignored with a warning.
 //! - Node animations (translation, rotation, scale; STEP, LINEAR, CUBICSPLINE) as [`animation::SceneAnimations`];
@@ -38,7 +38,7 @@
 //! | extension in `extensionsRequired` that kelvin does not read | ignored; the scene may look unlike intended |
 //! | primitive mode points / lines / invalid; no POSITION; Draco-compressed | primitive skipped |
 //! | vertex indices out of range; NaN / infinite positions | the triangles using them dropped |
-//! | NaN / infinite normals; NORMAL or TEXCOORD_0 count differs from POSITION's | normals (or uvs) dropped |
+//! | NaN / infinite normals; NORMAL, TEXCOORD_0 or TEXCOORD_1 count differs from POSITION's | normals (or that uv set) dropped |
 //! | material index out of range | default material (`None`) |
 //! | factor out of range (colour, metallic, roughness, specular); bad ior or emissive strength | clamped / default |
 //! | node reached twice (cycle or shared child); bad mesh / camera / child index | that reference skipped |
@@ -151,6 +151,8 @@ pub struct PrimitiveData {
     pub normals: Option<Vec<Vec3>>,
     /// TEXCOORD_0 (v = 0 at the top of the image, as glTF), same length as `positions`.
     pub uvs: Option<Vec<Vec2>>,
+    /// TEXCOORD_1, the lightmap uvs of `kelvin bake` (as TEXCOORD_0: v = 0 at the top), same length as `positions`.
+    pub uvs1: Option<Vec<Vec2>>,
     /// Three indices per triangle, each `< positions.len()`; never empty.
     pub indices: Vec<u32>,
     /// Index into [`GltfScene::materials`]; `None` means the glTF default material ([`MaterialData::default`]).

@@ -1,0 +1,325 @@
+//! Baked light for game engines: lightmaps on a mesh's second uv set (`kelvin bake lightmaps`).
+//!
+//! [`bake_lightmaps`] takes a world loaded as `kelvin render` loads one (a [`LoadedJob`]) and bakes,
+//! for each placed glTF mesh with TEXCOORD_1, a square lightmap. A texel holds what a game engine
+//! multiplies by a surface's diffuse colour (Bevy: `lightmap * diffuse_color * lightmap_exposure`):
+//! the irradiance there over pi, i.e. the radiance a white Lambertian surface would reflect, in
+//! linear sRGB and kelvin's photometric units (nit). It is estimated by paths that start at points
+//! spread over the texel's covered part (`texels.rs`), each seen as a white Lambertian surface:
+//! cosine-weighted BSDF samples with MIS against the light system's samples, and every later bounce
+//! as in `kelvin render` (`render::surface_paths`, the path tracer's own wavefront).
+//!
+//! **Leaks.** A sample whose first ray meets a back face nearer than the leak distance starts
+//! inside geometry or behind a wall (a floor under a box, a wall's far side): it is dropped. A
+//! sample inside closed geometry meets a back face in every direction, so no sample under a box is
+//! kept, whatever its ray. Texels left without a valid sample, and texels no triangle covers, are
+//! filled from their valid neighbours, ring by ring, up to `margin` texels out (`lightmap.rs`):
+//! bilinear filtering then reads no black fringe at a chart's edge.
+//!
+//! Output (`output.rs`): per lightmap an EXR (linear f32) and a zstd-supercompressed KTX2
+//! (`B10G11R11_UFLOAT`, as Bevy's own lightmaps; [`ktx2`]), and `lightmaps.json`.
+//!
+//! [`bake_volume`] bakes an irradiance volume (ambient cubes for Bevy's `IrradianceVolume`) the
+//! same way, from voxel centres instead of texels ([`volume`]).
+
+pub mod ktx2;
+mod lightmap;
+mod output;
+mod targets;
+mod texels;
+pub mod volume;
+
+use std::ops::RangeInclusive;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+pub use output::{LIGHTMAPS_JSON, write_lightmaps, write_volume};
+pub use volume::{IrradianceVolume, VolumeOptions, bake_volume};
+
+use crate::render::job::{self, LoadedJob};
+use crate::render::path::PathDepth;
+use crate::render::renderer::RenderStats;
+use crate::render::surface_paths::{StartPoint, SurfaceTracer};
+use crate::rng::SampleStream;
+use crate::shading::{ColorMode, Settings};
+use lightmap::Accumulator;
+
+/// Accepted lightmap sides, texels.
+pub const SIZE: RangeInclusive<u32> = 1..=4096;
+/// Accepted dilation margins, texels.
+pub const MARGIN: RangeInclusive<u32> = 0..=64;
+
+/// Which light a lightmap holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+pub enum BakedLight {
+    /// Direct and bounced light: a fully baked scene.
+    #[default]
+    All,
+    /// Bounced light only, for scenes whose direct light stays real-time.
+    Indirect,
+}
+
+/// How to bake.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightmapOptions {
+    /// Side of every lightmap, texels ([`SIZE`]). Defaults to 256.
+    pub size: u32,
+    /// Paths per texel ([`job::SPP`]). Defaults to 128.
+    pub spp: u32,
+    /// Surfaces after the texel's a path may reach, and where roulette may start ([`job::DEPTH`]).
+    pub depth: PathDepth,
+    /// All light or bounced light only. Defaults to all.
+    pub light: BakedLight,
+    /// How far (texels) dilation fills from valid texels ([`MARGIN`]). Defaults to 4.
+    pub margin: u32,
+    /// Passes of `spp` paths per texel until this many seconds have passed (at least one pass;
+    /// [`job::SECONDS`]); None: one pass.
+    pub time: Option<f64>,
+    /// A sample whose first ray meets a back face nearer than this (m) is dropped as a leak;
+    /// None: any back face in the scene (the diameter of its bounding sphere). A shorter
+    /// distance keeps samples that see single-sided geometry from behind, farther away.
+    pub leak_distance: Option<f32>,
+}
+
+impl Default for LightmapOptions {
+    fn default() -> Self {
+        Self {
+            size: 256,
+            spp: 128,
+            depth: PathDepth::DEFAULT,
+            light: BakedLight::All,
+            margin: 4,
+            time: None,
+            leak_distance: None,
+        }
+    }
+}
+
+/// What a texel holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TexelState {
+    /// Nothing: no triangle covers it (or none of its samples was valid) and dilation did not reach it. Zero.
+    Empty,
+    /// The mean of its valid samples.
+    Baked,
+    /// Filled by dilation from its neighbours.
+    Filled,
+}
+
+/// One baked lightmap.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lightmap {
+    /// A name unique in the bake: the glTF mesh's name (`mesh<index>` without one), followed by
+    /// `.` and the node's name (or index) when the mesh is placed more than once. Files take it.
+    pub name: String,
+    /// The glTF mesh's name.
+    pub mesh_name: Option<String>,
+    /// The name of the node that places it.
+    pub node_name: Option<String>,
+    /// Side, texels.
+    pub size: u32,
+    /// Row-major, row 0 at v = 0 (the top, as glTF's uv has it): irradiance / pi, linear sRGB, nit.
+    pub texels: Vec<Vec3>,
+    /// Standard error of each baked texel's mean; zero elsewhere.
+    pub std_error: Vec<Vec3>,
+    /// What each texel holds.
+    pub state: Vec<TexelState>,
+    /// Samples dropped because their first ray met a back face nearby.
+    pub leaked_samples: u64,
+}
+
+impl Lightmap {
+    /// Mean luminance (nit) of the baked texels, 0 without any.
+    pub fn mean_luminance(&self) -> f32 {
+        let baked = self.texels.iter().zip(&self.state).filter(|(_, s)| **s == TexelState::Baked);
+        let (sum, n) = baked.fold((0.0f64, 0u32), |(sum, n), (t, _)| (sum + lightmap::luminance(*t) as f64, n + 1));
+        if n == 0 { 0.0 } else { (sum / n as f64) as f32 }
+    }
+}
+
+/// A finished bake.
+#[derive(Clone, Debug, Default)]
+pub struct BakeReport {
+    /// One per placed mesh with TEXCOORD_1, in the file's order.
+    pub lightmaps: Vec<Lightmap>,
+    /// Meshes without TEXCOORD_1, one line each, skipped.
+    pub skipped: Vec<String>,
+    /// What else was dropped (uv1 outside [0, 1], degenerate triangles) and the light system's
+    /// warnings.
+    pub warnings: Vec<String>,
+    /// Time, paths per texel (`spp`, more than asked under a time budget) and in all
+    /// (`camera_samples`), shadow and BSDF rays, the light system's run report.
+    pub stats: RenderStats,
+}
+
+/// Why a bake could not be done or written.
+#[derive(Debug, thiserror::Error)]
+pub enum BakeError {
+    /// An option out of range or a world the bake cannot use; the message says which.
+    #[error("{0}")]
+    Invalid(String),
+    /// No placed mesh has TEXCOORD_1.
+    #[error("nothing to bake: {0}")]
+    NothingToBake(String),
+    /// An output file could not be encoded or written.
+    #[error(transparent)]
+    Write(#[from] crate::render::film_io::ImageIoError),
+    /// A KTX2 file could not be encoded.
+    #[error(transparent)]
+    Ktx2(#[from] ktx2::Ktx2Error),
+}
+
+fn check_in<T: PartialOrd + std::fmt::Display>(name: &str, v: T, range: RangeInclusive<T>) -> Result<(), BakeError> {
+    if range.contains(&v) {
+        Ok(())
+    } else {
+        Err(BakeError::Invalid(format!("{name} = {v} is outside {}..={}", range.start(), range.end())))
+    }
+}
+
+/// A time budget in [`job::SECONDS`], or none.
+fn check_time(time: Option<f64>) -> Result<(), BakeError> {
+    match time {
+        Some(t) if !(t.is_finite() && job::SECONDS.contains(&t)) => {
+            Err(BakeError::Invalid(format!("time = {t} is outside [0, {})", job::SECONDS.end)))
+        }
+        _ => Ok(()),
+    }
+}
+
+impl LightmapOptions {
+    /// Checks every option's range.
+    pub fn check(&self) -> Result<(), BakeError> {
+        check_in("size", self.size, SIZE)?;
+        check_in("spp", self.spp, job::SPP)?;
+        check_in("max_depth", self.depth.max_depth, job::DEPTH)?;
+        check_in("roulette_depth", self.depth.roulette_depth, job::DEPTH)?;
+        check_in("margin", self.margin, MARGIN)?;
+        check_time(self.time)?;
+        match self.leak_distance {
+            Some(d) if !(d > 0.0 && d.is_finite()) => {
+                Err(BakeError::Invalid(format!("leak_distance = {d} must be a positive finite distance")))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Bakes a lightmap for every placed mesh of `loaded` that has TEXCOORD_1 (see the module's doc).
+/// `progress` gets the finished fraction. The world must be in RGB colour mode.
+pub fn bake_lightmaps(
+    loaded: &mut LoadedJob,
+    opts: &LightmapOptions,
+    progress: impl FnMut(f32) + Send,
+) -> Result<BakeReport, BakeError> {
+    opts.check()?;
+    if loaded.world.resource::<Settings>().color_mode == ColorMode::Spectral {
+        return Err(BakeError::Invalid("lightmaps are baked in RGB; the job's colour mode is spectral".into()));
+    }
+    let (targets, mut report) = targets::gather(&loaded.world, &loaded.primitives)?;
+    let coverages: Vec<texels::Coverage> =
+        targets.iter().map(|t| texels::Coverage::of(&t.surfaces, opts.size)).collect();
+    for (t, c) in targets.iter().zip(&coverages) {
+        if c.outside > 0 {
+            report.warnings.push(format!(
+                "{}: {} triangle(s) reach outside uv1 [0, 1]; that part is not baked",
+                t.name, c.outside
+            ));
+        }
+        if c.texels.is_empty() {
+            report
+                .warnings
+                .push(format!("{}: no texel covered (uv1 outside [0, 1] or of zero area); left empty", t.name));
+        }
+        if c.degenerate > 0 {
+            report
+                .warnings
+                .push(format!("{}: {} triangle(s) of zero area in uv1 or in the world skipped", t.name, c.degenerate));
+        }
+    }
+    // Texel ordinals over all lightmaps key the random streams: lightmap i's are first[i]..first[i + 1].
+    let mut first = vec![0u64];
+    first.extend(coverages.iter().scan(0u64, |n, c| {
+        *n += c.texels.len() as u64;
+        Some(*n)
+    }));
+    let texels = *first.last().unwrap_or(&0);
+    if texels > u32::MAX as u64 {
+        return Err(BakeError::Invalid(format!("{texels} covered texels: more than 2^32 - 1; use a smaller size")));
+    }
+    let LoadedJob { world, schedule, .. } = loaded;
+    let (accumulators, stats) = rayon::scope(|_| {
+        let direct = opts.light == BakedLight::All;
+        let mut tracer = SurfaceTracer::new(world, schedule, opts.depth, direct, opts.leak_distance);
+        let seed = tracer.seed();
+        let place = |t: u64, s: u32| {
+            let map = first.partition_point(|&f| f <= t) - 1;
+            let k = (t - first[map]) as usize;
+            let mut rng = SampleStream::new(seed, t as u32, s).at_dimension(0);
+            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            coverages[map].point(&targets[map].surfaces, k, u, t as u32, s)
+        };
+        let passes = Passes { cells: texels, spp: opts.spp, time: opts.time };
+        let (accumulators, spp) = trace_all(world, schedule, &mut tracer, passes, place, progress);
+        (accumulators, RenderStats { spp, ..tracer.stats })
+    });
+    report.stats = stats;
+    report.warnings.extend(report.stats.report.warnings.iter().cloned());
+    for (i, (target, coverage)) in targets.into_iter().zip(&coverages).enumerate() {
+        let range = first[i] as usize..first[i + 1] as usize;
+        report.lightmaps.push(lightmap::finish(target, coverage, &accumulators[range], opts));
+    }
+    Ok(report)
+}
+
+/// The sample counts of a bake: `spp` samples of each of `cells` cells per pass, one pass, or
+/// passes until `time` (seconds) has passed.
+#[derive(Clone, Copy)]
+struct Passes {
+    cells: u64,
+    spp: u32,
+    time: Option<f64>,
+}
+
+/// Traces the samples of `passes` in batches, sample `s` of cell `c` placed by `place(c, s)`, and
+/// sums each cell's valid samples. Returns the sums and the samples per cell taken.
+fn trace_all(
+    world: &mut bevy_ecs::world::World,
+    schedule: &mut bevy_ecs::schedule::Schedule,
+    tracer: &mut SurfaceTracer,
+    passes: Passes,
+    place: impl Fn(u64, u32) -> StartPoint + Sync,
+    mut progress: impl FnMut(f32),
+) -> (Vec<Accumulator>, u32) {
+    let start = std::time::Instant::now();
+    let Passes { cells, spp, time } = passes;
+    let mut accumulators = vec![Accumulator::default(); cells as usize];
+    let mut points = Vec::with_capacity(SurfaceTracer::BATCH);
+    let total = cells * spp as u64;
+    for pass in 0u32.. {
+        let mut first = 0u64;
+        while first < total {
+            let end = (first + SurfaceTracer::BATCH as u64).min(total);
+            // Pass k takes samples k spp.. of each cell's streams.
+            let sample = |g: u64| (g / spp as u64, pass * spp + (g % spp as u64) as u32);
+            let batch = (0..(end - first) as usize).into_par_iter().map(|i| sample(first + i as u64));
+            batch.map(|(c, s)| place(c, s)).collect_into_vec(&mut points);
+            let (rgb, leaked) = tracer.trace(world, schedule, &points);
+            for (g, (rgb, leaked)) in (first..end).zip(rgb.iter().zip(leaked)) {
+                accumulators[(g / spp as u64) as usize].add(rgb.as_dvec3(), *leaked);
+            }
+            first = end;
+            let elapsed = start.elapsed().as_secs_f64();
+            progress(time.map_or(first as f32 / total as f32, |t| (elapsed / t.max(1e-9)).min(1.0) as f32));
+        }
+        // Sample indices are u32: a pass that would run past them is not started.
+        let room = pass.checked_add(2).and_then(|p| p.checked_mul(spp)).is_some();
+        if time.is_none_or(|t| start.elapsed().as_secs_f64() >= t) || !room {
+            tracer.stats.seconds = start.elapsed().as_secs_f64() + tracer.stats.update_seconds;
+            return (accumulators, (pass + 1) * spp);
+        }
+    }
+    unreachable!("the pass loop returns")
+}

@@ -1,0 +1,99 @@
+//! A bake's files: per lightmap `<name>.exr` (linear f32) and `<name>.ktx2` (B10G11R11_UFLOAT,
+//! zstd-supercompressed, as Bevy's own lightmaps), and `lightmaps.json`, which maps each lightmap
+//! to its mesh, node and files, the `uv_rect` Bevy's `Lightmap` takes and a `lightmap_exposure`.
+//! An irradiance volume is one 3D KTX2 (E5B9G9R9_UFLOAT, zstd, Bevy's layout) and a JSON file
+//! beside it with the light probe's transform.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::json;
+
+use super::ktx2::{self, Format, Supercompression, Texture};
+use super::volume::IrradianceVolume;
+use super::{BakeError, BakeReport, BakedLight, LightmapOptions, TexelState};
+use crate::render::film_io::{ImageIoError, write_exr, write_file};
+
+/// The name of the index file in the output folder.
+pub const LIGHTMAPS_JSON: &str = "lightmaps.json";
+/// Zstandard level of the KTX2 files: a few times smaller than raw texels, fast to write.
+const ZSTD_LEVEL: i32 = 9;
+
+/// Writes every lightmap of `report` into `dir` (created if missing), then `lightmaps.json` last,
+/// so that a folder with the index holds a finished bake. Returns the files written.
+pub fn write_lightmaps(dir: &Path, report: &BakeReport, opts: &LightmapOptions) -> Result<Vec<PathBuf>, BakeError> {
+    let io = |path: &Path, e: std::io::Error| ImageIoError::Io { what: path.display().to_string(), msg: e.to_string() };
+    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+    let mut written = Vec::new();
+    let mut entries = serde_json::Map::new();
+    for map in &report.lightmaps {
+        let side = map.size as usize;
+        let (exr, ktx2) = (dir.join(format!("{}.exr", map.name)), dir.join(format!("{}.ktx2", map.name)));
+        write_exr(&exr, side, side, &map.texels)?;
+        let texture =
+            Texture { format: Format::B10G11R11, width: map.size, height: map.size, depth: 0, texels: &map.texels };
+        let bytes = ktx2::encode(&texture, Supercompression::Zstd(ZSTD_LEVEL))?;
+        write_file(&ktx2, &ktx2.display().to_string(), &bytes)?;
+        let count = |s: TexelState| map.state.iter().filter(|t| **t == s).count();
+        let file = |p: &Path| p.file_name().map(|n| n.to_string_lossy().into_owned());
+        entries.insert(
+            map.name.clone(),
+            json!({
+                "mesh": map.mesh_name,
+                "node": map.node_name,
+                "image": file(&ktx2),
+                "exr": file(&exr),
+                "uv_rect": [0.0, 0.0, 1.0, 1.0],
+                // Texels are nit, Bevy's own photometric units: no rescaling.
+                "lightmap_exposure": 1.0,
+                "mean_luminance": map.mean_luminance(),
+                "texels": { "baked": count(TexelState::Baked), "filled": count(TexelState::Filled), "empty": count(TexelState::Empty) },
+                "leaked_samples": map.leaked_samples,
+            }),
+        );
+        written.extend([exr, ktx2]);
+    }
+    let index = json!({
+        "generator": format!("kelvin {}", env!("CARGO_PKG_VERSION")),
+        "texel": "irradiance / pi (the radiance a white Lambertian surface reflects), linear sRGB, nit (cd/m^2); rows top to bottom as glTF uv (v = 0 at the top)",
+        "light": match opts.light { BakedLight::All => "all", BakedLight::Indirect => "indirect" },
+        "size": opts.size,
+        "spp": opts.spp,
+        "max_depth": opts.depth.max_depth,
+        "lightmaps": entries,
+        "skipped": report.skipped,
+    });
+    let path = dir.join(LIGHTMAPS_JSON);
+    let text = serde_json::to_string_pretty(&index).unwrap_or_default() + "\n";
+    write_file(&path, &path.display().to_string(), text.as_bytes())?;
+    written.push(path);
+    Ok(written)
+}
+
+/// Writes `volume` as a 3D KTX2 at `path` (its folder created if missing; E5B9G9R9_UFLOAT, zstd,
+/// Bevy's layout) and, beside it
+/// (`.json`), the `Transform` Bevy's light probe needs (the volume is a unit cube it scales and
+/// places) and the intensity (1: texels are nit). Returns the files written.
+pub fn write_volume(path: &Path, volume: &IrradianceVolume) -> Result<Vec<PathBuf>, BakeError> {
+    let r = volume.resolution;
+    let atlas = volume.atlas();
+    let texture = Texture { format: Format::E5B9G9R9, width: r.x, height: 2 * r.y, depth: 3 * r.z, texels: &atlas };
+    let bytes = ktx2::encode(&texture, Supercompression::Zstd(ZSTD_LEVEL))?;
+    let info = json!({
+        "generator": format!("kelvin {}", env!("CARGO_PKG_VERSION")),
+        "voxels": path.file_name().map(|n| n.to_string_lossy().into_owned()),
+        "resolution": r.to_array(),
+        "transform": { "translation": volume.center().to_array(), "scale": volume.scale().to_array() },
+        "intensity": 1.0,
+        "side": "irradiance / pi about the axis, linear sRGB, nit; (Rx, 2Ry, 3Rz) texels, side S of voxel (x, y, z) at (x, y + Ry [S negative], z + Rz axis(S))",
+        "inside_voxels": volume.inside,
+    });
+    let json_path = path.with_extension("json");
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        let io = |e: std::io::Error| ImageIoError::Io { what: dir.display().to_string(), msg: e.to_string() };
+        std::fs::create_dir_all(dir).map_err(io)?;
+    }
+    write_file(path, &path.display().to_string(), &bytes)?;
+    let text = serde_json::to_string_pretty(&info).unwrap_or_default() + "\n";
+    write_file(&json_path, &json_path.display().to_string(), text.as_bytes())?;
+    Ok(vec![path.to_path_buf(), json_path])
+}
