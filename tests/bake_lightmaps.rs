@@ -390,6 +390,12 @@ fn cornell_box_bakes_end_to_end_through_the_program() {
         }
     }
     assert_eq!(index["light"], "all");
+    // The meter reading of the mean luminance: a few nit give an EV100 of a few stops.
+    let means: Vec<f64> = maps.values().map(|m| m["mean_luminance"].as_f64().unwrap()).collect();
+    let ev100 = index["camera_ev100"].as_f64().unwrap();
+    let lo = (means.iter().copied().fold(f64::MAX, f64::min) * 8.0).log2();
+    let hi = (means.iter().copied().fold(0.0, f64::max) * 8.0).log2();
+    assert!((lo..=hi).contains(&ev100), "{ev100} outside [{lo}, {hi}]");
 }
 
 #[test]

@@ -54,6 +54,7 @@ pub fn write_lightmaps(dir: &Path, report: &BakeReport, opts: &LightmapOptions) 
     }
     let index = json!({
         "generator": format!("kelvin {}", env!("CARGO_PKG_VERSION")),
+        "camera_ev100": camera_ev100(report),
         "texel": "irradiance / pi (the radiance a white Lambertian surface reflects), linear sRGB, nit (cd/m^2); rows top to bottom as glTF uv (v = 0 at the top)",
         "light": match opts.light { BakedLight::All => "all", BakedLight::Indirect => "indirect" },
         "size": opts.size,
@@ -69,10 +70,22 @@ pub fn write_lightmaps(dir: &Path, report: &BakeReport, opts: &LightmapOptions) 
     Ok(written)
 }
 
+/// The EV100 that a reflected-light meter (calibration K = 12.5 cd s/m^2 at ISO 100) reads off the
+/// mean baked luminance, EV100 = log2(L 100 / K): Bevy's `Exposure { ev100 }` that shows the baked
+/// light near mid-grey. None without a lit texel.
+fn camera_ev100(report: &BakeReport) -> Option<f32> {
+    let (mut sum, mut n) = (0.0, 0.0);
+    for map in &report.lightmaps {
+        let baked = map.state.iter().filter(|s| **s == TexelState::Baked).count() as f32;
+        (sum, n) = (sum + map.mean_luminance() * baked, n + baked);
+    }
+    (sum > 0.0).then(|| (sum / n * 100.0 / 12.5).log2())
+}
+
 /// Writes `volume` as a 3D KTX2 at `path` (its folder created if missing; E5B9G9R9_UFLOAT, zstd,
-/// Bevy's layout) and, beside it
-/// (`.json`), the `Transform` Bevy's light probe needs (the volume is a unit cube it scales and
-/// places) and the intensity (1: texels are nit). Returns the files written.
+/// Bevy's layout) and, beside it (`.json`), the `Transform` Bevy's light probe needs (the volume is
+/// a unit cube it scales and places) and the intensity (1: texels are nit). Returns the files
+/// written.
 pub fn write_volume(path: &Path, volume: &IrradianceVolume) -> Result<Vec<PathBuf>, BakeError> {
     let r = volume.resolution;
     let atlas = volume.atlas();
