@@ -126,7 +126,10 @@ fn bad_fields_get_warnings_at_their_pointers() {
     ];
     for (sky, says, kept) in cases {
         let (read, warnings) = warnings_of(&lamp_file_with_sky(Some(sky.clone())));
-        assert!(warnings.iter().any(|w| w.starts_with(p) && w.contains(says)), "{sky}: expected '{says}' in {warnings:?}");
+        assert!(
+            warnings.iter().any(|w| w.starts_with(p) && w.contains(says)),
+            "{sky}: expected '{says}' in {warnings:?}"
+        );
         assert_eq!(read.is_some(), *kept, "{sky}");
         if let Some(light) = read {
             // The bad field fell back to its default; the rest stands.

@@ -482,7 +482,12 @@ fn parallel_exr_decode_equals_the_exr_crates_reader_bit_for_bit() {
             assert_eq!(image.pixels.len(), reference.len());
             let bits = |v: &Vec3| v.to_array().map(f32::to_bits);
             let first = image.pixels.iter().zip(&reference).position(|(a, b)| bits(a) != bits(b));
-            assert!(first.is_none(), "{} on {threads} threads: texel {first:?} {:?}", path.display(), first.map(|i| (image.pixels[i], reference[i])));
+            assert!(
+                first.is_none(),
+                "{} on {threads} threads: texel {first:?} {:?}",
+                path.display(),
+                first.map(|i| (image.pixels[i], reference[i]))
+            );
         }
     }
 }

@@ -332,7 +332,8 @@ fn the_ecs_rebuilds_the_sky_only_when_it_changes_and_reuses_its_buffers() {
         schedule.run(&mut world);
         let warnings = &world.resource::<RunReport>().warnings;
         assert!(
-            warnings.len() == 1 && warnings[0].contains("the sun is 10.0 degrees below the horizon: the sun and sky give no light"),
+            warnings.len() == 1
+                && warnings[0].contains("the sun is 10.0 degrees below the horizon: the sun and sky give no light"),
             "{warnings:?}"
         );
         assert!(world.resource::<LightTable>().sun_sky_of(e).unwrap().is_night());

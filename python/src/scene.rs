@@ -100,8 +100,11 @@ impl Scene {
         environment_at: Option<[f32; 3]>,
         crop: Option<(u32, u32, u32, u32)>,
     ) -> PyResult<(Bound<'py, PyArray1<f32>>, u32, u32, Vec<String>, Bound<'py, PyDict>)> {
-        let integrator =
-            choice("integrator", integrator, &[("path", IntegratorChoice::Path), ("direct", IntegratorChoice::Direct)])?;
+        let integrator = choice(
+            "integrator",
+            integrator,
+            &[("path", IntegratorChoice::Path), ("direct", IntegratorChoice::Direct)],
+        )?;
         let job = RenderJob {
             width: size.0,
             height: size.1,
@@ -165,9 +168,16 @@ impl Scene {
             return Err(PyKeyError::new_err(format!("animation {name}: this scene has no animation")));
         };
         let Some(clip) = clips.find(&name) else {
-            let names: Vec<String> =
-                clips.clips.iter().enumerate().map(|(i, c)| format!("{i}: {}", c.name.as_deref().unwrap_or("-"))).collect();
-            return Err(PyKeyError::new_err(format!("animation {name}: not in the scene (it has {})", names.join(", "))));
+            let names: Vec<String> = clips
+                .clips
+                .iter()
+                .enumerate()
+                .map(|(i, c)| format!("{i}: {}", c.name.as_deref().unwrap_or("-")))
+                .collect();
+            return Err(PyKeyError::new_err(format!(
+                "animation {name}: not in the scene (it has {})",
+                names.join(", ")
+            )));
         };
         let file = self.loaded.file.unwrap_or_default();
         let posed = pose_gltf(world, file, clip, t).map_err(PyValueError::new_err)?;
@@ -258,7 +268,9 @@ impl Scene {
     fn animations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let files = self.loaded.world.get_resource::<GltfAnimations>().map_or(&[][..], |a| &a.files);
         let list = PyList::empty(py);
-        for (index, clip) in self.loaded.file.and_then(|f| files.get(f)).map_or(&[][..], |a| &a.clips).iter().enumerate() {
+        for (index, clip) in
+            self.loaded.file.and_then(|f| files.get(f)).map_or(&[][..], |a| &a.clips).iter().enumerate()
+        {
             let d = PyDict::new(py);
             d.set_item("index", index)?;
             d.set_item("name", clip.name.clone())?;

@@ -165,7 +165,8 @@ impl PiecewiseConstant1D {
         self.cdf.extend(values.take(n));
         self.cdf.resize(n + 1, 0.0);
         self.func.clear();
-        self.func.extend(self.cdf[1..].iter().map(|&c| if c.is_nan() { 0.0 } else { c.abs().min(f32::MAX as f64) as f32 }));
+        self.func
+            .extend(self.cdf[1..].iter().map(|&c| if c.is_nan() { 0.0 } else { c.abs().min(f32::MAX as f64) as f32 }));
         let sum = normalise(&mut self.cdf);
         self.integral = sum * (self.max as f64 - self.min as f64) / n as f64;
     }

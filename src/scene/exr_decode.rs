@@ -79,13 +79,17 @@ pub(super) fn decode_exr(bytes: &[u8], what: &str) -> Result<RgbImage, ImageErro
             .into_par_iter()
             .map(|chunk| {
                 let block = UncompressedBlock::decompress_chunk(chunk, &meta, false).map_err(decode_error)?;
-                to_rgb(&block, &header.channels, &wanted).ok_or_else(|| unsupported("a block's lines do not fit it".into()))
+                to_rgb(&block, &header.channels, &wanted)
+                    .ok_or_else(|| unsupported("a block's lines do not fit it".into()))
             })
             .collect::<Result<_, _>>()?;
         for b in blocks {
             let rows = b.rgb.len() / b.width.max(1);
             if b.x + b.width > width || b.y + rows > height {
-                return Err(unsupported(format!("a block at ({}, {}) reaches outside the {width} x {height} image", b.x, b.y)));
+                return Err(unsupported(format!(
+                    "a block at ({}, {}) reaches outside the {width} x {height} image",
+                    b.x, b.y
+                )));
             }
             for (r, row) in b.rgb.chunks_exact(b.width).enumerate() {
                 let start = (b.y + r) * width + b.x;
@@ -146,7 +150,6 @@ fn pick_channels(names: &[String], wanted: &[&str]) -> Option<Vec<usize>> {
     })
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -159,5 +162,4 @@ mod tests {
         assert_eq!(pick_channels(&names, &["R", "G", "B"]), Some(vec![2, 3, 4]));
         assert_eq!(pick_channels(&names, &["Y"]), None);
     }
-
 }

@@ -362,7 +362,12 @@ fn validate(image: RgbImage, what: &str) -> Result<LoadedImage, ImageError> {
 }
 
 /// Refuses a header claiming far more pixels than `file_len` bytes can encode (see [`MAX_PIXELS_PER_BYTE`]).
-pub(super) fn check_plausible(pixels: usize, file_len: usize, format: ImageFormat, what: &str) -> Result<(), ImageError> {
+pub(super) fn check_plausible(
+    pixels: usize,
+    file_len: usize,
+    format: ImageFormat,
+    what: &str,
+) -> Result<(), ImageError> {
     if pixels > file_len.saturating_mul(MAX_PIXELS_PER_BYTE) {
         return Err(ImageError::Decode {
             what: what.into(),

@@ -413,7 +413,8 @@ fn lightmap_uvs_are_read_and_checked_as_the_first_set() {
         json!({ "bufferView": 3, "componentType": 5126, "count": 2, "type": "VEC2" }),
         json!({ "bufferView": 4, "componentType": 5126, "count": 3, "type": "VEC2" }),
     ]);
-    let primitive = |uv1: usize| json!({ "attributes": { "POSITION": 0, "TEXCOORD_0": 1, "TEXCOORD_1": uv1 }, "indices": 2 });
+    let primitive =
+        |uv1: usize| json!({ "attributes": { "POSITION": 0, "TEXCOORD_0": 1, "TEXCOORD_1": uv1 }, "indices": 2 });
     json["meshes"][0]["primitives"] = json!([primitive(1), primitive(3), primitive(4)]);
     let scene = load_gltf_from_bytes(&serde_json::to_vec(&json).unwrap(), None, "uv1.gltf").unwrap();
     let prims = &scene.meshes[0].primitives;
