@@ -69,6 +69,12 @@ impl Edges<'_> {
     }
 }
 
+/// A raw value as a bin holds it: |v|, NaN as 0, +inf as `f32::MAX`.
+#[inline(always)]
+fn sanitise(v: f64) -> f64 {
+    if v.is_nan() { 0.0 } else { v.abs().min(f32::MAX as f64) }
+}
+
 /// Turns raw values (`cdf[1..]` on entry) into the normalised CDF from exactly 0 to exactly 1 in
 /// place; returns their sum. Values are taken as |v| with NaN as 0 and +inf as `f32::MAX`.
 #[inline(always)]
@@ -77,7 +83,7 @@ pub(super) fn normalise(cdf: &mut [f64]) -> f64 {
     cdf[0] = 0.0;
     // Three loops rather than one: the first and last vectorise; only the running sum is serial.
     for c in &mut cdf[1..] {
-        *c = if c.is_nan() { 0.0 } else { c.abs().min(f32::MAX as f64) };
+        *c = sanitise(*c);
     }
     let last = cdf[1..].iter().rposition(|&v| v > 0.0).unwrap_or(n - 1);
     let sum = prefix_sum(&mut cdf[1..]);
@@ -165,8 +171,7 @@ impl PiecewiseConstant1D {
         self.cdf.extend(values.take(n));
         self.cdf.resize(n + 1, 0.0);
         self.func.clear();
-        self.func
-            .extend(self.cdf[1..].iter().map(|&c| if c.is_nan() { 0.0 } else { c.abs().min(f32::MAX as f64) as f32 }));
+        self.func.extend(self.cdf[1..].iter().map(|&c| sanitise(c) as f32));
         let sum = normalise(&mut self.cdf);
         self.integral = sum * (self.max as f64 - self.min as f64) / n as f64;
     }
