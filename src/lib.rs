@@ -17,6 +17,7 @@ pub(crate) mod lanes;
 pub mod light;
 pub mod light_sampler;
 mod prefetch;
+pub mod provenance;
 pub mod render;
 #[cfg(feature = "report")]
 pub mod report;

@@ -5,7 +5,7 @@ use glam::{DVec3, Vec3};
 
 use super::targets::Target;
 use super::texels::Coverage;
-use super::{Lightmap, LightmapOptions, TexelState};
+use super::{Lightmap, TexelState};
 use crate::scene::image::LUMINANCE_WEIGHTS;
 
 /// A covered texel's samples so far.
@@ -48,6 +48,16 @@ impl Accumulator {
         Some((mean.as_vec3(), std_error.as_vec3()))
     }
 
+    /// The sums of the valid samples and of their squares.
+    pub(super) fn sums(&self) -> (DVec3, DVec3) {
+        (self.sum, self.sum2)
+    }
+
+    /// An accumulator with these sums and counts (a part file's cell).
+    pub(super) fn from_parts(sum: DVec3, sum2: DVec3, valid: u32, leaked: u32) -> Self {
+        Self { sum, sum2, valid, leaked }
+    }
+
     /// Valid samples, and samples dropped as leaks.
     pub(super) fn counts(&self) -> (u32, u32) {
         (self.valid, self.leaked)
@@ -59,9 +69,10 @@ pub(super) fn luminance(c: Vec3) -> f32 {
     c.dot(LUMINANCE_WEIGHTS)
 }
 
-/// The lightmap of `target`: `sums[k]` are the samples of covered texel k of `coverage`.
-pub(super) fn finish(target: Target, coverage: &Coverage, sums: &[Accumulator], opts: &LightmapOptions) -> Lightmap {
-    let n = (opts.size * opts.size) as usize;
+/// The `size` x `size` lightmap of `target`: `sums[k]` are the samples of covered texel k of
+/// `coverage`; dilation fills `margin` texels out.
+pub(super) fn finish(target: Target, coverage: &Coverage, sums: &[Accumulator], size: u32, margin: u32) -> Lightmap {
+    let n = (size * size) as usize;
     let (mut texels, mut std_error, mut state) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![TexelState::Empty; n]);
     let mut leaked_samples = 0;
     for (&texel, a) in coverage.texels.iter().zip(sums) {
@@ -71,12 +82,12 @@ pub(super) fn finish(target: Target, coverage: &Coverage, sums: &[Accumulator], 
             (texels[i], std_error[i], state[i]) = (mean, error, TexelState::Baked);
         }
     }
-    dilate(&mut texels, &mut state, opts.size as usize, opts.margin);
+    dilate(&mut texels, &mut state, size as usize, margin);
     Lightmap {
         name: target.name,
         mesh_name: target.mesh_name,
         node_name: target.node_name,
-        size: opts.size,
+        size,
         texels,
         std_error,
         state,

@@ -40,6 +40,7 @@ pub fn write_lightmaps(dir: &Path, report: &BakeReport, opts: &LightmapOptions) 
             json!({
                 "mesh": map.mesh_name,
                 "node": map.node_name,
+                "size": map.size,
                 "image": file(&ktx2),
                 "exr": file(&exr),
                 "uv_rect": [0.0, 0.0, 1.0, 1.0],
@@ -58,7 +59,8 @@ pub fn write_lightmaps(dir: &Path, report: &BakeReport, opts: &LightmapOptions) 
         "texel": "irradiance / pi (the radiance a white Lambertian surface reflects), linear sRGB, nit (cd/m^2); rows top to bottom as glTF uv (v = 0 at the top)",
         "light": match opts.light { BakedLight::All => "all", BakedLight::Indirect => "indirect" },
         "size": opts.size,
-        "spp": opts.spp,
+        "texels_per_unit": opts.texels_per_unit,
+        "spp": report.stats.spp,
         "max_depth": opts.depth.max_depth,
         "lightmaps": entries,
         "skipped": report.skipped,

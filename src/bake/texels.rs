@@ -26,6 +26,21 @@ pub(super) struct Surface {
     pub(super) entity_index: u32,
 }
 
+/// The world area (m^2) of `surfaces`' triangles and the area their uv1 triangles cover (a share
+/// of [0, 1]^2; overlapping charts count twice).
+pub(super) fn areas(surfaces: &[Surface]) -> (f64, f64) {
+    let (mut world, mut uv) = (0.0, 0.0);
+    for s in surfaces {
+        for t in 0..s.mesh.triangle_count() {
+            let [a, b, c] = s.mesh.triangle(t).map(|p| p.as_dvec3());
+            world += 0.5 * (b - a).cross(c - a).length();
+            let [a, b, c] = s.mesh.triangle_indices(t).map(|i| s.uvs1[i as usize].as_dvec2());
+            uv += 0.5 * (b - a).perp_dot(c - a).abs();
+        }
+    }
+    (world, uv)
+}
+
 /// A triangle of one texel's covered part: corners as barycentrics (b1, b2) of the mesh triangle.
 #[derive(Clone, Copy, Debug)]
 struct Piece {

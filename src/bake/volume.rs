@@ -20,8 +20,9 @@ use std::ops::RangeInclusive;
 use glam::{IVec3, UVec3, Vec3};
 
 use super::lightmap::Accumulator;
-use super::{BakeError, BakedLight, Passes, TexelState, check_time, trace_all};
-use crate::geometry::{GeometryId, SceneBvh, SurfacePoint};
+use super::parts::{self, BakePart, Part};
+use super::{BakeError, BakedLight, Passes, Progress, TexelState, check_part, check_time, trace_all};
+use crate::geometry::{GeometryId, Mesh, SceneBvh, SurfacePoint};
 use crate::render::job::{self, LoadedJob};
 use crate::render::path::PathDepth;
 use crate::render::renderer::RenderStats;
@@ -123,8 +124,70 @@ impl IrradianceVolume {
 pub fn bake_volume(
     loaded: &mut LoadedJob,
     opts: &VolumeOptions,
-    progress: impl FnMut(f32) + Send,
+    progress: impl FnMut(Progress) + Send,
 ) -> Result<IrradianceVolume, BakeError> {
+    let mut volume = empty_volume(loaded, opts)?;
+    let (sums, stats) = trace(loaded, opts, &volume, Part::WHOLE, progress);
+    volume.stats = stats;
+    finish(&mut volume, &sums);
+    Ok(volume)
+}
+
+/// Part `part` of [`bake_volume`]: the sums of its range of voxel sides (six per voxel, voxels x
+/// fastest), every sample the whole bake would take of them, for [`merge_volume`].
+pub fn bake_volume_part(
+    loaded: &mut LoadedJob,
+    opts: &VolumeOptions,
+    part: Part,
+    progress: impl FnMut(Progress) + Send,
+) -> Result<BakePart, BakeError> {
+    check_part(part, opts.time)?;
+    let volume = empty_volume(loaded, opts)?;
+    let (sums, stats) = trace(loaded, opts, &volume, part, progress);
+    Ok(BakePart::new("volume", part, volume.sides.len() as u64 * 6, sums, &stats))
+}
+
+/// The volume of `parts` (every part of one bake of `loaded` with `opts`), bit for bit that of
+/// [`bake_volume`] with the same options.
+pub fn merge_volume(
+    loaded: &mut LoadedJob,
+    opts: &VolumeOptions,
+    parts: Vec<BakePart>,
+) -> Result<IrradianceVolume, BakeError> {
+    let mut volume = empty_volume(loaded, opts)?;
+    let (sums, stats) = parts::join("volume", volume.sides.len() as u64 * 6, parts)?;
+    volume.stats = stats;
+    finish(&mut volume, &sums);
+    Ok(volume)
+}
+
+/// The world bounding box (min, max corners) of the meshes that nodes named `node` place: the box
+/// a volume for that part of the scene fills. An error lists the names there are when no mesh is
+/// placed by such a node (a node without a mesh has no extent to give).
+pub fn node_bounds(loaded: &LoadedJob, node: &str) -> Result<(Vec3, Vec3), BakeError> {
+    let mut bounds: Option<(Vec3, Vec3)> = None;
+    for p in loaded.primitives.iter().filter(|p| p.node_name.as_deref() == Some(node)) {
+        let Some(mesh) = loaded.world.get::<Mesh>(p.entity) else { continue };
+        for &q in mesh.positions() {
+            bounds = Some(bounds.map_or((q, q), |(lo, hi)| (lo.min(q), hi.max(q))));
+        }
+    }
+    match bounds {
+        Some((lo, hi)) if lo.cmplt(hi).all() => Ok((lo, hi)),
+        Some((lo, hi)) => Err(BakeError::Invalid(format!("node {node:?}: its meshes span {lo} to {hi}, no volume"))),
+        None => {
+            let mut names: Vec<&str> = loaded.primitives.iter().filter_map(|p| p.node_name.as_deref()).collect();
+            names.dedup();
+            Err(BakeError::Invalid(format!(
+                "no mesh is placed by a node named {node:?}; nodes with meshes: {}",
+                if names.is_empty() { "none named".to_owned() } else { names.join(", ") }
+            )))
+        }
+    }
+}
+
+/// The volume `opts` asks for over `loaded`'s scene, with nothing baked.
+fn empty_volume(loaded: &mut LoadedJob, opts: &VolumeOptions) -> Result<IrradianceVolume, BakeError> {
     for (axis, r) in ["x", "y", "z"].iter().zip(opts.resolution.to_array()) {
         if !RESOLUTION.contains(&r) {
             return Err(BakeError::Invalid(format!("resolution {axis} = {r} is outside 1..=128")));
@@ -139,24 +202,38 @@ pub fn bake_volume(
     {
         return Err(BakeError::Invalid(format!("bounds {lo} to {hi}: need finite corners with min < max")));
     }
-    let LoadedJob { world, schedule, .. } = loaded;
+    if opts.bounds.is_none() {
+        // The scene BVH the bounds come from is built by the light system's first update.
+        loaded.schedule.run(&mut loaded.world);
+    }
+    let Some((min, max)) = opts.bounds.or_else(|| loaded.world.resource::<SceneBvh>().world_bounds()) else {
+        return Err(BakeError::NothingToBake("the scene has no geometry to bound the volume; give bounds".into()));
+    };
     let voxels = opts.resolution.element_product() as usize;
-    let cells = voxels as u64 * 6;
+    Ok(IrradianceVolume {
+        resolution: opts.resolution,
+        min,
+        max,
+        sides: vec![[Vec3::ZERO; 6]; voxels],
+        std_error: vec![[Vec3::ZERO; 6]; voxels],
+        state: vec![[TexelState::Empty; 6]; voxels],
+        inside: 0,
+        stats: RenderStats::default(),
+    })
+}
+
+/// The sums of `part`'s voxel sides of `volume` and the stats of tracing them.
+fn trace(
+    loaded: &mut LoadedJob,
+    opts: &VolumeOptions,
+    volume: &IrradianceVolume,
+    part: Part,
+    progress: impl FnMut(Progress) + Send,
+) -> (Vec<Accumulator>, RenderStats) {
+    let LoadedJob { world, schedule, .. } = loaded;
+    let cells = volume.sides.len() as u64 * 6;
     rayon::scope(|_| {
         let mut tracer = SurfaceTracer::new(world, schedule, opts.depth, opts.light == BakedLight::All, None);
-        let Some((min, max)) = opts.bounds.or_else(|| world.resource::<SceneBvh>().world_bounds()) else {
-            return Err(BakeError::NothingToBake("the scene has no geometry to bound the volume; give bounds".into()));
-        };
-        let mut volume = IrradianceVolume {
-            resolution: opts.resolution,
-            min,
-            max,
-            sides: vec![[Vec3::ZERO; 6]; voxels],
-            std_error: vec![[Vec3::ZERO; 6]; voxels],
-            state: vec![[TexelState::Empty; 6]; voxels],
-            inside: 0,
-            stats: RenderStats::default(),
-        };
         let r = opts.resolution;
         let place = |cell: u64, sample: u32| {
             let cell = cell as u32;
@@ -168,11 +245,9 @@ pub fn bake_volume(
             let p_error = SurfacePoint::from_point(p, n).p_error;
             StartPoint { p, p_error, ng: n, ns: n, geometry: GeometryId::NONE, pixel: cell, sample }
         };
-        let passes = Passes { cells, spp: opts.spp, time: opts.time };
+        let passes = Passes { cells: part.range(cells), spp: opts.spp, time: opts.time };
         let (sums, spp) = trace_all(world, schedule, &mut tracer, passes, place, progress);
-        volume.stats = RenderStats { spp, ..tracer.stats };
-        finish(&mut volume, &sums);
-        Ok(volume)
+        (sums, RenderStats { spp, ..tracer.stats })
     })
 }
 

@@ -1,18 +1,24 @@
-//! `kelvin bake lightmaps SCENE -o DIR [--size N] [--spp N] [--time SECONDS] [--max-depth N]
-//! [--light all|indirect] [--seed S] [--threads T]`: a lightmap per mesh with TEXCOORD_1; `kelvin bake volume SCENE -o
-//! FILE.ktx2 --resolution RX,RY,RZ [--bounds X0,Y0,Z0,X1,Y1,Z1] [...]`: an irradiance volume
-//! (`kelvin::bake`).
+//! `kelvin bake lightmaps SCENE -o DIR [--size N | --texels-per-unit D] [--spp N] [...]`: a
+//! lightmap per mesh with TEXCOORD_1; `kelvin bake volume SCENE -o FILE.ktx2 --resolution RX,RY,RZ
+//! [--bounds X0,Y0,Z0,X1,Y1,Z1 | --node NAME] [...]`: an irradiance volume (`kelvin::bake`). Both
+//! take `--env`/`--sky` as `kelvin render` does, and split over machines with `--part K/N` (each
+//! part's sums into the output's parts folder) and `--merge` (the finished bake, bit for bit).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
+use indicatif::{ProgressBar, ProgressStyle};
 use kelvin::bake::{
-    self, BakedLight, LightmapOptions, VolumeOptions, bake_lightmaps, bake_volume, write_lightmaps, write_volume,
+    self, BakePart, BakedLight, LightmapOptions, Part, Progress, VolumeOptions, bake_lightmaps, bake_lightmaps_part,
+    bake_volume, bake_volume_part, check_provenance, merge_lightmaps, merge_volume, node_bounds, write_lightmaps,
+    write_volume,
 };
-use kelvin::render::job::{self, RenderJob};
+use kelvin::render::film_io::write_file;
+use kelvin::render::job::{self, LoadedJob, RenderJob};
 use kelvin::render::path::PathDepth;
+use serde_json::json;
 
-use super::render::progress_bar;
+use super::render::LightingArgs;
 use super::{CliError, values};
 
 #[derive(clap::Args)]
@@ -33,56 +39,14 @@ enum BakeCommand {
     Volume(VolumeArgs),
 }
 
+/// What both bakes take.
 #[derive(clap::Args)]
-pub struct VolumeArgs {
-    /// glTF scene (.gltf or .glb).
-    scene: PathBuf,
-    /// Output .ktx2 file (FILE.json is written beside it).
-    #[arg(short, long)]
-    output: PathBuf,
-    /// Voxels along x, y and z.
-    #[arg(long, value_name = "RX,RY,RZ", value_parser = values::resolution)]
-    resolution: glam::UVec3,
-    /// The box the grid fills (default: the scene's geometry).
-    #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", value_parser = values::bounds)]
-    bounds: Option<(glam::Vec3, glam::Vec3)>,
-    /// Paths per voxel side (per pass, with --time).
-    #[arg(long, default_value_t = 256, value_parser = values::whole(job::SPP))]
-    spp: u32,
-    /// Bake passes of --spp paths per side until this many seconds have passed (at least one).
+struct CommonArgs {
+    /// Bake passes of --spp paths per texel (or voxel side) until this many seconds have passed
+    /// (at least one).
     #[arg(long, value_name = "SECONDS", value_parser = values::seconds)]
     time: Option<f64>,
-    /// Surfaces after the voxel's a path may reach (1 = direct light only).
-    #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth, value_parser = values::whole(job::DEPTH))]
-    max_depth: u32,
-    /// All light, or bounced light only.
-    #[arg(long, value_enum, default_value = "all")]
-    light: BakedLight,
-    /// Seed of the random numbers.
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
-    /// Worker threads (default: all cores). The volume is bit-identical for any count.
-    #[arg(long, value_parser = values::threads())]
-    threads: Option<usize>,
-}
-
-#[derive(clap::Args)]
-pub struct LightmapArgs {
-    /// glTF scene (.gltf or .glb) whose meshes carry lightmap uvs (TEXCOORD_1).
-    scene: PathBuf,
-    /// Output folder (created): the lightmaps and lightmaps.json.
-    #[arg(short, long)]
-    output: PathBuf,
-    /// Side of each lightmap, texels.
-    #[arg(long, default_value_t = 256, value_parser = values::whole(bake::SIZE))]
-    size: u32,
-    /// Paths per texel (per pass, with --time).
-    #[arg(long, default_value_t = 128, value_parser = values::whole(job::SPP))]
-    spp: u32,
-    /// Bake passes of --spp paths per texel until this many seconds have passed (at least one).
-    #[arg(long, value_name = "SECONDS", value_parser = values::seconds)]
-    time: Option<f64>,
-    /// Surfaces after the texel's a path may reach (1 = direct light only).
+    /// Surfaces after the texel's (or voxel's) a path may reach (1 = direct light only).
     #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth, value_parser = values::whole(job::DEPTH))]
     max_depth: u32,
     /// All light (direct and bounced: a fully baked scene), or bounced light only (for direct
@@ -92,9 +56,63 @@ pub struct LightmapArgs {
     /// Seed of the random numbers.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Worker threads (default: all cores). Lightmaps are bit-identical for any count.
+    /// Worker threads (default: all cores). The bake is bit-identical for any count.
     #[arg(long, value_parser = values::threads())]
     threads: Option<usize>,
+    #[command(flatten)]
+    lighting: LightingArgs,
+    /// Bake only part K of N of the texels (or voxel sides), with every sample the whole bake
+    /// gives them, into the output's parts folder; `--merge` joins the N parts.
+    #[arg(long, value_name = "K/N", conflicts_with_all = ["merge", "time"])]
+    part: Option<Part>,
+    /// Join the parts baked with --part (same scene and options, checked) into the finished
+    /// output, bit for bit the bake unsplit; then remove the parts folder.
+    #[arg(long)]
+    merge: bool,
+}
+
+#[derive(clap::Args)]
+pub struct VolumeArgs {
+    /// glTF scene (.gltf or .glb).
+    scene: PathBuf,
+    /// Output .ktx2 file (FILE.json is written beside it; parts go to FILE.parts/).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Voxels along x, y and z.
+    #[arg(long, value_name = "RX,RY,RZ", value_parser = values::resolution)]
+    resolution: glam::UVec3,
+    /// The box the grid fills (default: the scene's geometry).
+    #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", value_parser = values::bounds, conflicts_with = "node")]
+    bounds: Option<(glam::Vec3, glam::Vec3)>,
+    /// The grid fills the bounding box of the meshes the nodes of this name place.
+    #[arg(long, value_name = "NAME")]
+    node: Option<String>,
+    /// Paths per voxel side (per pass, with --time).
+    #[arg(long, default_value_t = 256, value_parser = values::whole(job::SPP))]
+    spp: u32,
+    #[command(flatten)]
+    common: CommonArgs,
+}
+
+#[derive(clap::Args)]
+pub struct LightmapArgs {
+    /// glTF scene (.gltf or .glb) whose meshes carry lightmap uvs (TEXCOORD_1).
+    scene: PathBuf,
+    /// Output folder (created): the lightmaps and lightmaps.json (parts go to DIR/parts/).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Side of each lightmap, texels (default 256); with --texels-per-unit, the largest side.
+    #[arg(long, value_parser = values::whole(bake::SIZE))]
+    size: Option<u32>,
+    /// Texels per metre along the surface: each mesh's side follows from its area and its uv1
+    /// charts' share of the atlas, so texels are about the same size everywhere.
+    #[arg(long, value_name = "D", value_parser = values::finite_in(1e-6, 1e6))]
+    texels_per_unit: Option<f32>,
+    /// Paths per texel (per pass, with --time).
+    #[arg(long, default_value_t = 128, value_parser = values::whole(job::SPP))]
+    spp: u32,
+    #[command(flatten)]
+    common: CommonArgs,
 }
 
 pub fn run(args: BakeArgs) -> Result<(), CliError> {
@@ -104,38 +122,141 @@ pub fn run(args: BakeArgs) -> Result<(), CliError> {
     }
 }
 
-/// Loads `scene` as `kelvin render` would, printing the loader's warnings and the summary.
-fn load(scene: &std::path::Path, seed: u64, threads: Option<usize>) -> Result<job::LoadedJob, CliError> {
-    if let Some(t) = threads {
-        rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
+impl CommonArgs {
+    /// Loads `scene` as `kelvin render` would, printing the loader's warnings and the summary.
+    fn load(&self, scene: &Path) -> Result<LoadedJob, CliError> {
+        if let Some(t) = self.threads {
+            rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
+        }
+        let job = RenderJob { scene: Some(scene.to_path_buf()), seed: self.seed, ..RenderJob::default() };
+        let loaded = self.lighting.apply(job).load()?;
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+        if let Some(summary) = &loaded.summary {
+            eprintln!("{summary}");
+        }
+        Ok(loaded)
     }
-    let loaded = RenderJob { scene: Some(scene.to_path_buf()), seed, ..RenderJob::default() }.load()?;
-    for w in &loaded.warnings {
-        eprintln!("warning: {w}");
+
+    fn depth(&self) -> PathDepth {
+        PathDepth { max_depth: self.max_depth, ..PathDepth::DEFAULT }
     }
-    if let Some(summary) = &loaded.summary {
-        eprintln!("{summary}");
+
+    /// What a part records about how it was made, `settings` the command's own: a merge compares it.
+    fn provenance(&self, scene: &Path, settings: serde_json::Value) -> Result<serde_json::Value, CliError> {
+        let hash = |p: &Path| kelvin::provenance::file_sha256(p).map_err(|e| format!("{}: {e}", p.display()));
+        let env = match &self.lighting.env {
+            Some(p) => json!({ "file": p.file_name().map(|n| n.to_string_lossy()), "sha256": hash(p)? }),
+            None => serde_json::Value::Null,
+        };
+        Ok(json!({
+            "kelvin": env!("CARGO_PKG_VERSION"),
+            "scene": { "file": scene.file_name().map(|n| n.to_string_lossy()), "sha256": hash(scene)? },
+            "env": env,
+            "settings": {
+                "command": settings,
+                "max_depth": self.max_depth,
+                "light": format!("{:?}", self.light),
+                "seed": self.seed,
+                "env_intensity": self.lighting.env_intensity,
+                "sky": self.lighting.sky,
+                "sky_intensity": self.lighting.sky_intensity,
+            },
+        }))
     }
-    Ok(loaded)
+}
+
+/// A progress bar of paths traced (cells x spp).
+fn samples_bar() -> ProgressBar {
+    let bar = ProgressBar::new(0);
+    let style = "{bar:40} {percent:>3}% {human_pos}/{human_len} paths (texels x spp) {elapsed_precise} eta {eta}";
+    bar.set_style(ProgressStyle::with_template(style).expect("valid template"));
+    bar
+}
+
+fn show(bar: &ProgressBar, p: Progress) {
+    bar.set_length(p.of);
+    bar.set_position((p.fraction as f64 * p.of as f64) as u64);
+}
+
+/// The file part `part` is written to in `folder`.
+fn part_path(folder: &Path, part: Part) -> PathBuf {
+    folder.join(format!("part-{}-of-{}.kbake", part.index + 1, part.count))
+}
+
+/// Writes `part` with `provenance` into `folder` (created).
+fn write_part(folder: &Path, mut part: BakePart, provenance: serde_json::Value) -> Result<(), CliError> {
+    std::fs::create_dir_all(folder).map_err(|e| format!("{}: {e}", folder.display()))?;
+    let path = part_path(folder, part.part());
+    part.set_provenance(provenance);
+    write_file(&path, &path.display().to_string(), &part.to_bytes())?;
+    let p = part.part();
+    println!("baked part {} of {}: wrote {} (join the parts with --merge)", p.index + 1, p.count, path.display());
+    Ok(())
+}
+
+/// Every part file in `folder`, each checked to have been made as `provenance` says.
+fn read_parts(folder: &Path, provenance: &serde_json::Value) -> Result<Vec<BakePart>, CliError> {
+    let entries = std::fs::read_dir(folder).map_err(|e| format!("{}: no parts to merge: {e}", folder.display()))?;
+    let mut parts = Vec::new();
+    for entry in entries {
+        let path = entry.map_err(|e| format!("{}: {e}", folder.display()))?.path();
+        if path.extension().is_none_or(|e| e != "kbake") {
+            continue;
+        }
+        let what = path.display().to_string();
+        let bytes = std::fs::read(&path).map_err(|e| format!("{what}: {e}"))?;
+        let part = BakePart::from_bytes(&bytes, &what)?;
+        check_provenance(provenance, part.provenance())
+            .map_err(|f| format!("{what} was not made by this bake (scene, options or build): {f}"))?;
+        parts.push(part);
+    }
+    Ok(parts)
 }
 
 fn volume(args: VolumeArgs) -> Result<(), CliError> {
     if args.output.extension().is_none_or(|e| !e.eq_ignore_ascii_case("ktx2")) {
         return Err(format!("{}: the volume is written as .ktx2", args.output.display()).into());
     }
+    let common = &args.common;
+    let mut loaded = common.load(&args.scene)?;
+    let bounds = match &args.node {
+        Some(node) => Some(node_bounds(&loaded, node).map_err(|e| format!("--node: {e}"))?),
+        None => args.bounds,
+    };
     let opts = VolumeOptions {
         resolution: args.resolution,
         spp: args.spp,
-        depth: PathDepth { max_depth: args.max_depth, ..PathDepth::DEFAULT },
-        light: args.light,
-        bounds: args.bounds,
-        time: args.time,
+        depth: common.depth(),
+        light: common.light,
+        bounds,
+        time: common.time,
     };
-    let mut loaded = load(&args.scene, args.seed, args.threads)?;
-    let bar = progress_bar();
-    let baked = bake_volume(&mut loaded, &opts, |f| bar.set_position((f * 1000.0) as u64));
-    bar.finish_and_clear();
-    let volume = baked.map_err(|e| format!("{}: {e}", args.scene.display()))?;
+    let settings = json!({
+        "volume": args.resolution.to_array(),
+        "bounds": bounds.map(|(lo, hi)| [lo.to_array(), hi.to_array()]),
+        "spp": args.spp,
+    });
+    let folder = args.output.with_extension("parts");
+    let scene = args.scene.display();
+    let volume = if common.merge {
+        let provenance = common.provenance(&args.scene, settings)?;
+        let parts = read_parts(&folder, &provenance)?;
+        merge_volume(&mut loaded, &opts, parts).map_err(|e| format!("{}: {e}", folder.display()))?
+    } else {
+        let bar = samples_bar();
+        let progress = |p| show(&bar, p);
+        if let Some(part) = common.part {
+            let baked = bake_volume_part(&mut loaded, &opts, part, progress);
+            bar.finish_and_clear();
+            let baked = baked.map_err(|e| format!("{scene}: {e}"))?;
+            return write_part(&folder, baked, common.provenance(&args.scene, settings)?);
+        }
+        let baked = bake_volume(&mut loaded, &opts, progress);
+        bar.finish_and_clear();
+        baked.map_err(|e| format!("{scene}: {e}"))?
+    };
     for w in &volume.stats.report.warnings {
         eprintln!("warning: {w}");
     }
@@ -155,23 +276,49 @@ fn volume(args: VolumeArgs) -> Result<(), CliError> {
     for path in written {
         println!("wrote {}", path.display());
     }
+    if common.merge {
+        remove_parts(&folder);
+    }
     Ok(())
 }
 
 fn lightmaps(args: LightmapArgs) -> Result<(), CliError> {
+    let common = &args.common;
     let opts = LightmapOptions {
-        size: args.size,
+        size: args.size.unwrap_or(if args.texels_per_unit.is_some() { *bake::SIZE.end() } else { 256 }),
+        texels_per_unit: args.texels_per_unit,
         spp: args.spp,
-        depth: PathDepth { max_depth: args.max_depth, ..PathDepth::DEFAULT },
-        light: args.light,
-        time: args.time,
+        depth: common.depth(),
+        light: common.light,
+        time: common.time,
         ..LightmapOptions::default()
     };
-    let mut loaded = load(&args.scene, args.seed, args.threads)?;
-    let bar = progress_bar();
-    let baked = bake_lightmaps(&mut loaded, &opts, |f| bar.set_position((f * 1000.0) as u64));
-    bar.finish_and_clear();
-    let report = baked.map_err(|e| format!("{}: {e}", args.scene.display()))?;
+    let settings = json!({
+        "lightmaps": opts.size,
+        "texels_per_unit": opts.texels_per_unit,
+        "spp": opts.spp,
+        "margin": opts.margin,
+    });
+    let mut loaded = common.load(&args.scene)?;
+    let folder = args.output.join("parts");
+    let scene = args.scene.display();
+    let report = if common.merge {
+        let provenance = common.provenance(&args.scene, settings)?;
+        let parts = read_parts(&folder, &provenance)?;
+        merge_lightmaps(&mut loaded, &opts, parts).map_err(|e| format!("{}: {e}", folder.display()))?
+    } else {
+        let bar = samples_bar();
+        let progress = |p| show(&bar, p);
+        if let Some(part) = common.part {
+            let baked = bake_lightmaps_part(&mut loaded, &opts, part, progress);
+            bar.finish_and_clear();
+            let baked = baked.map_err(|e| format!("{scene}: {e}"))?;
+            return write_part(&folder, baked, common.provenance(&args.scene, settings)?);
+        }
+        let baked = bake_lightmaps(&mut loaded, &opts, progress);
+        bar.finish_and_clear();
+        baked.map_err(|e| format!("{scene}: {e}"))?
+    };
     for s in &report.skipped {
         eprintln!("skipped: {s}");
     }
@@ -180,11 +327,11 @@ fn lightmaps(args: LightmapArgs) -> Result<(), CliError> {
     }
     let written = write_lightmaps(&args.output, &report, &opts)?;
     let stats = &report.stats;
+    let sides: Vec<String> = report.lightmaps.iter().map(|m| format!("{} {}", m.name, m.size)).collect();
     println!(
-        "baked {} lightmaps of {}x{} at {} spp in {:.3} s: {:.2} M paths/s, {:.2} M shadow rays/s, {:.2} M BSDF rays/s",
+        "baked {} lightmaps ({}) at {} spp in {:.3} s: {:.2} M paths/s, {:.2} M shadow rays/s, {:.2} M BSDF rays/s",
         report.lightmaps.len(),
-        args.size,
-        args.size,
+        sides.join(", "),
         stats.spp,
         stats.seconds,
         stats.camera_samples as f64 / stats.seconds.max(1e-9) / 1e6,
@@ -194,5 +341,15 @@ fn lightmaps(args: LightmapArgs) -> Result<(), CliError> {
     for path in written {
         println!("wrote {}", path.display());
     }
+    if common.merge {
+        remove_parts(&folder);
+    }
     Ok(())
+}
+
+/// Removes a merged bake's parts folder (a failure only warns: the outputs are written).
+fn remove_parts(folder: &Path) {
+    if let Err(e) = std::fs::remove_dir_all(folder) {
+        eprintln!("warning: {}: the parts are merged but could not be removed: {e}", folder.display());
+    }
 }

@@ -35,22 +35,8 @@ pub struct RenderArgs {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "512x512", value_parser = values::size)]
     size: (u32, u32),
-    /// Lat-long environment map (.exr or .hdr) lighting the scene as an infinite light.
-    #[arg(long)]
-    env: Option<PathBuf>,
-    /// Luminance (nit) of an environment texel of value 1.
-    #[arg(long, default_value_t = 1.0, value_parser = values::intensity())]
-    env_intensity: f32,
-    /// A physical sun and sky (Hosek-Wilkie) for a place and a UTC time: latitude (degrees north),
-    /// longitude (degrees east), UTC date-time, optional turbidity 1-10 (default 3), e.g.
-    /// 48.86,2.35,2024-06-21T10:00 or 48.86,2.35,2024-06-21T10:00,5. +Y is up, -Z north. Replaces
-    /// the sky a scene file carries (its KELVIN_sun_sky extension).
-    #[arg(long, value_name = "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]")]
-    sky: Option<String>,
-    /// Multiplies the sky's physical radiance (1 = real daylight, ~100 klx in full sun); also a
-    /// scene file's own sky.
-    #[arg(long, default_value_t = 1.0, value_parser = values::intensity())]
-    sky_intensity: f32,
+    #[command(flatten)]
+    lighting: LightingArgs,
     /// How light reaches the camera: paths of up to --max-depth bounces, every bounce through the
     /// light system, or direct lighting (light and BSDF samples at the surface the camera sees).
     #[arg(long, value_enum, default_value = "path")]
@@ -122,6 +108,40 @@ pub struct RenderArgs {
     report: bool,
 }
 
+/// The lights a job adds to its scene: an environment map or a sun and sky (`render`, `bake`).
+#[derive(clap::Args)]
+pub(super) struct LightingArgs {
+    /// Lat-long environment map (.exr or .hdr) lighting the scene as an infinite light.
+    #[arg(long)]
+    pub(super) env: Option<PathBuf>,
+    /// Luminance (nit) of an environment texel of value 1.
+    #[arg(long, default_value_t = 1.0, value_parser = values::intensity())]
+    pub(super) env_intensity: f32,
+    /// A physical sun and sky (Hosek-Wilkie) for a place and a UTC time: latitude (degrees north),
+    /// longitude (degrees east), UTC date-time, optional turbidity 1-10 (default 3), e.g.
+    /// 48.86,2.35,2024-06-21T10:00 or 48.86,2.35,2024-06-21T10:00,5. +Y is up, -Z north. Replaces
+    /// the sky a scene file carries (its KELVIN_sun_sky extension).
+    #[arg(long, value_name = "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]")]
+    pub(super) sky: Option<String>,
+    /// Multiplies the sky's physical radiance (1 = real daylight, ~100 klx in full sun); also a
+    /// scene file's own sky.
+    #[arg(long, default_value_t = 1.0, value_parser = values::intensity())]
+    pub(super) sky_intensity: f32,
+}
+
+impl LightingArgs {
+    /// `job` with these lights.
+    pub(super) fn apply(&self, job: RenderJob) -> RenderJob {
+        RenderJob {
+            env: self.env.clone(),
+            env_intensity: self.env_intensity,
+            sky: self.sky.clone(),
+            sky_intensity: self.sky_intensity,
+            ..job
+        }
+    }
+}
+
 impl RenderArgs {
     /// The full image's size.
     pub(super) fn size(&self) -> (u32, u32) {
@@ -135,16 +155,12 @@ impl RenderArgs {
 
     /// The render these arguments describe (all but outputs and frames).
     pub(super) fn job(&self) -> RenderJob {
-        RenderJob {
+        self.lighting.apply(RenderJob {
             scene: self.scene.clone(),
             width: self.size.0,
             height: self.size.1,
             spp: self.spp,
             time: self.time,
-            env: self.env.clone(),
-            env_intensity: self.env_intensity,
-            sky: self.sky.clone(),
-            sky_intensity: self.sky_intensity,
             integrator: self.integrator,
             depth: PathDepth { max_depth: self.max_depth, roulette_depth: self.roulette_depth },
             light_sampler: self.light_sampler,
@@ -158,7 +174,8 @@ impl RenderArgs {
             seed: self.seed,
             environment_at: self.environment_at,
             crop: self.crop,
-        }
+            ..RenderJob::default()
+        })
     }
 
     /// Why this render cannot be split into tiles that merge into it (None: it can).

@@ -267,18 +267,30 @@ fn check_dimensions(
     Ok(())
 }
 
-/// Writes `bytes` to a temporary file beside `path` and renames it onto `path` (see the module's doc);
-/// `what` names the file in the error.
-pub(crate) fn write_file(path: &Path, what: &str, bytes: &[u8]) -> Result<(), ImageIoError> {
+/// Writes `bytes` durably: to a temporary file beside `path`, flushed to the disk (`fsync`), then
+/// renamed onto `path` and the folder flushed, so that after a crash `path` is either absent, the
+/// old file or the whole new one, never empty or cut short. `what` names the file in the error.
+pub fn write_file(path: &Path, what: &str, bytes: &[u8]) -> Result<(), ImageIoError> {
+    use std::io::Write;
     let io = |e: std::io::Error| ImageIoError::Io { what: what.into(), msg: e.to_string() };
     // A temporary name in the same directory, so the rename stays on one file system.
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let temp = path.with_file_name(format!(".{name}.{}.partial", std::process::id()));
-    std::fs::write(&temp, bytes).map_err(io)?;
-    std::fs::rename(&temp, path).map_err(|e| {
+    let written = std::fs::File::create(&temp).and_then(|mut f| {
+        f.write_all(bytes)?;
+        f.sync_all()
+    });
+    let renamed = written.and_then(|()| std::fs::rename(&temp, path));
+    if let Err(e) = renamed {
         std::fs::remove_file(&temp).ok();
-        io(e)
-    })
+        return Err(io(e));
+    }
+    // The rename is durable once the folder's entry is (a no-op where folders cannot be opened).
+    let folder = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if let Ok(dir) = std::fs::File::open(folder) {
+        dir.sync_all().ok();
+    }
+    Ok(())
 }
 
 #[cfg(test)]

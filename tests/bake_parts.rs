@@ -1,0 +1,195 @@
+//! Bakes where options meet: split into parts and merged (bit for bit the whole bake, through the
+//! program), texel density choosing each lightmap's side, a volume fitted to a node, and an
+//! environment map lighting a bake from the command line.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use glam::Vec3;
+use kelvin::bake::{LightmapOptions, Part, VolumeOptions, bake_lightmaps, bake_lightmaps_part, merge_lightmaps};
+use kelvin::render::job::RenderJob;
+
+use common::files::{TempDir, test_data};
+use common::gltf_doc::{Doc, floor};
+
+fn kelvin<S: AsRef<std::ffi::OsStr> + std::fmt::Debug>(args: &[S]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_kelvin")).args(args).output().unwrap()
+}
+
+fn ok<S: AsRef<std::ffi::OsStr> + std::fmt::Debug>(args: &[S]) -> String {
+    let run = kelvin(args);
+    assert!(run.status.success(), "kelvin {args:?}: {}", String::from_utf8_lossy(&run.stderr));
+    String::from_utf8_lossy(&run.stdout).into_owned()
+}
+
+fn failed<S: AsRef<std::ffi::OsStr> + std::fmt::Debug>(args: &[S]) -> String {
+    let run = kelvin(args);
+    assert!(!run.status.success(), "kelvin {args:?} succeeded");
+    String::from_utf8_lossy(&run.stderr).into_owned()
+}
+
+/// Every file of folder `a` and `b` (by name, sorted), with their bytes.
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .map(|p| (p.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read(&p).unwrap()))
+        .collect();
+    out.sort();
+    out
+}
+
+/// CornellBox's lightmaps baked in three parts on the command line and merged are the whole
+/// bake's files byte for byte (EXRs, KTX2s and the index); the parts folder is gone after.
+#[test]
+fn lightmap_parts_merge_into_the_whole_bake_byte_for_byte() {
+    let dir = TempDir::new("bake-parts", "cornell");
+    let scene = test_data("gltf/bevy/CornellBox.glb");
+    let scene = scene.to_str().unwrap();
+    let (whole, split) = (dir.join("whole"), dir.join("split"));
+    let base = ["bake", "lightmaps", scene, "--size", "16", "--spp", "4", "--max-depth", "3", "--seed", "5"];
+    ok(&[&base[..], &["-o", whole.to_str().unwrap()]].concat());
+    let split_args = [&base[..], &["-o", split.to_str().unwrap()]].concat();
+    for k in ["3/3", "1/3", "2/3"] {
+        let out = ok(&[&split_args[..], &["--part", k]].concat());
+        assert!(out.contains(&format!("baked part {} of 3", &k[..1])), "{out}");
+    }
+    assert_eq!(std::fs::read_dir(split.join("parts")).unwrap().count(), 3);
+    ok(&[&split_args[..], &["--merge"]].concat());
+    let (a, b) = (files(&whole), files(&split));
+    assert_eq!(a.iter().map(|f| &f.0).collect::<Vec<_>>(), b.iter().map(|f| &f.0).collect::<Vec<_>>());
+    assert_eq!(a.len(), 9, "four meshes' EXR and KTX2, and the index");
+    for ((name, x), (_, y)) in a.iter().zip(&b) {
+        assert!(x == y, "{name} differs between the whole bake and the merged parts");
+    }
+    assert!(!split.join("parts").exists());
+}
+
+/// A merge refuses a missing part, a part of another bake (other spp: the differing setting is
+/// named), and a time budget cannot be split.
+#[test]
+fn a_merge_refuses_missing_and_foreign_parts() {
+    let dir = TempDir::new("bake-parts", "refuse");
+    let scene = test_data("gltf/bevy/CornellBox.glb");
+    let out = dir.join("maps");
+    let args = ["bake", "lightmaps", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--size", "8"];
+    let with = |extra: &[&'static str]| -> Vec<String> { args.iter().chain(extra).map(|s| s.to_string()).collect() };
+    ok(&with(&["--spp", "2", "--part", "1/2"]));
+    let err = failed(&with(&["--spp", "2", "--merge"]));
+    assert!(err.contains("are in no part"), "{err}");
+    ok(&with(&["--spp", "3", "--part", "2/2"]));
+    let err = failed(&with(&["--spp", "2", "--merge"]));
+    assert!(err.contains("/settings/command/spp is 2 against 3"), "{err}");
+    let err = failed(&with(&["--time", "1", "--part", "1/2"]));
+    assert!(err.contains("--time") && err.contains("--part"), "{err}");
+    let err = failed(&with(&["--part", "3/2"]));
+    assert!(err.contains("1 <= K <= N"), "{err}");
+}
+
+/// Through the library, a volume in parts: every side of the merged volume is the whole bake's,
+/// and parts of a lightmap bake do not merge into a volume.
+#[test]
+fn volume_parts_merge_bit_for_bit_and_kinds_do_not_mix() {
+    let dir = TempDir::new("bake-parts", "volume");
+    let path = dir.join("scene.gltf");
+    let mut doc = Doc::default();
+    let m = doc.material(0.5, 0.0);
+    doc.mesh("floor", &[floor([-1.0, 1.0], [-1.0, 1.0], 0.0, m)]);
+    doc.light(serde_json::json!({ "type": "point", "intensity": 5.0 }), Vec3::new(0.2, 1.0, 0.1), [0.0, 0.0, 0.0, 1.0]);
+    doc.write(&path);
+    let load = || RenderJob { scene: Some(path.clone()), seed: 3, ..RenderJob::default() }.load().unwrap();
+    let opts = VolumeOptions {
+        resolution: glam::UVec3::new(3, 2, 2),
+        spp: 6,
+        bounds: Some((Vec3::new(-1.0, 0.1, -1.0), Vec3::new(1.0, 1.1, 1.0))),
+        ..VolumeOptions::default()
+    };
+    let whole = kelvin::bake::bake_volume(&mut load(), &opts, |_| {}).unwrap();
+    let parts: Vec<_> = (0..4)
+        .map(|index| {
+            let part = kelvin::bake::bake_volume_part(&mut load(), &opts, Part { index, count: 4 }, |_| {}).unwrap();
+            // Through the file format, as a farm moves them.
+            kelvin::bake::BakePart::from_bytes(&part.to_bytes(), "part").unwrap()
+        })
+        .collect();
+    let merged = kelvin::bake::merge_volume(&mut load(), &opts, parts).unwrap();
+    assert_eq!(merged.sides, whole.sides);
+    assert_eq!(merged.std_error, whole.std_error);
+    assert_eq!(merged.state, whole.state);
+    let lightmap_opts = LightmapOptions { size: 4, spp: 2, ..LightmapOptions::default() };
+    let part = bake_lightmaps_part(&mut load(), &lightmap_opts, Part::WHOLE, |_| {}).unwrap();
+    let err = kelvin::bake::merge_volume(&mut load(), &opts, vec![part]).unwrap_err().to_string();
+    assert!(err.contains("lightmaps bake"), "{err}");
+    let part = bake_lightmaps_part(&mut load(), &lightmap_opts, Part { index: 0, count: 2 }, |_| {}).unwrap();
+    let err = merge_lightmaps(&mut load(), &lightmap_opts, vec![part]).unwrap_err().to_string();
+    assert!(err.contains("are in no part"), "{err}");
+}
+
+/// Texel density picks each mesh's side from its area: a 1 m and a 4 m wide quad at 10 texels per
+/// metre get sides 12 (10, rounded up to a multiple of 4) and 40, and the largest side caps them.
+#[test]
+fn texel_density_sizes_each_lightmap_by_its_area() {
+    let dir = TempDir::new("bake-parts", "density");
+    let path = dir.join("scene.gltf");
+    let mut doc = Doc::default();
+    let m = doc.material(0.5, 0.0);
+    doc.mesh("small", &[floor([0.0, 1.0], [0.0, 1.0], 0.0, m)]);
+    doc.mesh("large", &[floor([2.0, 6.0], [0.0, 4.0], 0.0, m)]);
+    doc.light(serde_json::json!({ "type": "point", "intensity": 5.0 }), Vec3::new(1.0, 2.0, 1.0), [0.0, 0.0, 0.0, 1.0]);
+    doc.write(&path);
+    let load = || RenderJob { scene: Some(path.clone()), ..RenderJob::default() }.load().unwrap();
+    let sides = |size, density| {
+        let opts = LightmapOptions { size, texels_per_unit: Some(density), spp: 1, ..LightmapOptions::default() };
+        let report = bake_lightmaps(&mut load(), &opts, |_| {}).unwrap();
+        report.lightmaps.iter().map(|m| (m.name.clone(), m.size)).collect::<Vec<_>>()
+    };
+    assert_eq!(sides(4096, 10.0), [("small".into(), 12), ("large".into(), 40)]);
+    assert_eq!(sides(32, 10.0), [("small".into(), 12), ("large".into(), 32)]);
+    let opts = LightmapOptions { texels_per_unit: Some(f32::NAN), ..LightmapOptions::default() };
+    let err = bake_lightmaps(&mut load(), &opts, |_| {}).unwrap_err().to_string();
+    assert!(err.contains("texels_per_unit = NaN"), "{err}");
+}
+
+/// `--node` fits the volume to the meshes a node places (the light probe's transform is their
+/// box), an unknown node is an error listing the names there are, and `--env` lights a bake as it
+/// lights a render: a floor open to a uniform map of 0.5 at --env-intensity 8 holds E / pi = 4 nit.
+#[test]
+fn node_bounds_and_an_environment_map_on_the_command_line() {
+    let dir = TempDir::new("bake-parts", "node-env");
+    let path = dir.join("scene.gltf");
+    let mut doc = Doc::default();
+    let m = doc.material(0.5, 0.0);
+    doc.mesh("floor", &[floor([-1.0, 3.0], [-2.0, 1.0], 0.5, m)]);
+    doc.write(&path);
+    let env = dir.join("grey.exr");
+    kelvin::render::film_io::write_exr(&env, 8, 4, &[Vec3::splat(0.5); 32]).unwrap();
+    let scene = path.to_str().unwrap();
+    let out = dir.join("maps");
+    let args = ["bake", "lightmaps", scene, "-o", out.to_str().unwrap(), "--size", "4", "--spp", "1024", "--env"];
+    ok(&[&args[..], &[env.to_str().unwrap(), "--env-intensity", "8"]].concat());
+    let (_, _, texels) = kelvin::render::film_io::read_exr(&out.join("floor.exr")).unwrap();
+    // 1024 paths per texel leave about 1% noise (MIS of the map's samples and cosine samples).
+    for t in &texels {
+        assert!((*t - Vec3::splat(4.0)).abs().max_element() < 0.15, "{t}");
+    }
+    let mean = texels.iter().sum::<Vec3>() / texels.len() as f32;
+    assert!((mean - Vec3::splat(4.0)).abs().max_element() < 0.05, "{mean}");
+    let volume = dir.join("v.ktx2");
+    let args = ["bake", "volume", scene, "-o", volume.to_str().unwrap(), "--resolution", "2,1,2", "--spp", "4"];
+    let err = failed(&[&args[..], &["--node", "nothing"]].concat());
+    assert!(err.contains("no mesh is placed by a node named \"nothing\"") && err.contains("floor.node"), "{err}");
+    // A flat floor has no height: a volume needs a box.
+    let err = failed(&[&args[..], &["--node", "floor.node"]].concat());
+    assert!(err.contains("no volume"), "{err}");
+    let mut doc = Doc::default();
+    let m = doc.material(0.5, 0.0);
+    doc.mesh("box", &[common::gltf_doc::cuboid(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(1.0, 3.0, 4.0), false, false, m)]);
+    doc.write(&path);
+    ok(&[&args[..], &["--node", "box.node"]].concat());
+    let info: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("v.json")).unwrap()).unwrap();
+    assert_eq!(info["transform"]["translation"], serde_json::json!([0.0, 1.5, 3.0]));
+    assert_eq!(info["transform"]["scale"], serde_json::json!([2.0, 3.0, 2.0]));
+}
