@@ -160,3 +160,57 @@ fn frames_of_an_animated_scene_are_jobs_of_their_own() {
     let out = kelvin(&["batch", &manifest]);
     assert!(text(&out).contains("3 jobs: 1 rendered, 2 skipped, 0 failed"), "{}", text(&out));
 }
+
+/// Bake jobs: a lightmap bake in three parts and a volume, each byte for byte what `kelvin bake`
+/// writes alone; bad bake jobs fail with the cause (an unknown flag as the command line says it,
+/// parts out of range, a time budget split) while the others run; a rerun skips finished bakes.
+#[test]
+fn batch_bakes_in_parts_byte_for_byte() {
+    let dir = TempDir::new("cli-batch", "bake");
+    let cornell = test_data("gltf/bevy/CornellBox.glb");
+    let manifest = write_manifest(
+        &dir,
+        &format!(
+            r#"{{"name": "maps", "bake": "lightmaps", "scene": "{c}", "output": "out/maps", "parts": 3,
+                 "settings": {{"size": 16, "spp": 4, "max_depth": 2, "seed": 3}}}},
+               {{"name": "probe", "bake": "volume", "scene": "{c}", "output": "out/probe.ktx2",
+                 "settings": {{"resolution": [2, 2, 3], "spp": 4}}}},
+               {{"name": "typo", "bake": "lightmaps", "scene": "{c}", "output": "out/typo", "settings": {{"sise": 8}}}},
+               {{"name": "many", "bake": "volume", "scene": "{c}", "output": "out/many.ktx2", "parts": 0}},
+               {{"name": "timed", "bake": "lightmaps", "scene": "{c}", "output": "out/timed", "parts": 2,
+                 "settings": {{"time": 1}}}}"#,
+            c = cornell.display()
+        ),
+    );
+    let out = kelvin(&["batch", &manifest]);
+    let log = text(&out);
+    assert!(!out.status.success(), "{log}");
+    assert!(log.contains("typo") && log.contains("unexpected argument '--sise'"), "{log}");
+    assert!(log.contains("many") && log.contains("parts: 0 is not a whole number"), "{log}");
+    assert!(log.contains("timed") && log.contains("cannot be used with"), "{log}");
+    assert!(log.contains("5 jobs: 2 rendered, 0 skipped, 3 failed"), "{log}");
+    let c = cornell.to_str().unwrap();
+    let plain = dir.join("plain");
+    let p = plain.to_str().unwrap();
+    let args = ["bake", "lightmaps", c, "-o", p, "--size", "16", "--spp", "4", "--max-depth", "2", "--seed", "3"];
+    assert!(kelvin(&args).status.success());
+    let mut names: Vec<_> = std::fs::read_dir(&plain).unwrap().map(|e| e.unwrap().file_name()).collect();
+    names.sort();
+    assert_eq!(names.len(), 9);
+    for name in names {
+        let (a, b) = (std::fs::read(plain.join(&name)).unwrap(), std::fs::read(dir.join("out/maps").join(&name)));
+        assert!(b.is_ok_and(|b| b == a), "{name:?} differs from kelvin bake's");
+    }
+    assert!(!dir.join("out/maps/parts").exists());
+    let volume = dir.join("plain.ktx2");
+    let args = ["bake", "volume", c, "-o", volume.to_str().unwrap(), "--resolution", "2,2,3", "--spp", "4"];
+    assert!(kelvin(&args).status.success());
+    assert!(std::fs::read(&volume).unwrap() == std::fs::read(dir.join("out/probe.ktx2")).unwrap());
+    let plan = text(&kelvin(&["batch", &manifest, "--plan"]));
+    let plan: serde_json::Value = serde_json::from_str(&plan).unwrap();
+    assert_eq!(plan["jobs"][0]["command"], "bake");
+    assert_eq!(plan["jobs"][0]["parts"], 3);
+    assert_eq!(plan["jobs"][0]["done"], true);
+    let again = text(&kelvin(&["batch", &manifest]));
+    assert!(again.contains("5 jobs: 0 rendered, 2 skipped, 3 failed"), "{again}");
+}

@@ -10,6 +10,10 @@ then joins each job's tiles with `kelvin merge`, which checks that they cover th
 kelvin's random numbers are a function of the pixel, so the merged image is byte for byte the one
 `kelvin render` writes on one machine.
 
+Bake jobs (`"bake"` in the manifest) split into the parts the manifest gives: each part is a task that
+runs `kelvin bake ... --part K/N` and returns the part's sums; `kelvin bake ... --merge` joins them into the
+lightmaps (or volume) byte for byte as one `kelvin bake` writes them.
+
 Tasks whose worker or node dies are retried (--max-retries); a job whose tile fails in kelvin itself
 (a bad scene, say) fails with kelvin's message and the other jobs go on. The exit code is 0 only if
 every job succeeded or was already finished. The kelvin binary and the scenes must be at the same
@@ -75,6 +79,33 @@ def render_tile(kelvin, args, crop, threads, timeout):
             return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
 
 
+@ray.remote
+def bake_part(kelvin, args, part, parts, threads, timeout):
+    """Runs `kelvin bake ARGS --part PART/PARTS` in a temporary folder; returns (part file bytes, node,
+    seconds, kelvin's CPU seconds)."""
+    start, cpu = time.monotonic(), cpu_seconds()
+    node = ray.get_runtime_context().get_node_id()
+    what = f"part {part}/{parts}"
+    with tempfile.TemporaryDirectory(prefix="kelvin-bake-") as tmp:
+        # A volume is written as .ktx2 (its parts beside it), lightmaps into a folder.
+        out = os.path.join(tmp, "out.ktx2" if args[0] == "volume" else "out")
+        cmd = [kelvin, "bake", *args, "--part", f"{part}/{parts}", "--threads", str(threads), "-o", out]
+        try:
+            run = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise TileFailed(f"{what}: kelvin bake took over {timeout} s")
+        except OSError as e:
+            raise TileFailed(f"{what}: cannot run {kelvin}: {e}")
+        if run.returncode != 0:
+            lines = [l for l in run.stderr.splitlines() if l.strip()]
+            raise TileFailed(f"{what}: {lines[-1] if lines else 'kelvin bake failed'}")
+        found = [os.path.join(d, f) for d, _, fs in os.walk(tmp) for f in fs if f.endswith(".kbake")]
+        if len(found) != 1:
+            raise TileFailed(f"{what}: kelvin bake wrote {len(found)} part files")
+        with open(found[0], "rb") as f:
+            return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
+
+
 def cpu_seconds():
     """User and system CPU seconds of this process's finished children (a worker runs one task at a time)."""
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -111,6 +142,19 @@ def merge(kelvin, job, tiles):
         return None if run.returncode == 0 else f"kelvin merge: {run.stderr.strip()}"
 
 
+def merge_bake(kelvin, job, parts):
+    """Writes the bake's parts into its parts folder and joins them with `kelvin bake --merge`; None or the error."""
+    folder = job["parts_dir"]
+    os.makedirs(folder, exist_ok=True)
+    n = len(parts)
+    for k, data in enumerate(parts, 1):
+        with open(os.path.join(folder, f"part-{k}-of-{n}.kbake"), "wb") as f:
+            f.write(data)
+    cmd = [kelvin, "bake", *job["args"], "--merge", "-o", job["output"]]
+    run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    return None if run.returncode == 0 else f"kelvin bake --merge: {run.stderr.strip()}"
+
+
 def run(opts):
     kelvin = os.path.abspath(opts.kelvin)
     jobs = plan(kelvin, opts.manifest)
@@ -128,6 +172,13 @@ def run(opts):
             status[i] = ("FAILED", job["error"])
         elif job["done"] and not opts.force:
             status[i] = ("skipped", f"{job['output']} exists")
+        elif job.get("command") == "bake":
+            n = job["parts"]
+            tiles[i] = [None] * n
+            for k in range(n):
+                task = bake_part.options(num_cpus=opts.threads, max_retries=opts.max_retries)
+                ref = task.remote(kelvin, job["args"], k + 1, n, opts.threads, opts.task_timeout)
+                pending[ref] = (i, k)
         else:
             # A job whose tiles would not merge into its image (ReSTIR's reuse) renders as one tile.
             if job.get("untileable"):
@@ -171,7 +222,8 @@ def run(opts):
             have = sum(d is not None for d in tiles[i])
             print(f"[{time.monotonic() - start:6.1f} s] tiles {done}/{total}: {name} {have}/{len(tiles[i])}", flush=True)
             if have == len(tiles[i]) and i not in status:
-                error = merge(kelvin, jobs[i], tiles[i])
+                join = merge_bake if jobs[i].get("command") == "bake" else merge
+                error = join(kelvin, jobs[i], tiles[i])
                 status[i] = ("FAILED", f"job {i} ({name}): {error}") if error else ("rendered", jobs[i]["output"])
                 tiles[i] = []  # the bytes are written; free them
     wall = time.monotonic() - start

@@ -4,9 +4,10 @@
     python test_cluster.py [--kelvin target/debug/kelvin]
 
 1. A manifest of 3 jobs (two scenes, both colour modes, an environment camera), one of 2 frames of an animated
-   scene, a ReSTIR job with an exposure (rendered as one tile: its reuse does not tile), and 2 bad ones (a missing
-   scene, a bad size), split into 16 tiles each: every merged image and its PNG preview is byte for byte a plain
-   `kelvin render`'s, both nodes rendered tiles, the bad jobs fail with kelvin's message and the exit code says so.
+   scene, a ReSTIR job with an exposure (rendered as one tile: its reuse does not tile), a lightmap bake in 5 parts,
+   and 2 bad ones (a missing scene, a bad size), split into 16 tiles each: every merged image and its PNG preview
+   is byte for byte a plain `kelvin render`'s (every baked file a plain `kelvin bake`'s), both nodes rendered
+   tiles, the bad jobs fail with kelvin's message and the exit code says so.
 2. The same good jobs again while the second node's worker processes are killed mid-run: Ray retries their
    tiles and the images are still byte-identical.
 
@@ -136,9 +137,18 @@ def png_of(exr):
 
 
 def references(kelvin, jobs, folder):
-    """A plain `kelvin render` of each job: the bytes of its EXR and of its PNG preview, by output path."""
+    """A plain `kelvin render` of each job: the bytes of its EXR and of its PNG preview, by output path (for a
+    bake, a plain `kelvin bake`: the bytes of every file it writes)."""
     refs = {}
     for i, job in enumerate(jobs):
+        if job["command"] == "bake":
+            out = os.path.join(folder, f"ref{i}")
+            run = subprocess.run([kelvin, "bake", *job["args"], "-o", out], capture_output=True, text=True, timeout=120)
+            check(run.returncode == 0, run.stderr)
+            for name in os.listdir(out):
+                with open(os.path.join(out, name), "rb") as f:
+                    refs[os.path.join(job["output"], name)] = f.read()
+            continue
         out = os.path.join(folder, f"ref{i}.exr")
         run = subprocess.run([kelvin, "render", *job["args"], "-o", out], capture_output=True, text=True, timeout=120)
         check(run.returncode == 0, run.stderr)
@@ -185,6 +195,9 @@ def main():
             # ReSTIR's reuse does not tile: one task renders it whole; its exposure reaches the PNG.
             {"name": "room-restir", "output": "out/restir.exr", "size": "40x30", "spp": 8,
              "settings": {"light_sampler": "restir", "exposure": 1.5}},
+            # Lightmaps baked in 5 parts on the cluster and merged.
+            {"name": "box-lightmaps", "bake": "lightmaps", "scene": os.path.join(REPO, "tests/data/gltf/bevy/CornellBox.glb"),
+             "output": "out/maps", "parts": 5, "settings": {"size": 24, "spp": 16, "seed": 2}},
         ]
         bad = [
             {"name": "missing-scene", "scene": "no/such/scene.glb", "output": "out/missing.exr"},
@@ -193,7 +206,7 @@ def main():
         manifest = os.path.join(work, "jobs.json")
         with open(manifest, "w") as f:
             json.dump({"jobs": good + bad}, f)
-        refs = references(kelvin, kelvin_plan(kelvin, manifest)[:6], work)
+        refs = references(kelvin, kelvin_plan(kelvin, manifest)[:7], work)
 
         cluster.start()
         print(f"cluster up at {cluster.address} in {time.monotonic() - started:.1f} s", flush=True)
@@ -208,13 +221,13 @@ def main():
         with open(summary) as f:
             result = json.load(f)
         states = {int(k): v for k, v in result["jobs"].items()}
-        check([states[i]["status"] for i in range(8)] == ["rendered"] * 6 + ["FAILED"] * 2, f"{states}")
-        check("no/such/scene.glb: no such file" in states[6]["detail"], states[6]["detail"])
-        check("'0x10'" in states[7]["detail"], states[7]["detail"])
+        check([states[i]["status"] for i in range(9)] == ["rendered"] * 7 + ["FAILED"] * 2, f"{states}")
+        check("no/such/scene.glb: no such file" in states[7]["detail"], states[7]["detail"])
+        check("'0x10'" in states[8]["detail"], states[8]["detail"])
         check(len(result["nodes"]) == 2, f"tiles ran on both nodes: {result['nodes']}")
-        check(sum(n["tiles"] for n in result["nodes"].values()) == 81, f"{result['nodes']}")
-        print(f"1. 3 jobs and 2 frames x 16 tiles and a whole ReSTIR job byte-identical, PNGs included; "
-              f"bad jobs failed clearly ({time.monotonic() - started:.1f} s)")
+        check(sum(n["tiles"] for n in result["nodes"].values()) == 86, f"{result['nodes']}")
+        print(f"1. 3 jobs and 2 frames x 16 tiles, a whole ReSTIR job and a bake of 5 parts byte-identical, "
+              f"PNGs included; bad jobs failed clearly ({time.monotonic() - started:.1f} s)")
 
         # 2. The same jobs while the second node's workers are killed.
         fault = os.path.join(work, "fault")
@@ -230,7 +243,7 @@ def main():
         try:
             while proc.poll() is None and time.monotonic() < deadline:
                 workers, procs = cluster.second_node_workers()
-                busy = [pid for pid, title in workers if "render_tile" in title]
+                busy = [pid for pid, title in workers if "render_tile" in title or "bake_part" in title]
                 if busy and len(kills) < 2:
                     victims = descendants(procs, [pid for pid, _ in workers])
                     kill(victims, signal.SIGKILL)

@@ -122,6 +122,42 @@ pub fn run(args: BakeArgs) -> Result<(), CliError> {
     }
 }
 
+#[derive(clap::Parser)]
+#[command(name = "kelvin bake")]
+struct BakeCommandLine {
+    #[command(flatten)]
+    args: BakeArgs,
+}
+
+/// `kelvin bake` arguments (`lightmaps ...` or `volume ...`) as the command line parses them:
+/// a manifest's bake job means what the command means. The error is clap's first line.
+pub(super) fn parse(args: &[String]) -> Result<BakeArgs, String> {
+    let argv = std::iter::once("kelvin-bake".to_owned()).chain(args.iter().cloned());
+    clap::Parser::try_parse_from(argv).map(|c: BakeCommandLine| c.args).map_err(|e| {
+        let text = e.to_string();
+        text.lines().next().unwrap_or_default().trim_start_matches("error: ").to_owned()
+    })
+}
+
+impl BakeArgs {
+    /// Where the finished bake goes, and the folder its parts go to.
+    pub(super) fn output(&self) -> (&Path, PathBuf) {
+        match &self.command {
+            BakeCommand::Lightmaps(a) => (&a.output, a.output.join("parts")),
+            BakeCommand::Volume(a) => (&a.output, a.output.with_extension("parts")),
+        }
+    }
+
+    /// The bake is finished: its index file (lightmaps.json, or the volume's .json) exists, which is
+    /// written last.
+    pub(super) fn finished(&self) -> bool {
+        match &self.command {
+            BakeCommand::Lightmaps(a) => a.output.join(bake::LIGHTMAPS_JSON).is_file(),
+            BakeCommand::Volume(a) => a.output.is_file() && a.output.with_extension("json").is_file(),
+        }
+    }
+}
+
 impl CommonArgs {
     /// Loads `scene` as `kelvin render` would, printing the loader's warnings and the summary.
     fn load(&self, scene: &Path) -> Result<LoadedJob, CliError> {

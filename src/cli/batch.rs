@@ -1,5 +1,5 @@
-//! `kelvin batch MANIFEST [--plan] [--force] [--threads T]`: renders a manifest's jobs one after
-//! another with a progress bar and a summary. A job whose output exists is finished (images are
+//! `kelvin batch MANIFEST [--plan] [--force] [--threads T]`: renders (and bakes) a manifest's jobs
+//! one after another with a progress bar and a summary. A job whose output exists is finished (images are
 //! written under a temporary name and renamed, the .exr after its .png preview) and is skipped, so
 //! a rerun resumes; a job that fails says why and the others still run.
 
@@ -81,6 +81,13 @@ fn run_job(job: &PlannedJob, force: bool, progress: impl FnMut(f32) + Send) -> O
     if job.done && !force {
         return Outcome::Skipped;
     }
+    if job.command == "bake" {
+        let start = std::time::Instant::now();
+        return match bake(job) {
+            Ok(()) => Outcome::Rendered(start.elapsed().as_secs_f64()),
+            Err(e) => Outcome::Failed(format!("job {} ({}): {e}", job.index, job.name)),
+        };
+    }
     let result = job.render_args(&job.output).map_err(|e| e.to_string()).and_then(|render| {
         if let Some(dir) = job.output.parent() {
             std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -91,4 +98,22 @@ fn run_job(job: &PlannedJob, force: bool, progress: impl FnMut(f32) + Send) -> O
         Ok(frames) => Outcome::Rendered(frames.iter().map(|r| r.stats.seconds).sum()),
         Err(e) => Outcome::Failed(format!("job {} ({}): {e}", job.index, job.name)),
     }
+}
+
+/// Runs a bake job: whole, or its parts one after another and then their merge (as a farm would
+/// spread them).
+fn bake(job: &PlannedJob) -> Result<(), String> {
+    let output = ["-o".to_owned(), job.output.display().to_string()];
+    let run = |extra: &[String]| {
+        let argv: Vec<String> = job.args.iter().chain(extra).chain(&output).cloned().collect();
+        let args = super::bake::parse(&argv)?;
+        super::bake::run(args).map_err(|e| e.to_string())
+    };
+    if job.parts <= 1 {
+        return run(&[]);
+    }
+    for k in 1..=job.parts {
+        run(&["--part".to_owned(), format!("{k}/{}", job.parts)])?;
+    }
+    run(&["--merge".to_owned()])
 }

@@ -12,6 +12,7 @@
 //!               "animation": "walk" } ] }
 //! ```
 //! Relative paths are relative to the manifest's folder. Unknown keys are errors. A job with
+//! `bake` runs `kelvin bake` instead (`bake_jobs.rs`). A job with
 //! `frames` is planned as one job per frame (`--frames K`, the output's '#' run numbered), so
 //! that frames, like tiles, can be spread, skipped when finished and retried one by one.
 
@@ -104,8 +105,14 @@ pub struct PlannedJob {
     pub output: PathBuf,
     pub width: u32,
     pub height: u32,
-    /// `kelvin render` arguments, the output (`-o`) excepted.
+    /// The `kelvin` command the job runs: "render" or "bake".
+    pub command: &'static str,
+    /// `kelvin render` (or `kelvin bake`) arguments, the output (`-o`) excepted.
     pub args: Vec<String>,
+    /// A bake: the parts it is split into (`--part K/N`, then `--merge`), and the folder the
+    /// merge reads them from.
+    pub parts: u32,
+    pub parts_dir: Option<PathBuf>,
     /// The output exists: a finished render (images are written under a temporary name and renamed).
     pub done: bool,
     /// Why the job cannot be split into tiles (ReSTIR's reuse): a driver renders it whole.
@@ -186,7 +193,10 @@ fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Pat
         output: output.clone().unwrap_or_default(),
         width: 0,
         height: 0,
+        command: "render",
         args: Vec::new(),
+        parts: 1,
+        parts_dir: None,
         done: false,
         untileable: None,
         exposure: None,
@@ -196,6 +206,18 @@ fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Pat
         && let Some(file) = output.as_ref().and_then(|o| o.file_name())
     {
         planned.name = file.to_string_lossy().into_owned();
+    }
+    if job.get("bake").is_some() {
+        planned.command = "bake";
+        match super::bake_jobs::resolve(&job, base, &planned.output) {
+            Ok(bake) => {
+                planned.done = bake.parsed.finished();
+                planned.parts_dir = Some(bake.parsed.output().1);
+                (planned.args, planned.parts) = (bake.args, bake.parts);
+            }
+            Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
+        }
+        return planned;
     }
     match resolve(job, frame, base) {
         Ok((args, parsed)) => {

@@ -1,5 +1,6 @@
 //! Subcommands of the `kelvin` program; each file parses its arguments and calls the library.
 mod bake;
+mod bake_jobs;
 mod batch;
 mod bench;
 mod frames;
