@@ -121,7 +121,7 @@ fn unreadable_manifests_and_unsupported_entries_are_clear_errors() {
     let log = text(&out);
     assert!(log.contains("f.exr: an output for --frames needs a run of '#'"), "{log}");
     assert!(log.contains("missing field `output`"), "{log}");
-    assert!(log.contains("frames: '3..1': the last frame is before the first"), "{log}");
+    assert!(log.contains("frames: '3..1': 1 is before 3"), "{log}");
     assert!(log.contains("--frames: the default scene has no animation"), "{log}");
     assert!(log.contains("fps and animation need frames"), "{log}");
     assert!(log.contains("6 jobs: 0 rendered, 0 skipped, 6 failed"), "{log}");
@@ -213,4 +213,45 @@ fn batch_bakes_in_parts_byte_for_byte() {
     assert_eq!(plan["jobs"][0]["done"], true);
     let again = text(&kelvin(&["batch", &manifest]));
     assert!(again.contains("5 jobs: 0 rendered, 2 skipped, 3 failed"), "{again}");
+}
+
+/// `--plan` finds what it can before any work: two jobs writing one output (both named), an
+/// output kelvin cannot write, a volume not written as .ktx2; farm frame lists plan one entry per
+/// frame; `--task N` runs plan entry N alone, as a farm's task runner calls it.
+#[test]
+fn plan_checks_outputs_and_task_runs_one_entry() {
+    let dir = TempDir::new("cli-batch", "plan");
+    let cornell = test_data("gltf/bevy/CornellBox.glb");
+    let lamp = test_data("gltf/kelvin/animated_lamp.gltf");
+    let manifest = write_manifest(
+        &dir,
+        &format!(
+            r#"{{"name": "a", "output": "out/same.exr", "size": "8x8", "spp": 1}},
+               {{"name": "b", "output": "out/same.exr", "size": "8x8", "spp": 2}},
+               {{"name": "tif", "output": "out/x.tif", "size": "8x8"}},
+               {{"name": "vol", "bake": "volume", "scene": "{c}", "output": "out/v.exr"}},
+               {{"name": "lamp", "scene": "{l}", "output": "out/lamp_##.exr", "frames": "1-5x2,8", "size": "8x8", "spp": 1}}"#,
+            c = cornell.display(),
+            l = lamp.display()
+        ),
+    );
+    let plan = kelvin(&["batch", &manifest, "--plan"]);
+    let plan: serde_json::Value = serde_json::from_slice(&plan.stdout).unwrap();
+    let jobs = plan["jobs"].as_array().unwrap();
+    let error = |k: usize| jobs[k]["error"].as_str().unwrap_or_default().to_owned();
+    for k in [0, 1] {
+        assert!(error(k).contains("same.exr: written by job 0 (a) and job 1 (b)"), "{}", error(k));
+    }
+    assert!(error(2).contains("x.tif: use .exr or .png"), "{}", error(2));
+    assert!(error(3).contains("a volume is written as .ktx2"), "{}", error(3));
+    let frames: Vec<u64> = jobs[4..].iter().map(|j| j["frame"].as_u64().unwrap()).collect();
+    assert_eq!(frames, [1, 3, 5, 8]);
+    let out = kelvin(&["batch", &manifest, "--task", "6"]);
+    assert!(out.status.success(), "{}", text(&out));
+    let written: Vec<_> = std::fs::read_dir(dir.join("out")).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(written.len(), 2, "only frame 5 and its preview: {written:?}");
+    assert!(dir.join("out/lamp_05.exr").exists());
+    let out = kelvin(&["batch", &manifest, "--task", "8"]);
+    assert!(!out.status.success() && text(&out).contains("the plan has 8 entries"), "{}", text(&out));
+    assert!(!kelvin(&["batch", &manifest, "--task", "0"]).status.success(), "a failed entry fails its task");
 }

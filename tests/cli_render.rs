@@ -221,7 +221,8 @@ fn bad_frame_requests_are_clear_errors() {
         (vec![lamp, "--frames", "0..2", "--animation", "night", "-o", "never_#.exr"], "(it has 0: day)"),
         (vec![lamp, "--frames", "0..2", "--animation", "1", "-o", "never_#.exr"], "--animation 1: not in"),
         (vec![lamp, "--frames", "0..2", "-o", "never.exr"], "needs a run of '#'"),
-        (vec![lamp, "--frames", "2..0", "-o", "never_#.exr"], "before the first"),
+        (vec![lamp, "--frames", "2..0", "-o", "never_#.exr"], "0 is before 2"),
+        (vec![lamp, "--frames", "1-9x0", "-o", "never_#.exr"], "a step of 0"),
         (vec![lamp, "--frames", "0..2", "--fps", "0", "-o", "never_#.exr"], "frames per second"),
     ] {
         let out = kelvin(&[&["render", "--size", "4x4", "--spp", "1"][..], &args].concat());

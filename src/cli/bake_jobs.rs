@@ -42,6 +42,9 @@ pub(super) fn resolve(job: &Value, base: &Path, output: &Path) -> Result<BakeJob
         Some(k @ ("lightmaps" | "volume")) => k,
         _ => return Err(format!("bake: {} is not \"lightmaps\" or \"volume\"", job["bake"])),
     };
+    if kind == "volume" && output.extension().is_none_or(|e| !e.eq_ignore_ascii_case("ktx2")) {
+        return Err(format!("output {}: a volume is written as .ktx2", output.display()));
+    }
     let parts = match job.get("parts") {
         None => 1,
         Some(v) => v
@@ -88,8 +91,12 @@ pub(super) fn resolve(job: &Value, base: &Path, output: &Path) -> Result<BakeJob
         }
     }
     let with_output = |extra: &[String]| {
-        let argv: Vec<String> =
-            args.iter().cloned().chain(extra.iter().cloned()).chain(["-o".into(), output.display().to_string()]).collect();
+        let argv: Vec<String> = args
+            .iter()
+            .cloned()
+            .chain(extra.iter().cloned())
+            .chain(["-o".into(), output.display().to_string()])
+            .collect();
         parse(&argv)
     };
     // A split is checked as its parts will run (a time budget, say, cannot be split).

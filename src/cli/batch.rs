@@ -19,6 +19,10 @@ pub struct BatchArgs {
     /// Render finished jobs again.
     #[arg(long)]
     force: bool,
+    /// Run only entry N (from 0) of the plan (`--plan` lists them; a job's frames are entries of
+    /// their own): what a render farm's task runner calls.
+    #[arg(long, value_name = "N", conflicts_with = "plan")]
+    task: Option<usize>,
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = super::values::threads())]
     threads: Option<usize>,
@@ -31,7 +35,13 @@ enum Outcome {
 }
 
 pub fn run(args: BatchArgs) -> Result<(), CliError> {
-    let jobs = plan(&args.manifest)?;
+    let mut jobs = plan(&args.manifest)?;
+    if let Some(n) = args.task {
+        if n >= jobs.len() {
+            return Err(format!("--task {n}: the plan has {} entries (0..{})", jobs.len(), jobs.len()).into());
+        }
+        jobs = vec![jobs.swap_remove(n)];
+    }
     if args.plan {
         println!("{}", serde_json::to_string_pretty(&serde_json::json!({ "jobs": jobs }))?);
         return Ok(());

@@ -47,7 +47,7 @@ struct JobSpec {
     spp: Option<u32>,
     #[serde(default)]
     camera: CameraSpec,
-    /// Frames of the scene's animation, "FIRST..LAST" or "K", as `--frames` takes them.
+    /// Frames of the scene's animation, as `--frames` takes them ("0..47", "1-100x2", "1,5,10-20").
     #[allow(dead_code)] // read by `plan_frames` from the JSON
     frames: Option<String>,
     /// Frames per second (default 24).
@@ -157,14 +157,29 @@ pub fn plan(path: &Path) -> Result<Vec<PlannedJob>, String> {
     // Absolute paths in the arguments, so that they mean the same from any working directory.
     let base = std::path::absolute(path).map_err(|e| format!("{what}: {e}"))?;
     let base = base.parent().unwrap_or(Path::new("/"));
-    Ok(manifest.jobs.into_iter().enumerate().flat_map(|(i, job)| plan_frames(i, job, base)).collect())
+    let mut jobs: Vec<PlannedJob> =
+        manifest.jobs.into_iter().enumerate().flat_map(|(i, job)| plan_frames(i, job, base)).collect();
+    // Two jobs writing one output would overwrite each other (and the second would find the first's
+    // file "done"): both are errors, named.
+    let mut writers: std::collections::HashMap<PathBuf, Vec<usize>> = std::collections::HashMap::new();
+    for (k, job) in jobs.iter().enumerate().filter(|(_, j)| j.error.is_none()) {
+        writers.entry(job.output.clone()).or_default().push(k);
+    }
+    for same in writers.values().filter(|w| w.len() > 1) {
+        let names: Vec<String> = same.iter().map(|&k| format!("job {} ({})", jobs[k].index, jobs[k].name)).collect();
+        for &k in same {
+            let what = format!("{}: written by {}", jobs[k].output.display(), names.join(" and "));
+            jobs[k].error = Some(what);
+        }
+    }
+    Ok(jobs)
 }
 
 /// A job, or one job per frame of its `frames`.
 fn plan_frames(index: usize, job: serde_json::Value, base: &Path) -> Vec<PlannedJob> {
     let frames = match job.get("frames") {
         None => return vec![plan_job(index, None, job, base)],
-        Some(f) => f.as_str().ok_or_else(|| format!("frames: {f} is not a string like \"0..47\"")),
+        Some(f) => f.as_str().ok_or_else(|| format!("frames: {f} is not a string like \"0..47\" or \"1-100x2\"")),
     };
     let range = frames.and_then(|f| f.parse::<FrameRange>().map_err(|e| format!("frames: {e}")));
     match range {
@@ -221,6 +236,15 @@ fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Pat
     }
     match resolve(job, frame, base) {
         Ok((args, parsed)) => {
+            let ext = planned.output.extension().map(|e| e.to_ascii_lowercase());
+            if !matches!(ext.as_ref().and_then(|e| e.to_str()), Some("exr" | "png")) {
+                planned.error = Some(format!(
+                    "job {index} ({}): output {}: use .exr or .png",
+                    planned.name,
+                    planned.output.display()
+                ));
+                return planned;
+            }
             planned.done = planned.output.exists();
             (planned.width, planned.height) = parsed.size();
             (planned.args, planned.untileable, planned.exposure) = (args, parsed.tiling_refusal(), parsed.exposure());

@@ -2,7 +2,7 @@
 //! [--sky LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY] [--sky-intensity X]] [--integrator path|direct] [--max-depth N]
 //! [--roulette-depth N] [--light-sampler uniform|power|bvh|ris|restir [--candidates M]
 //! [--neighbours K] [--radius PX] [--biased-reuse]] [--color rgb|spectral] [--seed S]
-//! [--threads T] [--report] [--crop X0,Y0,X1,Y1] [--frames FIRST..LAST [--fps F] [--animation NAME|INDEX]]`.
+//! [--threads T] [--report] [--crop X0,Y0,X1,Y1] [--frames 0..47|1-100x2|1,5,10-20 [--fps F] [--animation NAME|INDEX]]`.
 
 use std::path::{Path, PathBuf};
 
@@ -90,10 +90,10 @@ pub struct RenderArgs {
     /// in the full render, into an EXR that records its place (`kelvin merge` joins tiles).
     #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = values::crop)]
     crop: Option<Crop>,
-    /// Render these frames of the scene's animation (both ends included, or one frame) in one
-    /// process, each frame moving only what the animation moves; the output's run of '#' takes
+    /// Render these frames of the scene's animation in one process (a frame list as render farms
+    /// write it: 7, 0..47 or 1-100 with both ends included, 1-100x2 every other frame, 1,5,10-20), each frame moving only what the animation moves; the output's run of '#' takes
     /// the frame number (-o out_####.exr).
-    #[arg(long, value_name = "FIRST..LAST")]
+    #[arg(long, value_name = "FRAMES")]
     frames: Option<FrameRange>,
     /// Frames per second: frame k shows the animation at k / fps seconds.
     #[arg(long, default_value_t = 24.0, value_parser = values::fps)]
@@ -261,9 +261,11 @@ pub(super) fn render_to_files(
         return Err(format!("{out}: unsupported output extension; use .exr or .png").into());
     }
     // Checked before the scene loads, so a bad name fails at once.
-    let frames: Vec<Option<u32>> = match args.frames {
+    let frames: Vec<Option<u32>> = match &args.frames {
         Some(range) => {
-            frame_output(&args.output, range, range.first)?;
+            for f in range.iter() {
+                frame_output(&args.output, range, f)?;
+            }
             range.iter().map(Some).collect()
         }
         None => vec![None],
@@ -274,7 +276,7 @@ pub(super) fn render_to_files(
     let mut rendered = Vec::with_capacity(frames.len());
     let n = frames.len() as f32;
     for (k, frame) in frames.into_iter().enumerate() {
-        let (output, pose_seconds) = match (frame, args.frames, clip, file) {
+        let (output, pose_seconds) = match (frame, &args.frames, clip, file) {
             (Some(f), Some(range), Some(clip), Some(file)) => {
                 let start = std::time::Instant::now();
                 let posed = pose_gltf(&mut world, file, clip, (f as f64 / args.fps) as f32)?;
