@@ -1,10 +1,17 @@
-//! What made an output: content hashes of the files a job read, so that pieces of one job made on
-//! different machines can be checked to come from the same inputs before they are joined.
+//! What made an output: the program, the inputs (content hashes of the files a job read) and the
+//! settings, so that pieces of one job made on different machines are checked to come from the
+//! same build and inputs before they are joined, and a finished output is known to be the job's.
+//! EXRs carry it as one text attribute, `kelvin`, a JSON object; bake parts in their header.
 
+use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
+use std::sync::OnceLock;
 
 use sha2::{Digest, Sha256};
+
+/// The name of the EXR header attribute that holds the provenance.
+pub const ATTRIBUTE: &str = "kelvin";
 
 /// `sha256:` and the lowercase hex SHA-256 of the file at `path` (what `sha256sum` prints).
 pub fn file_sha256(path: &Path) -> std::io::Result<String> {
@@ -21,15 +28,73 @@ pub fn file_sha256(path: &Path) -> std::io::Result<String> {
     Ok(format!("sha256:{hex}"))
 }
 
+/// The running program: its file name and SHA-256 (two builds of one commit with another
+/// compiler, target CPU or libm differ here), hashed once per process.
+pub fn program() -> &'static str {
+    static PROGRAM: OnceLock<String> = OnceLock::new();
+    PROGRAM.get_or_init(|| {
+        let exe = std::env::current_exe();
+        let name = exe.as_ref().ok().and_then(|p| p.file_name()).map(|n| n.to_string_lossy().into_owned());
+        let hash = exe.as_ref().ok().and_then(|p| file_sha256(p).ok());
+        format!("{} {}", name.unwrap_or_else(|| "unknown".into()), hash.unwrap_or_else(|| "unhashed".into()))
+    })
+}
+
+/// Named text entries: what made a file.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Provenance(pub BTreeMap<String, String>);
+
+impl Provenance {
+    /// kelvin's version and the program ([`program`]): what every EXR kelvin writes records.
+    pub fn of_program() -> Self {
+        Self::default().with("version", env!("CARGO_PKG_VERSION")).with("program", program())
+    }
+
+    /// This with `key` set to `value`.
+    pub fn with(mut self, key: &str, value: impl Into<String>) -> Self {
+        self.0.insert(key.to_owned(), value.into());
+        self
+    }
+
+    /// This without `key`.
+    pub fn without(mut self, key: &str) -> Self {
+        self.0.remove(key);
+        self
+    }
+
+    /// The first key (but those in `ignore`) whose value differs between `self` and `other` (one
+    /// may lack it), with both values: None when they agree.
+    pub fn difference(&self, other: &Provenance, ignore: &[&str]) -> Option<(String, String, String)> {
+        let none = String::from("(none)");
+        let keys = self.0.keys().chain(other.0.keys().filter(|k| !self.0.contains_key(*k)));
+        keys.filter(|k| !ignore.contains(&k.as_str())).find_map(|k| {
+            let (a, b) = (self.0.get(k).unwrap_or(&none), other.0.get(k).unwrap_or(&none));
+            (a != b).then(|| (k.clone(), a.clone(), b.clone()))
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     /// The digest of "abc" from FIPS 180-2's example.
     #[test]
     fn sha256_of_a_known_file() {
         let path = std::env::temp_dir().join(format!("kelvin-sha-{}", std::process::id()));
         std::fs::write(&path, b"abc").unwrap();
-        let digest = super::file_sha256(&path).unwrap();
+        let digest = file_sha256(&path).unwrap();
         std::fs::remove_file(&path).ok();
         assert_eq!(digest, "sha256:ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+    }
+
+    #[test]
+    fn differences_name_the_key() {
+        let a = Provenance::default().with("scene", "x").with("tile", "0,0,4,4");
+        let b = Provenance::default().with("scene", "y").with("tile", "4,0,8,4");
+        assert_eq!(a.difference(&b, &["tile"]), Some(("scene".into(), "x".into(), "y".into())));
+        assert_eq!(a.difference(&a.clone().with("tile", "1"), &["tile"]), None);
+        let c = a.clone().without("scene");
+        assert_eq!(a.difference(&c, &["tile"]), Some(("scene".into(), "x".into(), "(none)".into())));
     }
 }

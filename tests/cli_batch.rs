@@ -156,6 +156,8 @@ fn frames_of_an_animated_scene_are_jobs_of_their_own() {
         let batch = std::fs::read(dir.join(format!("anim/f_0{k}.exr"))).unwrap();
         assert!(batch == std::fs::read(dir.join(format!("one_{k}.exr"))).unwrap(), "frame {k} differs");
     }
+    let p = kelvin::render::film_io::read_exr_provenance(&dir.join("anim/f_03.exr")).unwrap();
+    assert_eq!((p.0["frame"].as_str(), p.0["animation"].as_str(), p.0["animation_name"].as_str()), ("3", "0", "day"));
     std::fs::remove_file(dir.join("anim/f_04.exr")).unwrap();
     let out = kelvin(&["batch", &manifest]);
     assert!(text(&out).contains("3 jobs: 1 rendered, 2 skipped, 0 failed"), "{}", text(&out));

@@ -49,9 +49,19 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
     if let Some(t) = args.threads {
         rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
     }
+    for job in &jobs {
+        remove_stale_temporaries(&job.output);
+    }
     let n = jobs.len();
     let mut outcomes = Vec::with_capacity(n);
     for (k, job) in jobs.iter().enumerate() {
+        if let (Some(why), false) = (&job.stale, args.force) {
+            eprintln!(
+                "{}: {} exists but is not this job's output ({why}); rendering it again",
+                job.name,
+                job.output.display()
+            );
+        }
         let bar = super::render::progress_bar();
         bar.set_message(format!("[{}/{n}] {} ", k + 1, job.name));
         let outcome = run_job(job, args.force, |f| bar.set_position((f * 1000.0) as u64));
@@ -126,4 +136,24 @@ fn bake(job: &PlannedJob) -> Result<(), String> {
         run(&["--part".to_owned(), format!("{k}/{}", job.parts)])?;
     }
     run(&["--merge".to_owned()])
+}
+
+/// Removes what a killed writer left beside `output` (and inside it, for a bake's folder): files
+/// `.<name>.<pid>.partial` (see `film_io::write_file`) of a process that no longer runs.
+fn remove_stale_temporaries(output: &std::path::Path) {
+    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let beside = output.parent().map(|d| (d.to_path_buf(), format!(".{stem}")));
+    let inside = output.is_dir().then(|| (output.to_path_buf(), ".".to_owned()));
+    for (dir, prefix) in beside.into_iter().chain(inside) {
+        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        for path in entries.filter_map(|e| e.ok()).map(|e| e.path()) {
+            let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            let Some(rest) = name.strip_prefix(&prefix).and_then(|r| r.strip_suffix(".partial")) else { continue };
+            let pid = rest.rsplit('.').next().and_then(|p| p.parse::<u32>().ok());
+            let running = pid.is_some_and(|p| std::path::Path::new(&format!("/proc/{p}")).exists());
+            if !running && std::fs::remove_file(&path).is_ok() {
+                eprintln!("removed {}, left by a writer that stopped", path.display());
+            }
+        }
+    }
 }

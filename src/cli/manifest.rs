@@ -113,8 +113,11 @@ pub struct PlannedJob {
     /// merge reads them from.
     pub parts: u32,
     pub parts_dir: Option<PathBuf>,
-    /// The output exists: a finished render (images are written under a temporary name and renamed).
+    /// The output is finished: it exists, reads back, and (an EXR) records this job's scene,
+    /// settings and frame (images are written under a temporary name, flushed and renamed).
     pub done: bool,
+    /// Why an existing output is not this job's (it is rendered again).
+    pub stale: Option<String>,
     /// Why the job cannot be split into tiles (ReSTIR's reuse): a driver renders it whole.
     pub untileable: Option<String>,
     /// The PNG preview's exposure in stops (None: automatic): what `kelvin merge` needs to write the
@@ -213,6 +216,7 @@ fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Pat
         parts: 1,
         parts_dir: None,
         done: false,
+        stale: None,
         untileable: None,
         exposure: None,
         error: None,
@@ -245,13 +249,44 @@ fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Pat
                 ));
                 return planned;
             }
-            planned.done = planned.output.exists();
+            (planned.done, planned.stale) = finished(&planned.output, &parsed, frame);
             (planned.width, planned.height) = parsed.size();
             (planned.args, planned.untileable, planned.exposure) = (args, parsed.tiling_refusal(), parsed.exposure());
         }
         Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
     }
     planned
+}
+
+/// Whether `output` is a finished render of `args` (frame `frame`): it reads back and records
+/// the same scene, settings and frame (the program may differ: a rebuilt kelvin renders the same
+/// image). Otherwise, for an existing file, why not.
+fn finished(output: &Path, args: &RenderArgs, frame: Option<u32>) -> (bool, Option<String>) {
+    use kelvin::render::film_io::{read_exr, read_exr_provenance};
+    if !output.exists() {
+        return (false, None);
+    }
+    if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        return (true, None);
+    }
+    let recorded = match read_exr(output).and_then(|_| read_exr_provenance(output)) {
+        Ok(p) => p,
+        Err(e) => return (false, Some(format!("does not read back: {e}"))),
+    };
+    let wanted = match args.provenance(frame, None) {
+        Ok(p) => p,
+        Err(e) => return (false, Some(e.to_string())),
+    };
+    let ignore = ["program", "version", "animation", "animation_name"];
+    if let Some((key, was, now)) = recorded.difference(&wanted, &ignore) {
+        return (false, Some(format!("its {key} is {was}, the job's {now}")));
+    }
+    // The clip was resolved when rendering; the job names it by index or name.
+    let clip = [recorded.0.get("animation"), recorded.0.get("animation_name")];
+    if frame.is_some() && !clip.iter().flatten().any(|c| **c == args.animation()) {
+        return (false, Some(format!("it shows another animation than {}", args.animation())));
+    }
+    (true, None)
 }
 
 /// The job's `kelvin render` arguments (without `-o`) and what its parser made of them; for one

@@ -1,9 +1,10 @@
 //! `kelvin merge TILE.exr... -o FULL.exr [--exposure S]`: joins the tiles of `kelvin render --crop`
-//! into the full image, which must be covered exactly once.
+//! into the full image, which must be covered exactly once by tiles of one render (their recorded
+//! provenance equal but for the tile).
 
 use std::path::PathBuf;
 
-use kelvin::render::film_io::read_exr_tile;
+use kelvin::render::film_io::{read_exr_provenance, read_exr_tile};
 use kelvin::render::tiles::merge_tiles;
 
 use super::CliError;
@@ -23,9 +24,22 @@ pub struct MergeArgs {
 
 pub fn run(args: MergeArgs) -> Result<(), CliError> {
     let tiles = args.tiles.iter().map(|p| read_exr_tile(p)).collect::<Result<Vec<_>, _>>()?;
+    // Tiles of one image differ in their window only: not in the build, scene, settings or frame.
+    let provenance = args.tiles.iter().map(|p| read_exr_provenance(p)).collect::<Result<Vec<_>, _>>()?;
+    for (path, p) in args.tiles.iter().zip(&provenance).skip(1) {
+        if let Some((key, theirs, first)) = p.difference(&provenance[0], &["tile"]) {
+            return Err(format!(
+                "{}: its {key} is {theirs}, {}'s is {first}: tiles of different renders (or builds) do not merge",
+                path.display(),
+                args.tiles[0].display()
+            )
+            .into());
+        }
+    }
     let (width, height, rgb) = merge_tiles(&tiles)?;
     let exposure = args.exposure.unwrap_or_else(|| kelvin::render::film_io::auto_exposure(&rgb));
-    super::render::write_outputs(&args.output, width, height, &rgb, exposure)?;
+    let merged = provenance.into_iter().next().unwrap_or_default().without("tile");
+    super::render::write_outputs(&args.output, width, height, &rgb, exposure, &merged)?;
     println!("merged {} tiles into {width}x{height}", tiles.len());
     Ok(())
 }

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 
 use bevy_ecs::prelude::*;
 use indicatif::{ProgressBar, ProgressStyle};
-use kelvin::render::film_io::{auto_exposure, write_exr, write_exr_tile, write_png};
+use kelvin::provenance::{Provenance, file_sha256};
+use kelvin::render::film_io::{auto_exposure, write_exr_tile, write_exr_with, write_png};
 use kelvin::render::job::{self, IntegratorChoice, LoadedJob, RenderJob, SamplerChoice};
 use kelvin::render::path::PathDepth;
 use kelvin::render::renderer::{RenderOptions, RenderStats, render_with};
@@ -153,6 +154,11 @@ impl RenderArgs {
         self.exposure
     }
 
+    /// The animation --frames plays, as given (a name or an index).
+    pub(super) fn animation(&self) -> &str {
+        &self.animation
+    }
+
     /// The render these arguments describe (all but outputs and frames).
     pub(super) fn job(&self) -> RenderJob {
         self.lighting.apply(RenderJob {
@@ -176,6 +182,38 @@ impl RenderArgs {
             crop: self.crop,
             ..RenderJob::default()
         })
+    }
+
+    /// What an output of frame `frame` (None without --frames) of the animation `clip` (its index
+    /// and name, once resolved) records: the program, the scene's and environment map's SHA-256,
+    /// every setting that shapes the pixels, the frame, the clip and the tile. Tiles of one image
+    /// differ in `tile` only.
+    pub(super) fn provenance(
+        &self,
+        frame: Option<u32>,
+        clip: Option<(usize, Option<&str>)>,
+    ) -> Result<Provenance, CliError> {
+        let hash = |p: &Path| file_sha256(p).map_err(|e| format!("{}: {e}", p.display()));
+        // Paths differ between machines; the files' contents are what matter.
+        let job = RenderJob { scene: None, env: None, crop: None, ..self.job() };
+        let mut p = Provenance::of_program().with("settings", format!("{job:?}"));
+        p = match &self.scene {
+            Some(scene) => p.with("scene", hash(scene)?),
+            None => p.with("scene", "the embedded default scene"),
+        };
+        if let Some(env) = &self.lighting.env {
+            p = p.with("env", hash(env)?);
+        }
+        if let Some(f) = frame {
+            p = p.with("frame", f.to_string()).with("fps", self.fps.to_string());
+        }
+        if let Some((index, name)) = clip {
+            p = p.with("animation", index.to_string()).with("animation_name", name.unwrap_or_default());
+        }
+        if let Some(crop) = self.crop {
+            p = p.with("tile", crop.to_string());
+        }
+        Ok(p)
     }
 
     /// Why this render cannot be split into tiles that merge into it (None: it can).
@@ -214,13 +252,20 @@ fn chosen_clip(world: &World, file: Option<usize>, args: &RenderArgs) -> Result<
 
 /// Writes the image, and beside an .exr a .png preview first (so that an .exr that exists is a
 /// finished render's, preview included: `kelvin batch` skips it).
-pub(super) fn write_outputs(path: &Path, w: u32, h: u32, rgb: &[glam::Vec3], exposure: f32) -> Result<(), CliError> {
+pub(super) fn write_outputs(
+    path: &Path,
+    w: u32,
+    h: u32,
+    rgb: &[glam::Vec3],
+    exposure: f32,
+    provenance: &Provenance,
+) -> Result<(), CliError> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "exr" => {
             let preview = path.with_extension("png");
             write_png(&preview, w as usize, h as usize, rgb, exposure)?;
-            write_exr(path, w as usize, h as usize, rgb)?;
+            write_exr_with(path, w as usize, h as usize, rgb, provenance)?;
             eprintln!("wrote {} and {}", path.display(), preview.display());
         }
         "png" => {
@@ -291,24 +336,31 @@ pub(super) fn render_to_files(
             _ => (args.output.clone(), 0.0),
         };
         let (film, stats) = render_with(&mut world, &mut schedule, &opts, camera, |f| progress((k as f32 + f) / n));
-        write_image(args, &output, &film.pixels())?;
+        let clip_name = |c: usize| {
+            let files = world.get_resource::<GltfAnimations>().map(|a| &a.files);
+            let clip = files.and_then(|f| f.get(file?)).and_then(|a| a.clips.get(c));
+            clip.and_then(|c| c.name.clone())
+        };
+        let clip = clip.map(|c| (c, clip_name(c)));
+        let clip = clip.as_ref().map(|(c, n)| (*c, n.as_deref()));
+        write_image(args, &output, &film.pixels(), &args.provenance(frame, clip)?)?;
         rendered.push(Rendered { frame, pose_seconds, stats });
     }
     Ok(rendered)
 }
 
 /// Writes one render: a tile's EXR, or the image and its preview.
-fn write_image(args: &RenderArgs, output: &Path, rgb: &[glam::Vec3]) -> Result<(), CliError> {
+fn write_image(args: &RenderArgs, output: &Path, rgb: &[glam::Vec3], provenance: &Provenance) -> Result<(), CliError> {
     let (width, height) = args.size;
     match args.crop {
         // No preview: a tile's automatic exposure is not the image's (`kelvin merge` writes that).
         Some(crop) => {
-            write_exr_tile(output, crop, width, height, rgb)?;
+            write_exr_tile(output, crop, width, height, rgb, provenance)?;
             eprintln!("wrote {} (tile {crop} of {width}x{height})", output.display());
         }
         None => {
             let exposure = args.exposure.unwrap_or_else(|| auto_exposure(rgb));
-            write_outputs(output, width, height, rgb, exposure)?;
+            write_outputs(output, width, height, rgb, exposure, provenance)?;
         }
     }
     Ok(())

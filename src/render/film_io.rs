@@ -12,7 +12,8 @@
 //! an error (or a killed process) never leaves a partial file under the target's name.
 //!
 //! A tile of a larger image (`kelvin render --crop`) is an EXR whose display window is the full
-//! image and whose data window is the tile ([`write_exr_tile`], [`read_exr_tile`]).
+//! image and whose data window is the tile ([`write_exr_tile`], [`read_exr_tile`]). Every EXR
+//! records what made it in a `kelvin` text attribute (JSON) ([`crate::provenance`], [`read_exr_provenance`]).
 
 use std::io::Cursor;
 use std::path::Path;
@@ -20,6 +21,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::tiles::{Crop, Tile};
+use crate::provenance::{ATTRIBUTE, Provenance};
 use crate::scene::image::LUMINANCE_WEIGHTS;
 use crate::spectrum::color::srgb_encode;
 
@@ -98,11 +100,23 @@ pub fn auto_exposure(rgb: &[Vec3]) -> f32 {
     (0.18f64 / log_mean.exp()).log2() as f32
 }
 
-/// Writes linear RGB as a 32-bit float OpenEXR with lossless (ZIP) compression.
+/// Writes linear RGB as a 32-bit float OpenEXR with lossless (ZIP) compression, recording
+/// kelvin's version and the program that wrote it ([`Provenance::of_program`]).
 pub fn write_exr(path: &Path, width: usize, height: usize, rgb: &[Vec3]) -> Result<(), ImageIoError> {
+    write_exr_with(path, width, height, rgb, &Provenance::of_program())
+}
+
+/// [`write_exr`] recording `provenance` (the text attribute `kelvin`, a JSON object).
+pub fn write_exr_with(
+    path: &Path,
+    width: usize,
+    height: usize,
+    rgb: &[Vec3],
+    provenance: &Provenance,
+) -> Result<(), ImageIoError> {
     let what = path.display().to_string();
     check_dimensions(&what, width, height, rgb, usize::MAX)?;
-    let bytes = encode_exr(width, height, rgb, None).map_err(|msg| ImageIoError::Encode {
+    let bytes = encode_exr(width, height, rgb, None, provenance).map_err(|msg| ImageIoError::Encode {
         what: what.clone(),
         format: "OpenEXR",
         msg,
@@ -111,13 +125,15 @@ pub fn write_exr(path: &Path, width: usize, height: usize, rgb: &[Vec3]) -> Resu
 }
 
 /// Writes a tile of a `full_width` x `full_height` image: the pixels of `crop` (row-major, its
-/// size) as an EXR whose data window is `crop` and whose display window is the full image.
+/// size) as an EXR whose data window is `crop` and whose display window is the full image, with
+/// `provenance` (see [`write_exr_with`]).
 pub fn write_exr_tile(
     path: &Path,
     crop: Crop,
     full_width: u32,
     full_height: u32,
     rgb: &[Vec3],
+    provenance: &Provenance,
 ) -> Result<(), ImageIoError> {
     let what = path.display().to_string();
     let (width, height) = (crop.width() as usize, crop.height() as usize);
@@ -126,7 +142,7 @@ pub fn write_exr_tile(
         let msg = format!("tile {crop} is not inside the {full_width}x{full_height} image");
         return Err(ImageIoError::Encode { what, format: "OpenEXR", msg });
     }
-    let bytes = encode_exr(width, height, rgb, Some((crop, full_width, full_height)))
+    let bytes = encode_exr(width, height, rgb, Some((crop, full_width, full_height)), provenance)
         .map_err(|msg| ImageIoError::Encode { what: what.clone(), format: "OpenEXR", msg })?;
     write_file(path, &what, &bytes)
 }
@@ -150,6 +166,25 @@ pub fn read_exr_tile(path: &Path) -> Result<Tile, ImageIoError> {
     let crop = Crop { x0, y0, x1: x0 + w as u32, y1: y0 + h as u32 };
     let (width, height) = (display.size.width() as u32, display.size.height() as u32);
     Ok(Tile { name: what.clone(), width, height, crop, pixels })
+}
+
+/// The provenance an EXR records (its `kelvin` text attribute; empty for a file from elsewhere),
+/// read from the header alone.
+pub fn read_exr_provenance(path: &Path) -> Result<Provenance, ImageIoError> {
+    use exr::meta::attribute::AttributeValue;
+    let what = path.display().to_string();
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
+    let Some(header) = meta.headers.first() else { return Ok(Provenance::default()) };
+    let attributes = header.shared_attributes.other.iter().chain(&header.own_attributes.other);
+    for (name, value) in attributes {
+        if let (true, AttributeValue::Text(text)) = (name.to_string() == ATTRIBUTE, value) {
+            let entries = serde_json::from_str(&text.to_string())
+                .map_err(|e| ImageIoError::Read { what: what.clone(), msg: format!("attribute {ATTRIBUTE}: {e}") })?;
+            return Ok(Provenance(entries));
+        }
+    }
+    Ok(Provenance::default())
 }
 
 /// Reads an OpenEXR written by [`write_exr`] back exactly (negative values included, unlike the
@@ -235,7 +270,14 @@ pub fn tone_map_srgb8(linear: Vec3, exposure_scale: f32) -> [u8; 3] {
 }
 
 /// `tile`: the crop these pixels are of a full image of the given size (the data and display windows).
-fn encode_exr(width: usize, height: usize, rgb: &[Vec3], tile: Option<(Crop, u32, u32)>) -> Result<Vec<u8>, String> {
+fn encode_exr(
+    width: usize,
+    height: usize,
+    rgb: &[Vec3],
+    tile: Option<(Crop, u32, u32)>,
+    provenance: &Provenance,
+) -> Result<Vec<u8>, String> {
+    use exr::meta::attribute::{AttributeValue, Text};
     use exr::prelude::{Encoding, Image, IntegerBounds, SpecificChannels, WritableImage};
     let channels = SpecificChannels::rgb(|exr::math::Vec2(x, y): exr::math::Vec2<usize>| {
         let p = rgb[y * width + x];
@@ -246,6 +288,20 @@ fn encode_exr(width: usize, height: usize, rgb: &[Vec3], tile: Option<(Crop, u32
         image.attributes.display_window = IntegerBounds::new((0, 0), (full_width as usize, full_height as usize));
         image.layer_data.attributes.layer_position = exr::math::Vec2(crop.x0 as i32, crop.y0 as i32);
     }
+    // One attribute holding a JSON object with sorted keys: the crate writes attributes in hash
+    // order, so several would make the file's bytes differ from run to run.
+    let json = serde_json::to_string(&provenance.0).map_err(|e| e.to_string())?;
+    // EXR text is 8-bit: other characters go in as JSON's \u escapes.
+    let mut ascii = String::with_capacity(json.len());
+    for c in json.chars() {
+        if c.is_ascii() {
+            ascii.push(c);
+        } else {
+            c.encode_utf16(&mut [0; 2]).iter().for_each(|u| ascii += &format!("\\u{u:04x}"));
+        }
+    }
+    let text = Text::new_or_none(ascii).ok_or("provenance is not 8-bit text")?;
+    image.attributes.other.insert(Text::new_or_panic(ATTRIBUTE), AttributeValue::Text(text));
     let mut bytes = Vec::new();
     image.write().to_buffered(Cursor::new(&mut bytes)).map_err(|e| e.to_string())?;
     Ok(bytes)
