@@ -151,6 +151,20 @@ pub struct Settings {
     pub shadow_offset: crate::geometry::ShadowOffset,
     /// Precision of point and spot light sampling. Defaults to f32.
     pub light_precision: LightPrecision,
+    /// How the light sampler follows changed lights. Defaults to incremental updates.
+    pub light_updates: LightUpdates,
+}
+
+/// How the light sampler follows lights that moved or changed power.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightUpdates {
+    /// Refit the light BVH (rebuilt past a cost ratio): fastest, but the tree, and so the noise
+    /// of an image, depends on the frames before it.
+    #[default]
+    Incremental,
+    /// Build the sampler afresh on any change: a frame's image is the same bit for bit whether it
+    /// is rendered alone, in a chunk or after any other frames (what a render farm needs).
+    Rebuild,
 }
 
 impl Settings {
@@ -173,6 +187,7 @@ impl Default for Settings {
             mis: true,
             shadow_offset: crate::geometry::ShadowOffset::ErrorBound,
             light_precision: LightPrecision::F32,
+            light_updates: LightUpdates::Incremental,
         }
     }
 }

@@ -10,7 +10,9 @@ use crate::light::point::PointLanes;
 use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
-use crate::shading::{ColorMode, DirectLighting, LightPrecision, LightSelection, RunReport, Settings, ShadingBatch};
+use crate::shading::{
+    ColorMode, DirectLighting, LightPrecision, LightSelection, LightUpdates, RunReport, Settings, ShadingBatch,
+};
 
 use crate::spectrum::SampledSpectrum;
 pub use reuse::{MAX_NEIGHBOURS, Reservoirs};
@@ -104,6 +106,9 @@ pub fn update_light_sampler(
     let what = if sampler.kind() != settings.light_sampler {
         *sampler = LightSampler::build(settings.light_sampler, &table);
         "built"
+    } else if settings.light_updates == LightUpdates::Rebuild && table.is_changed() {
+        *sampler = LightSampler::build(settings.light_sampler, &table);
+        "lights changed: built afresh (LightUpdates::Rebuild)"
     } else {
         sampler.update(&table)
     };

@@ -257,3 +257,37 @@ fn plan_checks_outputs_and_task_runs_one_entry() {
     assert!(!out.status.success() && text(&out).contains("the plan has 8 entries"), "{}", text(&out));
     assert!(!kelvin(&["batch", &manifest, "--task", "0"]).status.success(), "a failed entry fails its task");
 }
+
+/// `chunk` frames per entry, as farms chunk their tasks: each entry renders its frames in one
+/// process, each frame's EXR byte for byte the one `kelvin render --frames K` writes alone; the
+/// plan says a chunk does not tile, and a chunk is finished only when all its frames are.
+#[test]
+fn chunks_of_frames_render_as_each_frame_alone() {
+    let dir = TempDir::new("cli-batch", "chunks");
+    let scene = test_data("gltf/kelvin/animated_lamp.gltf");
+    let job = format!(
+        r#"{{"name": "lamp", "scene": "{}", "output": "anim/f_##.exr", "frames": "1-7x2", "chunk": 3,
+             "fps": 4, "size": "6x5", "spp": 2}}"#,
+        scene.display()
+    );
+    let manifest = write_manifest(&dir, &job);
+    let plan: serde_json::Value = serde_json::from_slice(&kelvin(&["batch", &manifest, "--plan"]).stdout).unwrap();
+    let jobs = plan["jobs"].as_array().unwrap();
+    let frames: Vec<&serde_json::Value> = jobs.iter().map(|j| &j["frames"]).collect();
+    assert_eq!(frames, [&serde_json::json!([1, 3, 5]), &serde_json::json!([7])]);
+    assert_eq!(jobs[0]["name"], "lamp frames 1-5");
+    assert!(jobs[0]["untileable"].as_str().unwrap().contains("chunk of 3 frames"), "{}", jobs[0]);
+    let out = kelvin(&["batch", &manifest]);
+    assert!(out.status.success() && text(&out).contains("2 jobs: 2 rendered"), "{}", text(&out));
+    let scene = scene.to_str().unwrap();
+    for k in [1, 3, 5, 7] {
+        let alone = dir.join(format!("alone_{k}.exr"));
+        let args = ["render", scene, "--frames", &k.to_string(), "--fps", "4", "--size", "6x5", "--spp", "2"];
+        assert!(kelvin(&[&args[..], &["-o", alone.to_str().unwrap()]].concat()).status.success());
+        let chunked = std::fs::read(dir.join(format!("anim/f_0{k}.exr"))).unwrap();
+        assert!(chunked == std::fs::read(&alone).unwrap(), "frame {k} of a chunk differs from frame {k} alone");
+    }
+    std::fs::remove_file(dir.join("anim/f_03.exr")).unwrap();
+    let plan: serde_json::Value = serde_json::from_slice(&kelvin(&["batch", &manifest, "--plan"]).stdout).unwrap();
+    assert_eq!((plan["jobs"][0]["done"].as_bool(), plan["jobs"][1]["done"].as_bool()), (Some(false), Some(true)));
+}

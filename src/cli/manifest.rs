@@ -50,6 +50,10 @@ struct JobSpec {
     /// Frames of the scene's animation, as `--frames` takes them ("0..47", "1-100x2", "1,5,10-20").
     #[allow(dead_code)] // read by `plan_frames` from the JSON
     frames: Option<String>,
+    /// Frames per task: consecutive frames of `frames` rendered by one process, each an image of
+    /// its own, bit for bit as when rendered alone (default 1).
+    #[allow(dead_code)] // read by `plan_frames` from the JSON
+    chunk: Option<u32>,
     /// Frames per second (default 24).
     fps: Option<f64>,
     /// The animation to play, by name or index (default the first).
@@ -98,8 +102,10 @@ struct SettingsSpec {
 pub struct PlannedJob {
     /// The job's place in the manifest (the frames of one job share it).
     pub index: usize,
-    /// The frame this job renders, for a job with `frames`.
+    /// The frame this job renders (the first, for a chunk), for a job with `frames`.
     pub frame: Option<u32>,
+    /// Every frame it renders (more than one for a chunk); empty without `frames`.
+    pub frames: Vec<u32>,
     pub name: String,
     /// Resolved output path (empty when the job did not parse).
     pub output: PathBuf,
@@ -178,36 +184,56 @@ pub fn plan(path: &Path) -> Result<Vec<PlannedJob>, String> {
     Ok(jobs)
 }
 
-/// A job, or one job per frame of its `frames`.
+/// A job, or one job per frame of its `frames` (per `chunk` frames, with a chunk).
 fn plan_frames(index: usize, job: serde_json::Value, base: &Path) -> Vec<PlannedJob> {
     let frames = match job.get("frames") {
-        None => return vec![plan_job(index, None, job, base)],
+        None => return vec![plan_job(index, &[], job, base)],
         Some(f) => f.as_str().ok_or_else(|| format!("frames: {f} is not a string like \"0..47\" or \"1-100x2\"")),
     };
+    let chunk = match job.get("chunk") {
+        None => Ok(1),
+        Some(c) => c
+            .as_u64()
+            .filter(|c| (1..=MAX_CHUNK).contains(c))
+            .ok_or_else(|| format!("chunk: {c} is not a whole number in 1..={MAX_CHUNK}")),
+    };
     let range = frames.and_then(|f| f.parse::<FrameRange>().map_err(|e| format!("frames: {e}")));
-    match range {
-        Ok(range) => range.iter().map(|k| plan_job(index, Some(k), job.clone(), base)).collect(),
+    match range.and_then(|r| Ok((r, chunk?))) {
+        Ok((range, chunk)) => {
+            let frames: Vec<u32> = range.iter().collect();
+            frames.chunks(chunk as usize).map(|c| plan_job(index, c, job.clone(), base)).collect()
+        }
         Err(e) => {
-            let mut failed = plan_job(index, None, serde_json::Value::Null, base);
+            let mut failed = plan_job(index, &[], serde_json::Value::Null, base);
             failed.error = Some(format!("job {index}: {e}"));
             vec![failed]
         }
     }
 }
 
-fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Path) -> PlannedJob {
+/// Most frames in one chunk.
+const MAX_CHUNK: u64 = 10_000;
+
+/// Plans `job`, for `frames` of its animation (none: a still; one: that frame; more: a chunk,
+/// whose output is the job's pattern of '#').
+fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -> PlannedJob {
     let name = job.get("name").and_then(|n| n.as_str()).map(str::to_owned);
     let pattern = job.get("output").and_then(|o| o.as_str()).map(|o| base.join(o));
-    let output = match (frame, &pattern) {
-        (Some(k), Some(p)) => frame_path(p, k).ok(),
-        _ => pattern,
+    let frame = frames.first().copied();
+    let output = match (frames, &pattern) {
+        ([k], Some(p)) => frame_path(p, *k).ok(),
+        _ => pattern.clone(),
+    };
+    let label = match frames {
+        [] => None,
+        [k] => Some(format!("frame {k}")),
+        [a, .., b] => Some(format!("frames {a}-{b}")),
     };
     let mut planned = PlannedJob {
         index,
         frame,
-        name: name
-            .clone()
-            .map_or_else(|| format!("job {index}"), |n| frame.map_or(n.clone(), |k| format!("{n} frame {k}"))),
+        frames: frames.to_vec(),
+        name: name.clone().map_or_else(|| format!("job {index}"), |n| label.map_or(n.clone(), |l| format!("{n} {l}"))),
         output: output.clone().unwrap_or_default(),
         width: 0,
         height: 0,
@@ -238,7 +264,7 @@ fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Pat
         }
         return planned;
     }
-    match resolve(job, frame, base) {
+    match resolve(job, frames, base) {
         Ok((args, parsed)) => {
             let ext = planned.output.extension().map(|e| e.to_ascii_lowercase());
             if !matches!(ext.as_ref().and_then(|e| e.to_str()), Some("exr" | "png")) {
@@ -249,9 +275,26 @@ fn plan_job(index: usize, frame: Option<u32>, job: serde_json::Value, base: &Pat
                 ));
                 return planned;
             }
-            (planned.done, planned.stale) = finished(&planned.output, &parsed, frame);
+            (planned.done, planned.stale) = (true, None);
+            let outputs: Vec<(PathBuf, Option<u32>)> = match (frames, &pattern) {
+                ([_, _, ..], Some(p)) => {
+                    frames.iter().filter_map(|&k| Some((frame_path(p, k).ok()?, Some(k)))).collect()
+                }
+                _ => vec![(planned.output.clone(), frame)],
+            };
+            // A chunk is finished when each of its frames is.
+            for (output, k) in outputs {
+                let (done, stale) = finished(&output, &parsed, k);
+                planned.done &= done;
+                planned.stale = planned.stale.or(stale);
+            }
+            if frames.len() > 1 {
+                planned.untileable =
+                    Some(format!("a chunk of {} frames renders whole frames in one process", frames.len()));
+            }
             (planned.width, planned.height) = parsed.size();
-            (planned.args, planned.untileable, planned.exposure) = (args, parsed.tiling_refusal(), parsed.exposure());
+            planned.untileable = planned.untileable.or(parsed.tiling_refusal());
+            (planned.args, planned.exposure) = (args, parsed.exposure());
         }
         Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
     }
@@ -289,17 +332,18 @@ fn finished(output: &Path, args: &RenderArgs, frame: Option<u32>) -> (bool, Opti
     (true, None)
 }
 
-/// The job's `kelvin render` arguments (without `-o`) and what its parser made of them; for one
-/// `frame` of a job with frames.
-fn resolve(job: serde_json::Value, frame: Option<u32>, base: &Path) -> Result<(Vec<String>, RenderArgs), String> {
+/// The job's `kelvin render` arguments (without `-o`) and what its parser made of them; for
+/// `frames` of a job with frames (one, or a chunk).
+fn resolve(job: serde_json::Value, frames: &[u32], base: &Path) -> Result<(Vec<String>, RenderArgs), String> {
     let spec: JobSpec = serde_json::from_value(job).map_err(|e| e.to_string())?;
-    let output = match frame {
-        Some(k) => frame_path(&base.join(&spec.output), k)?,
-        None => base.join(&spec.output),
+    let output = match frames {
+        [k] => frame_path(&base.join(&spec.output), *k)?,
+        _ => base.join(&spec.output),
     };
     let mut args = Vec::new();
-    if let Some(k) = frame {
-        args.extend(["--frames".to_owned(), k.to_string()]);
+    if !frames.is_empty() {
+        let list: Vec<String> = frames.iter().map(u32::to_string).collect();
+        args.extend(["--frames".to_owned(), list.join(",")]);
         if let Some(fps) = spec.fps {
             args.extend(["--fps".to_owned(), fps.to_string()]);
         }

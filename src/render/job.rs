@@ -15,7 +15,7 @@ use super::path::PathDepth;
 use super::renderer::{Integrator, RenderOptions, RenderStats, Strategy, render_until};
 use super::tiles::Crop;
 use crate::light::SunSkyLight;
-use crate::shading::{ColorMode, LightSamplerKind, LightSelection, Restir, ReuseWeights, Settings};
+use crate::shading::{ColorMode, LightSamplerKind, LightSelection, LightUpdates, Restir, ReuseWeights, Settings};
 use crate::systems::LightingPlugin;
 
 /// Accepted ranges of the numeric options (the CLI's parsers check the same).
@@ -246,6 +246,8 @@ impl RenderJob {
             },
             selection: self.selection(),
             seed: self.seed,
+            // A frame's bytes must not depend on the frames rendered before it in one process.
+            light_updates: LightUpdates::Rebuild,
             ..Default::default()
         }
     }
