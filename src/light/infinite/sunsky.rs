@@ -18,6 +18,7 @@
 //! the light is black. Frame: +Y up, -Z north, +X east.
 
 mod hosek;
+mod sky_lanes;
 pub mod solar;
 
 use std::f32::consts::PI;
@@ -30,6 +31,7 @@ use rayon::prelude::*;
 use super::image::texel_solid_angle_integral;
 use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions};
 use super::{ColorQuery, LiSample, LightError, LightFlags, LightSampleContext, SceneSphere, far_distance};
+use crate::lanes::{self, LANES};
 use crate::light::distant::SUN_ANGULAR_DIAMETER;
 use crate::sampling::{Frame, sample_uniform_cone_sin2};
 use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
@@ -111,8 +113,9 @@ pub struct SkyBuffers {
     pub image: RgbImage,
     /// Tables of `image`; None until first built.
     pub tables: Option<EnvMapTables>,
-    /// Per image column, (cos, sin) of its azimuth: scratch for the image fill.
-    pub columns: Vec<Vec2>,
+    /// Per image column the cosine of its azimuth, then per column the sine: scratch for the
+    /// image fill.
+    pub columns: Vec<f32>,
 }
 
 impl Default for SkyBuffers {
@@ -260,17 +263,18 @@ impl SunSkyLight {
 /// Fills `image` (resized to `width` x its even half, buffers reused) with the sky's luminance
 /// at texel centres, in parallel over rows; the lower half (below the horizon) is black. The
 /// directions are those of [`crate::scene::image::lat_long_direction`], with each row's zenith-angle factors and each
-/// column's sin/cos of phi computed once (`columns`, reused).
-fn fill_sky_image(image: &mut RgbImage, columns: &mut Vec<Vec2>, width: usize, sky: &SkyModel, sun: Vec3) {
+/// column's sin/cos of phi computed once (`columns`, reused). Blocks of [`LANES`] texels go
+/// through the lane kernel ([`SkyModel::rgb_nits_lanes`]), the rest of a row through the scalar model.
+fn fill_sky_image(image: &mut RgbImage, columns: &mut Vec<f32>, width: usize, sky: &SkyModel, sun: Vec3) {
     let height = width.div_ceil(4) * 2;
     (image.width, image.height) = (width, height);
     image.pixels.resize(width * height, Vec3::ZERO);
+    let phi = |x: usize| std::f32::consts::TAU * ((x as f32 + 0.5) / width as f32 - 0.5);
     columns.clear();
-    columns.extend((0..width).map(|x| {
-        let (s, c) = (std::f32::consts::TAU * ((x as f32 + 0.5) / width as f32 - 0.5)).sin_cos();
-        Vec2::new(c, s)
-    }));
-    let columns = &columns[..];
+    columns.extend((0..width).map(|x| phi(x).cos()));
+    columns.extend((0..width).map(|x| phi(x).sin()));
+    let (cos_phi, sin_phi) = columns.split_at(width);
+    let whole = width / LANES * LANES;
     image.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
         if 2 * y >= height {
             row.fill(Vec3::ZERO);
@@ -278,9 +282,20 @@ fn fill_sky_image(image: &mut RgbImage, columns: &mut Vec<Vec2>, width: usize, s
         }
         let (sin_t, cos_t) = (PI * (y as f32 + 0.5) / height as f32).sin_cos();
         let factors = sky.rgb_row(cos_t);
-        for (px, cs) in row.iter_mut().zip(columns) {
-            let w = Vec3::new(sin_t * cs.x, cos_t, sin_t * cs.y);
-            *px = sky.rgb_nits_in_row(&factors, w, sun);
+        lanes::widest(
+            #[inline(always)]
+            || {
+                // Index loops: `step_by` may stay out of the widest code (see `lanes::widest`).
+                for k in 0..whole / LANES {
+                    let b = k * LANES;
+                    let (c, s) = (lanes::block(cos_phi, b), lanes::block(sin_phi, b));
+                    sky.rgb_nits_lanes(&factors, (sin_t, cos_t), c, s, sun, lanes::block_mut(row, b));
+                }
+            },
+        );
+        for x in whole..width {
+            let w = Vec3::new(sin_t * cos_phi[x], cos_t, sin_t * sin_phi[x]);
+            row[x] = sky.rgb_nits_in_row(&factors, w, sun);
         }
     });
 }

@@ -16,6 +16,8 @@
 
 use glam::Vec3;
 
+pub mod math;
+
 /// Values per lane array: one AVX-512 register of f32.
 pub const LANES: usize = 16;
 
