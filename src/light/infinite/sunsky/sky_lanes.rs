@@ -10,7 +10,7 @@ use crate::lanes::{LANES, math};
 
 impl SkyModel {
     /// [`Self::rgb_nits_in_row`] toward the `LANES` directions (sin theta cos phi, cos theta,
-    /// sin theta sin phi) of a row whose factors `row` are, for unit `sun`, into `out`.
+    /// sin theta sin phi) of a row whose factors `row` are, for unit `sun`: lane columns r, g, b.
     #[inline(always)]
     pub(crate) fn rgb_nits_lanes(
         &self,
@@ -19,11 +19,10 @@ impl SkyModel {
         cos_phi: &[f32; LANES],
         sin_phi: &[f32; LANES],
         sun: Vec3,
-        out: &mut [Vec3; LANES],
-    ) {
+    ) -> [[f32; LANES]; 3] {
+        let mut rgb = [[0.0f32; LANES]; 3];
         if !(cos_t > 0.0) {
-            *out = [Vec3::ZERO; LANES];
-            return;
+            return rgb;
         }
         // The direction, cos gamma and |w x sun| as glam's dot, cross and length compute them.
         let (mut cos_g, mut cross) = ([0.0f32; LANES], [0.0f32; LANES]);
@@ -34,9 +33,11 @@ impl SkyModel {
             cross[l] = ((cx * cx + cy * cy) + cz * cz).sqrt();
         }
         let gamma = math::atan2_upper(&cross, &cos_g);
-        let mut rgb = [[0.0f32; LANES]; 3];
-        for (ch, (cfg, dome)) in self.rgb.iter().zip(row.dome.to_array()).enumerate() {
-            let [_, _, c, d, e, f, g, i, h] = cfg.params;
+        // Index loop: a zip with `dome.to_array()` built the pair on the stack per block and
+        // stalled on reading it back (store forwarding).
+        for ch in 0..3 {
+            let [_, _, c, d, e, f, g, i, h] = self.rgb[ch].params;
+            let dome = row.dome[ch];
             let mut eg = [0.0f32; LANES];
             for l in 0..LANES {
                 eg[l] = e * gamma[l];
@@ -51,9 +52,7 @@ impl SkyModel {
                 rgb[ch][l] = if v > 0.0 { v } else { 0.0 };
             }
         }
-        for l in 0..LANES {
-            out[l] = Vec3::new(rgb[0][l], rgb[1][l], rgb[2][l]);
-        }
+        rgb
     }
 }
 
@@ -101,7 +100,7 @@ mod tests {
                             let b = k * LANES;
                             let mut out = [Vec3::NAN; LANES];
                             let (c, s) = (lanes::block(&cos_phi, b), lanes::block(&sin_phi, b));
-                            sky.rgb_nits_lanes(&row, (sin_t, cos_t), c, s, sun, &mut out);
+                            lanes::store_columns(&sky.rgb_nits_lanes(&row, (sin_t, cos_t), c, s, sun), &mut out);
                             for l in 0..LANES {
                                 let w = Vec3::new(sin_t * c[l], cos_t, sin_t * s[l]);
                                 let want = sky.rgb_nits_in_row(&row, w, sun).as_dvec3();
