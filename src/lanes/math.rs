@@ -50,7 +50,7 @@ pub fn atan2_upper(y: &[f32; LANES], x: &[f32; LANES]) -> [f32; LANES] {
     // odd polynomial of degree 9.
     const TAN_3PI_8: f32 = 2.414_213_6;
     const TAN_PI_8: f32 = 0.414_213_57;
-    const P: [f32; 4] = [8.053_744_5e-2, -1.387_768_5e-1, 1.997_771_1e-1, -3.333_294_9e-1];
+    const P: [f32; 4] = [8.053_744_5e-2, -1.387_768_5e-1, 1.997_771_1e-1, -3.333_295e-1];
     let mut u = [0.0f32; LANES];
     let mut base = [0.0f32; LANES];
     for l in 0..LANES {
