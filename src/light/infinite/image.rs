@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use bevy_ecs::component::Component;
 use glam::{DVec3, Quat, Vec2, Vec3};
+use rayon::prelude::*;
 
 use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions, clean_texel};
 use super::{ColorQuery, Emitter, LiSample, LightError, LightFlags, LightSampleContext, SceneSphere, far_distance};
@@ -280,8 +281,15 @@ pub fn texel_at(image: &RgbImage, lookup: EnvLookup, uv: Vec2) -> Vec3 {
 /// theta integral against sin(theta) is then exact per segment (integrals of sin and theta sin).
 pub fn texel_solid_angle_integral(image: &RgbImage, lookup: EnvLookup) -> DVec3 {
     let (w, h) = (image.width, image.height);
-    let row_sum =
-        |y: usize| -> DVec3 { image.pixels[y * w..(y + 1) * w].iter().map(|&t| clean_texel(t).as_dvec3()).sum() };
+    // Each row's serial sum on the pool, then the rows in order as before: the same result, and a
+    // moved sun's sky no longer waits ~1 ms on one core for this.
+    let sums: Vec<DVec3> = image
+        .pixels
+        .par_chunks(w.max(1))
+        .take(h)
+        .map(|row| row.iter().map(|&t| clean_texel(t).as_dvec3()).sum())
+        .collect();
+    let row_sum = |y: usize| sums[y];
     let d_phi = 2.0 * PI64 / w as f64;
     match lookup {
         EnvLookup::Nearest => (0..h)

@@ -18,18 +18,20 @@
 //! the light is black. Frame: +Y up, -Z north, +X east.
 
 mod hosek;
+mod sky_lanes;
 pub mod solar;
 
 use std::f32::consts::PI;
+use std::f64::consts::PI as PI64;
 use std::sync::Arc;
 
 use bevy_ecs::component::Component;
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::image::texel_solid_angle_integral;
 use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions};
 use super::{ColorQuery, LiSample, LightError, LightFlags, LightSampleContext, SceneSphere, far_distance};
+use crate::lanes::{self, LANES};
 use crate::light::distant::SUN_ANGULAR_DIAMETER;
 use crate::sampling::{Frame, sample_uniform_cone_sin2};
 use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
@@ -111,13 +113,17 @@ pub struct SkyBuffers {
     pub image: RgbImage,
     /// Tables of `image`; None until first built.
     pub tables: Option<EnvMapTables>,
-    /// Per image column, (cos, sin) of its azimuth: scratch for the image fill.
-    pub columns: Vec<Vec2>,
+    /// Per image column the cosine of its azimuth, then per column the sine: scratch for the
+    /// image fill.
+    pub columns: Vec<f32>,
+    /// Per image row, the sum of its texels' luminance (f64): scratch for the sky's integral.
+    pub row_luminance: Vec<f64>,
 }
 
 impl Default for SkyBuffers {
     fn default() -> Self {
-        Self { image: RgbImage { width: 1, height: 1, pixels: vec![Vec3::ZERO] }, tables: None, columns: Vec::new() }
+        let image = RgbImage { width: 1, height: 1, pixels: vec![Vec3::ZERO] };
+        Self { image, tables: None, columns: Vec::new(), row_luminance: Vec::new() }
     }
 }
 
@@ -230,13 +236,17 @@ impl SunSkyLight {
             .then(|| SunDisc::new(SunModel::new(elevation, self.turbidity), sun_dir, self.sun_angular_diameter));
         let (mut sky_lum, mut sky_rad) = (0.0, 0.0);
         if let Some(sky) = &sky {
-            fill_sky_image(&mut buffers.image, &mut buffers.columns, self.table_width, sky, sun_dir);
+            let b = &mut buffers;
+            fill_sky_image(&mut b.image, &mut b.columns, &mut b.row_luminance, self.table_width, sky, sun_dir);
             let options = EnvTableOptions { compensate: false, max_width: None, lookup: EnvLookup::Nearest };
             match &mut buffers.tables {
                 Some(t) => t.rebuild(&buffers.image, options),
                 None => buffers.tables = Some(EnvMapTables::build_with(&buffers.image, options)),
             }
-            sky_lum = LUMINANCE_WEIGHTS.as_dvec3().dot(texel_solid_angle_integral(&buffers.image, EnvLookup::Nearest));
+            // The texels' integral (`texel_solid_angle_integral`, nearest) from the fill's row sums.
+            let (h, d_phi) = (buffers.image.height, std::f64::consts::TAU / buffers.image.width as f64);
+            let band = |y: usize| (PI64 * y as f64 / h as f64).cos() - (PI64 * (y + 1) as f64 / h as f64).cos();
+            sky_lum = buffers.row_luminance.iter().enumerate().map(|(y, l)| l * d_phi * band(y)).sum();
             sky_rad = sky_lum / sky_efficacy(sky, sun_dir);
         }
         let s = self.scale as f64;
@@ -258,30 +268,62 @@ impl SunSkyLight {
 }
 
 /// Fills `image` (resized to `width` x its even half, buffers reused) with the sky's luminance
-/// at texel centres, in parallel over rows; the lower half (below the horizon) is black. The
-/// directions are those of [`crate::scene::image::lat_long_direction`], with each row's zenith-angle factors and each
-/// column's sin/cos of phi computed once (`columns`, reused).
-fn fill_sky_image(image: &mut RgbImage, columns: &mut Vec<Vec2>, width: usize, sky: &SkyModel, sun: Vec3) {
+/// at texel centres, in parallel over rows, and `row_luminance` with each row's luminance sum; the
+/// lower half (below the horizon) is black. The directions are those of
+/// [`crate::scene::image::lat_long_direction`], with each row's zenith-angle factors and each
+/// column's sin/cos of phi computed once (`columns`, reused). Blocks of [`LANES`] texels go
+/// through the lane kernel ([`SkyModel::rgb_nits_lanes`]), the rest of a row through the scalar model.
+fn fill_sky_image(
+    image: &mut RgbImage,
+    columns: &mut Vec<f32>,
+    row_luminance: &mut Vec<f64>,
+    width: usize,
+    sky: &SkyModel,
+    sun: Vec3,
+) {
     let height = width.div_ceil(4) * 2;
     (image.width, image.height) = (width, height);
     image.pixels.resize(width * height, Vec3::ZERO);
+    row_luminance.resize(height, 0.0);
+    let phi = |x: usize| std::f32::consts::TAU * ((x as f32 + 0.5) / width as f32 - 0.5);
     columns.clear();
-    columns.extend((0..width).map(|x| {
-        let (s, c) = (std::f32::consts::TAU * ((x as f32 + 0.5) / width as f32 - 0.5)).sin_cos();
-        Vec2::new(c, s)
-    }));
-    let columns = &columns[..];
-    image.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+    columns.extend((0..width).map(|x| phi(x).cos()));
+    columns.extend((0..width).map(|x| phi(x).sin()));
+    let (cos_phi, sin_phi) = columns.split_at(width);
+    let whole = width / LANES * LANES;
+    let weights = LUMINANCE_WEIGHTS.as_dvec3();
+    image.pixels.par_chunks_mut(width).zip(row_luminance.par_iter_mut()).enumerate().for_each(|(y, (row, sum))| {
+        *sum = 0.0;
         if 2 * y >= height {
             row.fill(Vec3::ZERO);
             return;
         }
         let (sin_t, cos_t) = (PI * (y as f32 + 0.5) / height as f32).sin_cos();
         let factors = sky.rgb_row(cos_t);
-        for (px, cs) in row.iter_mut().zip(columns) {
-            let w = Vec3::new(sin_t * cs.x, cos_t, sin_t * cs.y);
-            *px = sky.rgb_nits_in_row(&factors, w, sun);
+        // Luminance per lane, summed while the block is in registers.
+        let mut acc = [0.0f64; LANES];
+        lanes::widest(
+            #[inline(always)]
+            || {
+                // Index loops: `step_by` may stay out of the widest code (see `lanes::widest`).
+                for k in 0..whole / LANES {
+                    let b = k * LANES;
+                    let (c, s) = (lanes::block(cos_phi, b), lanes::block(sin_phi, b));
+                    let rgb = sky.rgb_nits_lanes(&factors, (sin_t, cos_t), c, s, sun);
+                    lanes::store_columns(&rgb, lanes::block_mut(row, b));
+                    for l in 0..LANES {
+                        let [r, g, b] = [rgb[0][l], rgb[1][l], rgb[2][l]].map(f64::from);
+                        acc[l] += weights.x * r + weights.y * g + weights.z * b;
+                    }
+                }
+            },
+        );
+        for x in whole..width {
+            let w = Vec3::new(sin_t * cos_phi[x], cos_t, sin_t * sin_phi[x]);
+            row[x] = sky.rgb_nits_in_row(&factors, w, sun);
+            acc[0] += weights.dot(row[x].as_dvec3());
         }
+        *sum = acc.iter().sum();
     });
 }
 

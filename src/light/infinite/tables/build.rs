@@ -72,7 +72,7 @@ fn cell(v: f64) -> f64 {
 /// are black); returns its number of non-finite texels. Blocks of [`LANES`] texels go through
 /// [`lum_lanes`], the rest through [`texel_lum`], which it equals bit for bit.
 #[inline(always)]
-fn lum_row(image: &RgbImage, y: usize, out: &mut [f64]) -> usize {
+pub fn lum_row(image: &RgbImage, y: usize, out: &mut [f64]) -> usize {
     let w = out.len();
     let px = if image.width == w { image.pixels.get(y * w..).unwrap_or(&[]) } else { &[] };
     let px = &px[..px.len().min(w)];

@@ -24,6 +24,10 @@
 
 mod build;
 
+/// A texel row's luminance as the build computes it: for the per-stage benchmark (benches/env_stages.rs).
+#[cfg(feature = "internals")]
+#[doc(hidden)]
+pub use build::lum_row;
 pub use build::{MEAN_TOLERANCE, texel_luminance};
 #[cfg(test)]
 mod tests;

@@ -16,6 +16,8 @@
 
 use glam::Vec3;
 
+pub mod math;
+
 /// Values per lane array: one AVX-512 register of f32.
 pub const LANES: usize = 16;
 
@@ -45,6 +47,19 @@ pub fn columns(v: &[Vec3; LANES]) -> [[f32; LANES]; 3] {
         }
     }
     c
+}
+
+/// The inverse of [`columns`]: writes lane columns x, y, z as `LANES` vectors, through the block
+/// as one run of floats (an interleaving store LLVM can shuffle), not vector by vector.
+#[inline(always)]
+pub fn store_columns(c: &[[f32; LANES]; 3], v: &mut [Vec3; LANES]) {
+    // SAFETY: as in `columns`: `Vec3` is `#[repr(C)]` of three f32, the block 3 * LANES f32.
+    let flat: &mut [f32; 3 * LANES] = unsafe { &mut *(v as *mut [Vec3; LANES]).cast() };
+    for l in 0..LANES {
+        for a in 0..3 {
+            flat[3 * l + a] = c[a][l];
+        }
+    }
 }
 
 /// Runs `f` compiled for the widest instruction set the CPU has ([`level`]: AVX-512 or AVX2,
@@ -213,5 +228,11 @@ mod tests {
         assert_eq!(v[5], Vec3::new(4.5, 104.5, 204.5));
         assert_eq!(columns(&v), c);
         assert_eq!(widest(|| columns(&v)), c);
+        let mut back = [Vec3::NAN; LANES];
+        store_columns(&c, &mut back);
+        assert_eq!(back, v);
+        let mut back = [Vec3::NAN; LANES];
+        widest(|| store_columns(&c, &mut back));
+        assert_eq!(back, v);
     }
 }
