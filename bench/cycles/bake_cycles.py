@@ -30,7 +30,8 @@ first row, as kelvin's) and DIR/cycles_bake.json; with --json also prints that J
     first; Blender writes an EXR top row first, so the EXR's first row is v_blender = 1, i.e. v_gltf = 0, as
     kelvin's (check_bake_units.py checks it with an off-centre light).
 Timing: `bake_seconds` is the wall time of bpy.ops.object.bake (scene sync, BVH, baking and writing the
-images' buffers; not the import nor the EXR files), `total_seconds` the script's from before the import.
+images' buffers; not the import nor the EXR files), `bake_cpu_seconds` the CPU time (all threads, user + system)
+of the same call, `total_seconds` the script's wall time from before the import.
 """
 import argparse
 import json
@@ -184,10 +185,10 @@ def main(argv=None):
         ob.select_set(True)
     bpy.context.view_layer.objects.active = targets[0][0]
     load_s = time.perf_counter() - t_start
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     bpy.ops.object.bake(type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, margin=a.margin, margin_type="EXTEND",
                         use_clear=True, target="IMAGE_TEXTURES")
-    bake_s = time.perf_counter() - t0
+    bake_s, bake_cpu = time.perf_counter() - t0, time.process_time() - cpu0
     s = scene.render.image_settings
     s.file_format, s.color_depth, s.color_mode, s.exr_codec = "OPEN_EXR", "32", "RGB", "ZIP"
     files = {}
@@ -201,7 +202,7 @@ def main(argv=None):
     summary = {"scene": os.path.abspath(a.scene), "size": a.size, "spp": a.spp, "max_depth": a.max_depth,
                "cycles_bounces": a.max_depth - 1, "seed": a.seed, "margin": a.margin, "uv_index": a.uv_index,
                "emission_sides": a.emission_sides, "one_sided_emission": one_sided,
-               "bake_seconds": bake_s, "load_seconds": load_s, "total_seconds": total_s,
+               "bake_seconds": bake_s, "bake_cpu_seconds": bake_cpu, "load_seconds": load_s, "total_seconds": total_s,
                "threads": scene.render.threads, "sampling_pattern": scene.cycles.sampling_pattern,
                "blender": bpy.app.version_string, "lightmaps": files, "notes": notes}
     (out / "cycles_bake.json").write_text(json.dumps(summary, indent=1) + "\n")

@@ -26,8 +26,9 @@ Figures per mesh over its clean texels (RGB, float64):
   noise        RMSE(x@N seed a, x@N seed b) / sqrt(2): each baker's own per-texel noise at N spp
   k/noise      RMSE(kelvin@N, ref) / kelvin's noise (~1 when unbiased, plus the reference's noise)
   relMSE       sum((x - ref)^2) / sum(ref^2)
-  speed        time to equal noise, Cycles over kelvin: (t_c relMSE_c) / (t_k relMSE_k) (relMSE ~ 1/spp);
-               with the bakers' whole times (one run bakes every mesh), per mesh and pooled over all meshes.
+  speed        (--speed-rounds R: times best of R + 1 runs, alternating) time to equal noise, Cycles over kelvin: (t_c relMSE_c) / (t_k relMSE_k) (relMSE ~ 1/spp);
+               with the bakers' whole times (one run bakes every mesh), per mesh and pooled over all meshes;
+               (2-seed: noise^2 instead of relMSE; CPU: CPU seconds instead of wall, robust to a shared machine).
 """
 import argparse
 import json
@@ -96,7 +97,8 @@ def cycles_bake(a, scene, depth, spp, seed, out):
     text, wall, cpu = run([a.cycles_python, HERE / "bake_cycles.py", scene, "-o", out, "--size", a.size, "--spp",
                            spp, "--max-depth", depth, "--seed", seed, "--margin", 4, "--json"])
     j = json.loads([ln for ln in text.splitlines() if ln.startswith("{")][-1])
-    r = {"seconds": j["bake_seconds"], "total_seconds": j["total_seconds"], "wall": wall, "cpu": cpu,
+    r = {"seconds": j["bake_seconds"], "bake_cpu": j.get("bake_cpu_seconds"), "total_seconds": j["total_seconds"],
+         "wall": wall, "cpu": cpu,
          "load_before": load, "spp": spp, "seed": seed, "notes": j["notes"],
          "files": {v["mesh"]: v["exr"] for v in j["lightmaps"].values()}}
     done.write_text(json.dumps(r))
@@ -267,18 +269,22 @@ def leak_fraction(points, normals, scene_tris, k=64, seed=7):
 
 
 def stats(mask, k, k2, kr, c, c2, ref):
-    sel = lambda x: x[mask]  # noqa: E731
-    k, k2, kr, c, c2, ref = map(sel, (k, k2, kr, c, c2, ref))
+    k, k2, kr, c, c2, ref = (x[mask] for x in (k, k2, kr, c, c2, ref))
     rmse = lambda x, y: float(np.sqrt(((x - y) ** 2).mean()))  # noqa: E731
-    r = {"texels": int(mask.sum()), "mean_k_c": float(k.sum() / c.sum()),
-         "mean_k_c_rgb": [float(x) for x in k.sum(0) / c.sum(0)], "mean_kref_cref": float(kr.sum() / ref.sum()),
-         "mean_kref_cref_rgb": [float(x) for x in kr.sum(0) / ref.sum(0)], "mean_c_ref": float(c.sum() / ref.sum()),
-         "rmse_k": rmse(k, ref), "rmse_c": rmse(c, ref), "noise_k": rmse(k, k2) / math.sqrt(2),
-         "noise_c": rmse(c, c2) / math.sqrt(2), "relmse_k": float(((k - ref) ** 2).sum() / (ref ** 2).sum()),
-         "relmse_c": float(((c - ref) ** 2).sum() / (ref ** 2).sum()), "ref_mean": float(ref.mean())}
-    r["rmse_k_over_c"] = r["rmse_k"] / r["rmse_c"]
-    r["rmse_k_over_noise"] = r["rmse_k"] / r["noise_k"]
-    r["rmse_c_over_noise"] = r["rmse_c"] / r["noise_c"]
+    def div(x, y):  # the leak zone can be all zeros in Cycles, the lamp's own map at depth 1 in both
+        return float(x / y) if y > 0 else (math.nan if x == 0 else math.inf)
+    r = {"texels": int(mask.sum()), "mean_k_c": div(k.sum(), c.sum()),
+         "mean_k_c_rgb": [div(x, y) for x, y in zip(k.sum(0), c.sum(0))],
+         "mean_kref_cref": div(kr.sum(), ref.sum()),
+         "mean_kref_cref_rgb": [div(x, y) for x, y in zip(kr.sum(0), ref.sum(0))],
+         "mean_c_ref": div(c.sum(), ref.sum()), "rmse_k": rmse(k, ref), "rmse_c": rmse(c, ref),
+         "noise_k": rmse(k, k2) / math.sqrt(2), "noise_c": rmse(c, c2) / math.sqrt(2),
+         "relmse_k": div(((k - ref) ** 2).sum(), (ref ** 2).sum()),
+         "relmse_c": div(((c - ref) ** 2).sum(), (ref ** 2).sum()), "ref_mean": float(ref.mean()),
+         "kref_mean": float(kr.mean())}
+    r["rmse_k_over_c"] = div(r["rmse_k"], r["rmse_c"])
+    r["rmse_k_over_noise"] = div(r["rmse_k"], r["noise_k"])
+    r["rmse_c_over_noise"] = div(r["rmse_c"], r["noise_c"])
     return r
 
 
@@ -295,6 +301,8 @@ def main(argv=None):
     ap.add_argument("--out-dir", default="/tmp/peers/cycles_bake")
     ap.add_argument("--json-out", default=None)
     ap.add_argument("--reuse", action="store_true", help="reuse finished bakes in --out-dir")
+    ap.add_argument("--speed-rounds", type=int, default=0,
+                    help="then R alternating rounds of kelvin and Cycles at N spp (seeds 10+): best-of times")
     a = ap.parse_args(argv)
     out = Path(a.out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -353,15 +361,33 @@ def main(argv=None):
                                                      ("k", "k2", "kr", "c", "c2", "ref")))
         rows.append({"depth": d, "cycles_bounces": d - 1, "mesh": "all", "spp": N, "ref_spp": M, "clean": all_})
         tk, tc = runs["k"]["seconds"], runs["c"]["seconds"]
+        # CPU seconds (all threads): kelvin's whole process (loading and writing are ~1% of it), Cycles' bake call.
+        ck, cc = runs["k"]["cpu"], runs["c"].get("bake_cpu") or runs["c"]["cpu"]
+        timing = {"k": [runs["k"]], "c": [runs["c"]]}
+        for i in range(a.speed_rounds):
+            timing["k"].append(kelvin_bake(a, scene, d, N, 10 + i, tag / f"speed_kelvin_{i}"))
+            timing["c"].append(cycles_bake(a, scene, d, N, 10 + i, tag / f"speed_cycles_{i}"))
+        if a.speed_rounds:
+            tk, tc = min(r["seconds"] for r in timing["k"]), min(r["seconds"] for r in timing["c"])
+            ck = min(r["cpu"] for r in timing["k"])
+            cc = min(r.get("bake_cpu") or r["cpu"] for r in timing["c"])
+        results.setdefault("timing", {})[f"d{d}"] = {
+            "kelvin_seconds": tk, "cycles_seconds": tc, "kelvin_cpu": ck, "cycles_cpu": cc,
+            "rounds": {key: [{f: r.get(f) for f in ("seconds", "wall", "cpu", "bake_cpu", "load_before")}
+                             for r in v] for key, v in timing.items()}}
         for row in rows:
             s = row["clean"]
-            s["speed_equal_noise"] = (tc * s["relmse_c"]) / (tk * s["relmse_k"])
-            s["speed_equal_noise_2seed"] = (tc * s["noise_c"] ** 2) / (tk * s["noise_k"] ** 2)
+            ok = s["relmse_k"] > 0 and s["noise_k"] > 0  # not a map of zeros (the lamp's own at depth 1)
+            s["speed_equal_noise"] = (tc * s["relmse_c"]) / (tk * s["relmse_k"]) if ok else math.nan
+            s["speed_equal_noise_cpu"] = (cc * s["relmse_c"]) / (ck * s["relmse_k"]) if ok else math.nan
+            s["speed_equal_noise_2seed"] = (tc * s["noise_c"] ** 2) / (tk * s["noise_k"] ** 2) if ok else math.nan
         results["rows"] += rows
         results.setdefault("runs", {})[f"d{d}"] = runs
+        best = f"best of {a.speed_rounds + 1} runs" if a.speed_rounds else "one run"
         print(f"depth {d} (Cycles bounces {d - 1}), {a.size}x{a.size}, {N} spp, reference Cycles {M} spp: "
-              f"kelvin {tk:.2f} s (wall {runs['k']['wall']:.1f}, CPU {runs['k']['cpu']:.1f}), "
-              f"Cycles {tc:.2f} s (wall {runs['c']['wall']:.1f}, CPU {runs['c']['cpu']:.1f})", flush=True)
+              f"kelvin {tk:.2f} s (CPU {ck:.1f} s), Cycles {tc:.2f} s (CPU {cc:.1f} s), {best}; load average "
+              f"before the runs {min(r['load_before'] for v in timing.values() for r in v):.1f}-"
+              f"{max(r['load_before'] for v in timing.values() for r in v):.1f}", flush=True)
         print("mesh         texels  mean k/c  k/c @ref spp  RMSE k/c  k/noise  c/noise  relMSE k   relMSE c   "
               "speed@eq.noise (2-seed)  | leak zone: texels, mean k/c@ref")
         for row in rows:
@@ -369,7 +395,7 @@ def main(argv=None):
             zs = f"{z['texels']:6d} {z['mean_kref_cref']:.3f}" if z else "     0"
             print(f"{row['mesh']:12s} {s['texels']:6d}  {s['mean_k_c']:.4f}   {s['mean_kref_cref']:.4f}       "
                   f"{s['rmse_k_over_c']:.3f}     {s['rmse_k_over_noise']:.3f}    {s['rmse_c_over_noise']:.3f}    "
-                  f"{s['relmse_k']:.3e}  {s['relmse_c']:.3e}  {s['speed_equal_noise']:.2f}x ({s['speed_equal_noise_2seed']:.2f}x)"
+                  f"{s['relmse_k']:.3e}  {s['relmse_c']:.3e}  {s['speed_equal_noise']:.2f}x ({s['speed_equal_noise_2seed']:.2f}x, CPU {s['speed_equal_noise_cpu']:.2f}x)"
                   f"  | {zs}", flush=True)
     if a.json_out:
         Path(a.json_out).write_text(json.dumps(results, indent=1, default=str) + "\n")
