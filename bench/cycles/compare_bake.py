@@ -4,7 +4,8 @@ converged Cycles bake over each one's own noise, relMSE, and time to equal noise
 
     /tmp/cycles-venv/bin/python bench/cycles/compare_bake.py [--kelvin /tmp/kbin/kelvin-main]
         [--scene tests/data/gltf/bevy/CornellBox.glb] [--size 256] [--spp 32] [--ref-mult 16] [--depths 16,1]
-        [--albedo-floor 1e-4] [--out-dir /tmp/peers/cycles_bake] [--json-out FILE] [--reuse]
+        [--albedo-floor 1e-4] [--two-sided-emitters] [--speed-rounds 0] [--out-dir /tmp/peers/cycles_bake]
+        [--json-out FILE] [--reuse]
 
 Scene: the Lambertian copy of scripts/make_lambertian_copy.py (one-sided emitters; bake_cycles.py makes Cycles'
 emission of doubleSided-false materials front-only too), then every base-colour channel that is 0 raised to
@@ -12,6 +13,8 @@ emission of doubleSided-false materials front-only too), then every base-colour 
 where a channel of that is 0, fills it from the other channels (safe_divide_even_color: a red wall's G and B
 become its R), where kelvin's texel is the irradiance a white surface gets in every channel. 1e-4 changes the
 light the wall reflects in that channel by 1e-4 of the light reaching it.
+--two-sided-emitters keeps the file's doubleSided true on emitters and Cycles' two-sided emission (a check of
+kelvin's leak test on a two-sided lamp).
 Runs, per kelvin depth d (Cycles bounces d - 1): kelvin at N spp seeds 0 and 1 and at N*M spp seed 2; Cycles
 at N spp seeds 1 and 3 and the reference at N*M spp seed 2 (Cycles, so that the reference shares no code with
 kelvin: kelvin's own bias shows against it). All on the CPU with all cores, one after another.
@@ -26,9 +29,11 @@ Figures per mesh over its clean texels (RGB, float64):
   noise        RMSE(x@N seed a, x@N seed b) / sqrt(2): each baker's own per-texel noise at N spp
   k/noise      RMSE(kelvin@N, ref) / kelvin's noise (~1 when unbiased, plus the reference's noise)
   relMSE       sum((x - ref)^2) / sum(ref^2)
-  speed        (--speed-rounds R: times best of R + 1 runs, alternating) time to equal noise, Cycles over kelvin: (t_c relMSE_c) / (t_k relMSE_k) (relMSE ~ 1/spp);
-               with the bakers' whole times (one run bakes every mesh), per mesh and pooled over all meshes;
-               (2-seed: noise^2 instead of relMSE; CPU: CPU seconds instead of wall, robust to a shared machine).
+  speed        time to equal noise, Cycles over kelvin: (t_c relMSE_c) / (t_k relMSE_k) (relMSE ~ 1/spp), with
+               the bakers' whole times (one run bakes every mesh: kelvin's "baked ... in T s", Cycles' bake call),
+               per mesh and pooled over all meshes; 2-seed: noise^2 instead of relMSE; CPU: CPU seconds (all
+               threads) instead of wall time, steadier on a shared machine. --speed-rounds R: R more alternating
+               runs of each at N spp, the best times of R + 1 taken.
 """
 import argparse
 import json
@@ -95,7 +100,8 @@ def cycles_bake(a, scene, depth, spp, seed, out):
         return json.loads(done.read_text())
     load = load1()
     text, wall, cpu = run([a.cycles_python, HERE / "bake_cycles.py", scene, "-o", out, "--size", a.size, "--spp",
-                           spp, "--max-depth", depth, "--seed", seed, "--margin", 4, "--json"])
+                           spp, "--max-depth", depth, "--seed", seed, "--margin", 4, "--json", "--emission-sides",
+                           "two" if a.two_sided_emitters else "gltf"])
     j = json.loads([ln for ln in text.splitlines() if ln.startswith("{")][-1])
     r = {"seconds": j["bake_seconds"], "bake_cpu": j.get("bake_cpu_seconds"), "total_seconds": j["total_seconds"],
          "wall": wall, "cpu": cpu,
@@ -298,6 +304,8 @@ def main(argv=None):
     ap.add_argument("--ref-mult", type=int, default=16)
     ap.add_argument("--depths", default="16,1")
     ap.add_argument("--albedo-floor", type=float, default=1e-4)
+    ap.add_argument("--two-sided-emitters", action="store_true",
+                    help="keep the file's doubleSided on emitters (kelvin) and Cycles' two-sided emission")
     ap.add_argument("--out-dir", default="/tmp/peers/cycles_bake")
     ap.add_argument("--json-out", default=None)
     ap.add_argument("--reuse", action="store_true", help="reuse finished bakes in --out-dir")
@@ -308,7 +316,13 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     # The scene both bake.
     doc, binary, glb = read_gltf(a.scene)
+    sided = [m.get("doubleSided", False) for m in doc.get("materials", [])]
     changes = lambertian(doc)
+    if a.two_sided_emitters:
+        for i, (m, was) in enumerate(zip(doc.get("materials", []), sided)):
+            if was and not m.get("doubleSided", False):
+                m["doubleSided"] = True
+                changes.append(f"material {i} '{m.get('name', '')}': doubleSided -> true again (--two-sided-emitters)")
     for i, m in enumerate(doc.get("materials", [])):
         pbr = m.setdefault("pbrMetallicRoughness", {})
         f = pbr.get("baseColorFactor", [1, 1, 1, 1])
