@@ -14,6 +14,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::camera_pass::{CameraColumns, FoundSurface, write_found_surfaces};
+use super::material::Material;
 use super::normal_map::apply_normal_maps;
 use super::renderer::{RenderStats, Strategy, to_rgb};
 use super::shade::{Bounce, BounceRules, Continuation, Materials, ShadeContext};
@@ -133,7 +134,7 @@ impl Paths {
             self.shade(&ctx, depth, rules);
             self.follow(&ctx, rules);
             if let (0, Start::Surfaces { leak_distance, .. }) = (depth, job.start) {
-                self.note_leaks(leak_distance);
+                self.note_leaks(leak_distance, &job.materials.materials);
             }
             stats.bsdf_rays += self.continuations.len() as u64;
             drop(ctx);
@@ -229,11 +230,13 @@ impl Paths {
     }
 
     /// Marks the paths whose first ray (the continuations just followed) met a back face nearer
-    /// than `leak_distance`.
-    fn note_leaks(&mut self, leak_distance: f32) {
+    /// than `leak_distance`. A double-sided surface has no inside: its back is a face like its
+    /// front (a two-sided lamp lights the ceiling above it with its back), not a leak.
+    fn note_leaks(&mut self, leak_distance: f32, materials: &[Material]) {
+        let one_sided = |m: u32| materials.get(m as usize).is_none_or(|m| !m.double_sided);
         for ((p, c), hit) in self.continuations.iter().zip(&self.hits) {
             // The ray's direction is unit length, so t is the distance.
-            let back = hit.is_some_and(|h| h.ng.dot(c.wi) > 0.0 && h.t < leak_distance);
+            let back = hit.is_some_and(|h| h.ng.dot(c.wi) > 0.0 && h.t < leak_distance && one_sided(h.material));
             self.leaked[*p as usize] = back;
         }
     }

@@ -93,6 +93,12 @@ impl Doc {
         self.materials.len() - 1
     }
 
+    /// Makes material `m` double-sided (glTF `doubleSided`: its back shades, and emits, as its front).
+    #[allow(dead_code)]
+    pub fn double_sided(&mut self, m: usize) {
+        self.materials[m]["doubleSided"] = json!(true);
+    }
+
     /// A mesh named `name` of `prims`, placed at the origin by its own node.
     pub fn mesh(&mut self, name: &str, prims: &[Prim]) {
         let mut primitives = Vec::new();
