@@ -139,6 +139,12 @@ pub(super) fn parse(args: &[String]) -> Result<BakeArgs, String> {
     })
 }
 
+/// The clap definition of `kelvin bake KIND` (lightmaps or volume), for the manifest's schema.
+pub(super) fn command(kind: &str) -> clap::Command {
+    let all = <BakeCommandLine as clap::CommandFactory>::command();
+    all.find_subcommand(kind).cloned().unwrap_or(all)
+}
+
 impl BakeArgs {
     /// Where the finished bake goes, and the folder its parts go to.
     pub(super) fn output(&self) -> (&Path, PathBuf) {

@@ -19,9 +19,7 @@ use super::bake::{BakeArgs, parse};
 /// Keys of a bake job.
 const KEYS: [&str; 6] = ["name", "bake", "scene", "output", "parts", "settings"];
 /// Flags a batch sets itself.
-const RESERVED: [&str; 4] = ["output", "part", "merge", "threads"];
-/// Settings that name files (relative to the manifest's folder).
-const PATHS: [&str; 1] = ["env"];
+pub(super) const RESERVED: [&str; 4] = ["output", "part", "merge", "threads"];
 /// Most parts a bake may be split into.
 pub(super) const MAX_PARTS: u64 = 4096;
 
@@ -63,33 +61,7 @@ pub(super) fn resolve(job: &Value, base: &Path, output: &Path) -> Result<BakeJob
         Some(Value::Object(m)) => m.clone(),
         Some(v) => return Err(format!("settings: {v} is not an object of `kelvin bake {kind}` flags")),
     };
-    for (key, value) in &settings {
-        if RESERVED.contains(&key.as_str()) {
-            return Err(format!("settings.{key}: set by the batch (output, parts), not by a setting"));
-        }
-        let flag = format!("--{}", key.replace('_', "-"));
-        let text = |v: &Value| match v {
-            Value::String(s) => Ok(s.clone()),
-            Value::Number(n) => Ok(n.to_string()),
-            _ => Err(format!("settings.{key}: {v} is not a string, a number or an array of numbers")),
-        };
-        match value {
-            Value::Bool(true) => args.push(flag),
-            Value::Bool(false) | Value::Null => {}
-            Value::Array(items) => {
-                let items: Result<Vec<String>, String> = items.iter().map(text).collect();
-                args.extend([flag, items?.join(",")]);
-            }
-            v if PATHS.contains(&key.as_str()) => {
-                let path = base.join(text(v)?);
-                if !path.is_file() {
-                    return Err(format!("settings.{key} {}: no such file", path.display()));
-                }
-                args.extend([flag, path.display().to_string()]);
-            }
-            v => args.extend([flag, text(v)?]),
-        }
-    }
+    args.extend(super::settings::flags(&settings, &RESERVED, base)?);
     let with_output = |extra: &[String]| {
         let argv: Vec<String> = args
             .iter()

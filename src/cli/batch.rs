@@ -11,7 +11,11 @@ use super::manifest::{PlannedJob, plan};
 #[derive(clap::Args)]
 pub struct BatchArgs {
     /// The manifest: JSON, `{"jobs": [{"scene", "output", "size", "spp", "camera", "settings"}, ...]}`.
-    manifest: PathBuf,
+    #[arg(required_unless_present = "schema")]
+    manifest: Option<PathBuf>,
+    /// Print the manifest's JSON Schema (generated from the commands' definitions) and exit.
+    #[arg(long)]
+    schema: bool,
     /// Print the jobs as JSON (resolved `kelvin render` arguments, size, finished or not, errors)
     /// instead of rendering them: what a distributed driver reads.
     #[arg(long)]
@@ -35,7 +39,12 @@ enum Outcome {
 }
 
 pub fn run(args: BatchArgs) -> Result<(), CliError> {
-    let mut jobs = plan(&args.manifest)?;
+    if args.schema {
+        println!("{}", serde_json::to_string_pretty(&super::settings::manifest_schema())?);
+        return Ok(());
+    }
+    let Some(manifest) = &args.manifest else { return Err("no manifest given".into()) };
+    let mut jobs = plan(manifest)?;
     if let Some(n) = args.task {
         if n >= jobs.len() {
             return Err(format!("--task {n}: the plan has {} entries (0..{})", jobs.len(), jobs.len()).into());

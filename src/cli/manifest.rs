@@ -27,8 +27,17 @@ use super::render::RenderArgs;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Manifest {
+    /// The manifest format's version (absent: 1).
+    pub version: Option<u32>,
     pub jobs: Vec<serde_json::Value>,
+    /// The schema the file names for editors (`"$schema"`), not read.
+    #[serde(rename = "$schema")]
+    #[allow(dead_code)]
+    pub schema: Option<String>,
 }
+
+/// The manifest version this kelvin reads.
+pub const VERSION: u32 = 1;
 
 /// One job as written in the manifest. Settings default as `kelvin render`'s flags do.
 #[derive(Deserialize)]
@@ -58,8 +67,9 @@ struct JobSpec {
     fps: Option<f64>,
     /// The animation to play, by name or index (default the first).
     animation: Option<String>,
+    /// `kelvin render` flags by name (`max_depth` is `--max-depth`; see `settings.rs`).
     #[serde(default)]
-    settings: SettingsSpec,
+    settings: serde_json::Map<String, serde_json::Value>,
 }
 
 /// The scene's camera (the first one, or one framing the scene), or an environment camera.
@@ -69,33 +79,9 @@ struct CameraSpec {
     environment_at: Option<[f32; 3]>,
 }
 
-#[derive(Deserialize, Default)]
-#[serde(deny_unknown_fields)]
-struct SettingsSpec {
-    /// rgb or spectral.
-    color: Option<String>,
-    /// uniform, power, bvh, ris or restir.
-    light_sampler: Option<String>,
-    /// Light samples per resampled one (light_sampler ris or restir).
-    candidates: Option<u32>,
-    /// Neighbour reservoirs per pixel and their radius, pixels (light_sampler restir).
-    neighbours: Option<u32>,
-    radius: Option<u32>,
-    /// path or direct.
-    integrator: Option<String>,
-    max_depth: Option<u32>,
-    roulette_depth: Option<u32>,
-    /// A physical sun and sky, as `--sky` takes it: "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]".
-    sky: Option<String>,
-    seed: Option<u64>,
-    #[serde(default)]
-    all_lights: bool,
-    /// false: light sampling only.
-    mis: Option<bool>,
-    env: Option<PathBuf>,
-    env_intensity: Option<f32>,
-    exposure: Option<f32>,
-}
+/// Flags a render job's settings may not set: the job's own keys (`frames`, `output`), the
+/// driver's tiling (`crop`) and the machine's (`threads`, `report`).
+pub(super) const RESERVED: [&str; 7] = ["output", "crop", "frames", "fps", "animation", "threads", "report"];
 
 /// A job ready to run, or why it cannot.
 #[derive(Serialize)]
@@ -163,6 +149,9 @@ pub fn plan(path: &Path) -> Result<Vec<PlannedJob>, String> {
     let what = path.display();
     let text = std::fs::read_to_string(path).map_err(|e| format!("{what}: cannot read: {e}"))?;
     let manifest: Manifest = serde_json::from_str(&text).map_err(|e| format!("{what}: not a manifest: {e}"))?;
+    if let Some(v) = manifest.version.filter(|v| *v != VERSION) {
+        return Err(format!("{what}: manifest version {v}; this kelvin reads version {VERSION}"));
+    }
     // Absolute paths in the arguments, so that they mean the same from any working directory.
     let base = std::path::absolute(path).map_err(|e| format!("{what}: {e}"))?;
     let base = base.parent().unwrap_or(Path::new("/"));
@@ -362,43 +351,16 @@ fn resolve(job: serde_json::Value, frames: &[u32], base: &Path) -> Result<(Vec<S
     if let Some([x, y, z]) = spec.camera.environment_at {
         push("--environment-at", format!("{x},{y},{z}"));
     }
-    let s = spec.settings;
-    let numbers = [
-        ("--candidates", s.candidates),
-        ("--neighbours", s.neighbours),
-        ("--radius", s.radius),
-        ("--max-depth", s.max_depth),
-        ("--roulette-depth", s.roulette_depth),
-    ];
-    let words =
-        [("--color", s.color), ("--light-sampler", s.light_sampler), ("--integrator", s.integrator), ("--sky", s.sky)];
-    for (flag, value) in words.into_iter().chain(numbers.map(|(f, v)| (f, v.map(|n| n.to_string())))) {
-        if let Some(v) = value {
-            push(flag, v);
+    let mut settings = spec.settings;
+    // `mis: false` is `--no-mis`, the flag's negation.
+    if let Some(mis) = settings.remove("mis") {
+        match mis.as_bool() {
+            Some(false) => args.push("--no-mis".into()),
+            Some(true) => {}
+            None => return Err(format!("settings.mis: {mis} is not true or false")),
         }
     }
-    if let Some(seed) = s.seed {
-        push("--seed", seed.to_string());
-    }
-    if let Some(env) = &s.env {
-        let env = base.join(env);
-        if !env.is_file() {
-            return Err(format!("settings.env {}: no such file", env.display()));
-        }
-        push("--env", env.display().to_string());
-    }
-    if let Some(x) = s.env_intensity {
-        push("--env-intensity", x.to_string());
-    }
-    if let Some(x) = s.exposure {
-        push("--exposure", x.to_string());
-    }
-    if s.all_lights {
-        args.push("--all-lights".into());
-    }
-    if s.mis == Some(false) {
-        args.push("--no-mis".into());
-    }
+    args.extend(super::settings::flags(&settings, &RESERVED, base)?);
     if let Some(scene) = &spec.scene {
         let scene = base.join(scene);
         if !scene.is_file() {

@@ -9,6 +9,7 @@ mod manifest;
 mod merge;
 mod render;
 mod report;
+mod settings;
 mod spectrum;
 mod values;
 
