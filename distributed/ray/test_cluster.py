@@ -412,10 +412,12 @@ def section_resume(ctx):
     proc, deadline = sec.start(), time.monotonic() + 300
     try:
         while proc.poll() is None and time.monotonic() < deadline:
-            if sum(map(os.path.exists, every)) >= 10:
+            # Preferably while a bake part is staged too (its parts run alongside the tiles and finish quickly).
+            have = [p for p in every if os.path.exists(p)]
+            if len(have) >= 16 or (len(have) >= 4 and any(p.endswith(".kbake") for p in have)):
                 proc.send_signal(signal.SIGKILL)
                 break
-            time.sleep(0.2)
+            time.sleep(0.1)
     finally:
         code, _ = sec.finish(proc, deadline)
     check(code == -signal.SIGKILL, f"the driver was killed mid-run: exit code {code} (it finished first?)")
@@ -423,8 +425,9 @@ def section_resume(ctx):
     have = staged(jobs)
     total, before = sum(len(pieces(jobs[i])) for i in have), sum(map(len, have.values()))
     victim = plant_foreign_tile(ctx, jobs, have)
-    print(f"killed the driver with {before} tiles of {total} of the unfinished jobs staged; planted a tile of seed "
-          f"77 in {jobs[victim]['name']}", flush=True)
+    parts = sum(p.endswith(".kbake") for ps in have.values() for p in ps)
+    print(f"killed the driver with {before} tiles of {total} of the unfinished jobs staged ({parts} of them bake "
+          f"parts); planted a tile of seed 77 in {jobs[victim]['name']}", flush=True)
 
     code, out = sec.run()
     show(out)
