@@ -133,9 +133,13 @@ def run_kelvin(cmd, what, timeout, node):
 
 
 def report_start(tracker, attempt):
-    """Tells the tracker where this attempt runs (waiting for it, so a kill right after cannot lose it)."""
+    """Tells the tracker where this attempt runs (waiting for it, so a kill right after cannot lose it). Only a
+    hint for choosing a retry's node: a tracker that cannot be reached does not fail the tile."""
     node = ray.get_runtime_context().get_node_id()
-    ray.get(tracker.started.remote(attempt, node))
+    try:
+        ray.get(tracker.started.remote(attempt, node), timeout=60)
+    except ray.exceptions.RayError:
+        pass
     return node
 
 
@@ -190,6 +194,7 @@ def cpu_seconds():
 
 
 def plan(kelvin, manifest):
+    """The manifest's jobs as kelvin plans them (frames expanded, outputs checked), so none is interpreted here."""
     run = subprocess.run([kelvin, "batch", manifest, "--plan"], capture_output=True, text=True, timeout=120)
     if run.returncode != 0:
         sys.exit(f"kelvin batch --plan {manifest}: {run.stderr.strip()}")
@@ -391,6 +396,7 @@ class Farm:
                 self.handle(ref)
 
     def handle(self, ref):
+        """Stages a finished piece (merging its job when it was the last), or deals with its failure."""
         piece, pinned, attempt = self.pending.pop(ref)
         if pinned:
             self.pinned[pinned] -= 1
@@ -402,7 +408,11 @@ class Farm:
         except Exception as err:  # a task's failure is its job's, not the run's
             self.failed(piece, err, pinned, attempt)
             return
-        write_durably(piece.path, data)
+        try:
+            write_durably(piece.path, data)
+        except OSError as e:  # the driver's disk: no other node would help
+            self.fail(job, f"job {job.index} ({job.name}): cannot stage {piece.what}: {e}")
+            return
         self.done += 1
         stats = self.per_node.setdefault(node, [0, 0.0, 0.0])
         stats[0], stats[1], stats[2] = stats[0] + 1, stats[1] + secs, stats[2] + cpu
@@ -468,6 +478,7 @@ class Farm:
             job.status = ("rendered", job.entry["output"])
 
     def time_out(self):
+        """Cancels what is left; the staged pieces stay for a rerun."""
         for ref, (piece, _, _) in self.pending.items():
             ray.cancel(ref, force=True)
             job = self.jobs[piece.job]
