@@ -14,24 +14,42 @@ Bake jobs (`"bake"` in the manifest) split into the parts the manifest gives: ea
 runs `kelvin bake ... --part K/N` and returns the part's sums; `kelvin bake ... --merge` joins them into the
 lightmaps (or volume) byte for byte as one `kelvin bake` writes them.
 
-Tasks whose worker or node dies are retried (--max-retries); a job whose tile fails in kelvin itself
-(a bad scene, say) fails with kelvin's message and the other jobs go on. The exit code is 0 only if
-every job succeeded or was already finished. The kelvin binary and the scenes must be at the same
-paths on every node (as in one container image); tiles travel through Ray, not a shared disk.
+Failures are sorted. A task whose kelvin was killed by a signal (the OOM killer, say), timed out, could not be
+executed (exit code 126/127), or whose worker, node or result was lost, is retried (--max-retries) on another
+node where one is alive: the driver pins the retry away from every node the task failed on. A task that kelvin
+itself refuses (exit code 1 or 2: a bad scene, bad settings) fails its job at once with kelvin's message; the
+other jobs go on.
+
+Every finished tile is written at once, durably, into a staging folder beside the job's output
+(`OUTPUT.tiles/X0_Y0_X1_Y1.exr`; a bake's parts go to kelvin's parts folder as `part-K-of-N.kbake`), so a driver
+restarted after a crash renders only the tiles that are missing. The staging folder is removed once merged; if
+the merge refuses the staged tiles (made by another build or for other settings), it is removed too and the job
+reported failed, so that a rerun renders it fresh.
+
+The exit code is 0 only if every job succeeded or was already finished. The kelvin binary and the scenes must be
+at the same paths on every node (as in one container image); tiles travel through Ray, not a shared disk.
 Without --address a local Ray cluster is started for the run.
 """
 
 import argparse
+import ctypes
 import json
 import math
 import os
 import resource
+import shutil
+import signal
 import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass, field
 
 import ray
+from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+# How long one ray.wait may block: completions are handled in batches this often at most.
+WAIT_SECONDS = 0.5
 
 
 def tile_grid(width, height, tiles):
@@ -52,58 +70,117 @@ def tile_grid(width, height, tiles):
     return [(xs[i], ys[j], xs[i + 1], ys[j + 1]) for j in range(rows) for i in range(cols)]
 
 
+# ---------------------------------------------------------------------------------------------------------------
+# Tasks (run on the workers)
+
+
 class TileFailed(Exception):
-    """kelvin itself refused or failed a tile: retrying would fail the same way."""
+    """kelvin itself refused or failed a tile: retrying would fail the same way, anywhere."""
+
+
+class TaskFault(Exception):
+    """The tile failed for a reason of its node, not of the job (kelvin killed, timed out or not executable):
+    worth retrying elsewhere. Carries the node so that the driver can avoid it."""
+
+    def __init__(self, node, message):
+        super().__init__(node, message)
+        self.node, self.message = node, message
+
+    def __str__(self):
+        return self.message
+
+
+@ray.remote(num_cpus=0)
+class Whereabouts:
+    """Which node each task attempt started on. A task whose worker or node dies cannot say where it ran, and
+    Ray's errors for it (WorkerCrashedError, NodeDiedError) do not name the node; the driver asks here."""
+
+    def __init__(self):
+        self.nodes = {}
+
+    def started(self, attempt, node):
+        self.nodes[attempt] = node
+
+    def node_of(self, attempt):
+        return self.nodes.get(attempt)
+
+
+def die_with_parent():
+    """Runs in the kelvin child before exec: the kernel kills kelvin when its worker dies, so that a killed
+    worker (or node) does not leave an orphan render eating a CPU that its retry needs."""
+    PR_SET_PDEATHSIG = 1
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+
+
+def run_kelvin(cmd, what, timeout, node):
+    """Runs one kelvin command; raises TaskFault for failures of the node and TileFailed for kelvin's own."""
+    preexec = die_with_parent if sys.platform.startswith("linux") else None
+    try:
+        run = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, preexec_fn=preexec)
+    except subprocess.TimeoutExpired:
+        raise TaskFault(node, f"{what}: kelvin took over {timeout} s")
+    except OSError as e:
+        raise TaskFault(node, f"{what}: cannot run {cmd[0]}: {e}")
+    lines = [l for l in run.stderr.splitlines() if l.strip()]
+    last = lines[-1] if lines else "no message"
+    if run.returncode < 0:
+        raise TaskFault(node, f"{what}: kelvin was killed by {signal.Signals(-run.returncode).name}")
+    if run.returncode in (126, 127):
+        raise TaskFault(node, f"{what}: {cmd[0]} could not be executed (exit code {run.returncode}): {last}")
+    if run.returncode != 0:
+        # kelvin's own errors (1, 2) and panics (101) repeat on any node: kelvin is deterministic.
+        raise TileFailed(f"{what}: {last}")
+
+
+def report_start(tracker, attempt):
+    """Tells the tracker where this attempt runs (waiting for it, so a kill right after cannot lose it). Only a
+    hint for choosing a retry's node: a tracker that cannot be reached does not fail the tile."""
+    node = ray.get_runtime_context().get_node_id()
+    try:
+        ray.get(tracker.started.remote(attempt, node), timeout=60)
+    except ray.exceptions.RayError:
+        pass
+    return node
 
 
 @ray.remote
-def render_tile(kelvin, args, crop, threads, timeout):
+def render_tile(kelvin, args, crop, threads, timeout, tracker, attempt):
     """Runs `kelvin render ARGS --crop ...` in a temporary folder; returns (EXR bytes, node, seconds,
     kelvin's CPU seconds)."""
     start, cpu = time.monotonic(), cpu_seconds()
-    node = ray.get_runtime_context().get_node_id()
+    node = report_start(tracker, attempt)
     crop_arg = ",".join(map(str, crop))
-    with tempfile.TemporaryDirectory(prefix="kelvin-tile-") as tmp:
-        out = os.path.join(tmp, "tile.exr")
-        cmd = [kelvin, "render", *args, "--crop", crop_arg, "--threads", str(threads), "-o", out]
-        try:
-            run = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-        except subprocess.TimeoutExpired:
-            raise TileFailed(f"tile {crop_arg}: kelvin render took over {timeout} s")
-        except OSError as e:
-            raise TileFailed(f"tile {crop_arg}: cannot run {kelvin}: {e}")
-        if run.returncode != 0:
-            lines = [l for l in run.stderr.splitlines() if l.strip()]
-            raise TileFailed(f"tile {crop_arg}: {lines[-1] if lines else 'kelvin render failed'}")
-        with open(out, "rb") as f:
-            return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
+    try:
+        with tempfile.TemporaryDirectory(prefix="kelvin-tile-") as tmp:
+            out = os.path.join(tmp, "tile.exr")
+            cmd = [kelvin, "render", *args, "--crop", crop_arg, "--threads", str(threads), "-o", out]
+            run_kelvin(cmd, f"tile {crop_arg}", timeout, node)
+            with open(out, "rb") as f:
+                return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
+    except OSError as e:  # the node's temporary disk, not the job
+        raise TaskFault(node, f"tile {crop_arg}: {e}")
 
 
 @ray.remote
-def bake_part(kelvin, args, part, parts, threads, timeout):
+def bake_part(kelvin, args, part, parts, threads, timeout, tracker, attempt):
     """Runs `kelvin bake ARGS --part PART/PARTS` in a temporary folder; returns (part file bytes, node,
     seconds, kelvin's CPU seconds)."""
     start, cpu = time.monotonic(), cpu_seconds()
-    node = ray.get_runtime_context().get_node_id()
+    node = report_start(tracker, attempt)
     what = f"part {part}/{parts}"
-    with tempfile.TemporaryDirectory(prefix="kelvin-bake-") as tmp:
-        # A volume is written as .ktx2 (its parts beside it), lightmaps into a folder.
-        out = os.path.join(tmp, "out.ktx2" if args[0] == "volume" else "out")
-        cmd = [kelvin, "bake", *args, "--part", f"{part}/{parts}", "--threads", str(threads), "-o", out]
-        try:
-            run = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-        except subprocess.TimeoutExpired:
-            raise TileFailed(f"{what}: kelvin bake took over {timeout} s")
-        except OSError as e:
-            raise TileFailed(f"{what}: cannot run {kelvin}: {e}")
-        if run.returncode != 0:
-            lines = [l for l in run.stderr.splitlines() if l.strip()]
-            raise TileFailed(f"{what}: {lines[-1] if lines else 'kelvin bake failed'}")
-        found = [os.path.join(d, f) for d, _, fs in os.walk(tmp) for f in fs if f.endswith(".kbake")]
-        if len(found) != 1:
-            raise TileFailed(f"{what}: kelvin bake wrote {len(found)} part files")
-        with open(found[0], "rb") as f:
-            return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
+    try:
+        with tempfile.TemporaryDirectory(prefix="kelvin-bake-") as tmp:
+            # A volume is written as .ktx2 (its parts beside it), lightmaps into a folder.
+            out = os.path.join(tmp, "out.ktx2" if args[0] == "volume" else "out")
+            cmd = [kelvin, "bake", *args, "--part", f"{part}/{parts}", "--threads", str(threads), "-o", out]
+            run_kelvin(cmd, what, timeout, node)
+            found = [os.path.join(d, f) for d, _, fs in os.walk(tmp) for f in fs if f.endswith(".kbake")]
+            if len(found) != 1:
+                raise TileFailed(f"{what}: kelvin bake wrote {len(found)} part files")
+            with open(found[0], "rb") as f:
+                return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
+    except OSError as e:
+        raise TaskFault(node, f"{what}: {e}")
 
 
 def cpu_seconds():
@@ -112,47 +189,333 @@ def cpu_seconds():
     return usage.ru_utime + usage.ru_stime
 
 
+# ---------------------------------------------------------------------------------------------------------------
+# Driver
+
+
 def plan(kelvin, manifest):
+    """The manifest's jobs as kelvin plans them (frames expanded, outputs checked), so none is interpreted here."""
     run = subprocess.run([kelvin, "batch", manifest, "--plan"], capture_output=True, text=True, timeout=120)
     if run.returncode != 0:
         sys.exit(f"kelvin batch --plan {manifest}: {run.stderr.strip()}")
     return json.loads(run.stdout)["jobs"]
 
 
-def cause(err):
-    """The message of a task's failure, without Ray's traceback."""
-    if isinstance(err, ray.exceptions.RayTaskError) and isinstance(err.cause, TileFailed):
-        return str(err.cause)
-    return f"{type(err).__name__}: {str(err).strip().splitlines()[-1] if str(err).strip() else ''}"
+def classify(err):
+    """(transient, message, node or None) of a task's failure. Transient failures are the node's (its kelvin
+    killed or not executable, its worker, raylet or objects lost): another node may succeed. Anything the task
+    raised otherwise is the job's: kelvin's refusal, or a bug that would repeat."""
+    if isinstance(err, ray.exceptions.RayTaskError):
+        if isinstance(err.cause, TaskFault):
+            return True, str(err.cause), err.cause.node
+        if isinstance(err.cause, TileFailed):
+            return False, str(err.cause), None
+        return False, f"{type(err.cause).__name__}: {err.cause}", None
+    text = str(err).strip()
+    return True, f"{type(err).__name__}: {text.splitlines()[-1] if text else ''}", None
 
 
-def merge(kelvin, job, tiles):
-    """Writes the job's tiles to a local folder and joins them with `kelvin merge`; None or the error."""
-    os.makedirs(os.path.dirname(job["output"]) or ".", exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="kelvin-merge-") as tmp:
-        paths = []
-        for i, data in enumerate(tiles):
-            paths.append(os.path.join(tmp, f"tile{i:03}.exr"))
-            with open(paths[-1], "wb") as f:
-                f.write(data)
-        # The job's exposure, so that the PNG preview is the one `kelvin render` writes.
-        exposure = [] if job.get("exposure") is None else ["--exposure", repr(job["exposure"])]
-        cmd = [kelvin, "merge", *paths, "-o", job["output"], *exposure]
-        run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-        return None if run.returncode == 0 else f"kelvin merge: {run.stderr.strip()}"
-
-
-def merge_bake(kelvin, job, parts):
-    """Writes the bake's parts into its parts folder and joins them with `kelvin bake --merge`; None or the error."""
-    folder = job["parts_dir"]
+def write_durably(path, data):
+    """Writes `data` under a temporary name, fsyncs and renames it to `path`, then fsyncs the folder: a file
+    under its final name is always whole, whenever the driver or the machine stops."""
+    folder = os.path.dirname(path)
     os.makedirs(folder, exist_ok=True)
-    n = len(parts)
-    for k, data in enumerate(parts, 1):
-        with open(os.path.join(folder, f"part-{k}-of-{n}.kbake"), "wb") as f:
-            f.write(data)
-    cmd = [kelvin, "bake", *job["args"], "--merge", "-o", job["output"]]
+    tmp = os.path.join(folder, f".{os.path.basename(path)}.{os.getpid()}.tmp")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+@dataclass
+class Piece:
+    """One task's worth of a job: a tile of a render or a part of a bake, and its staged file."""
+
+    job: int  # plan position
+    index: int  # in the job's pieces
+    what: str  # "tile X0,Y0,X1,Y1" or "part K/N"
+    spec: tuple  # the crop, or (K, N)
+    path: str  # where the finished piece is staged
+    failed_on: set = field(default_factory=set)  # nodes it failed on
+    retries: int = 0
+
+    def staged(self):
+        return os.path.exists(self.path)
+
+
+@dataclass
+class Job:
+    index: int  # plan position: the frames of one manifest job share its manifest index
+    entry: dict  # the plan's entry
+    staging: str = ""  # folder of the staged pieces
+    pieces: list = field(default_factory=list)
+    have: int = 0  # pieces staged
+    status: tuple = None  # ("rendered" | "skipped" | "FAILED", detail) once decided
+
+    @property
+    def name(self):
+        return self.entry["name"]
+
+    @property
+    def bake(self):
+        return self.entry.get("command") == "bake"
+
+
+def pieces_of(i, job, tiles):
+    """The job's tiles (or bake parts) and where each is staged."""
+    entry = job.entry
+    if job.bake:
+        n = entry["parts"]
+        job.staging = entry["parts_dir"]
+        return [Piece(i, k, f"part {k + 1}/{n}", (k + 1, n), os.path.join(job.staging, f"part-{k + 1}-of-{n}.kbake"))
+                for k in range(n)]
+    # A job whose tiles would not merge into its image (ReSTIR's reuse) renders as one tile.
+    crops = tile_grid(entry["width"], entry["height"], 1 if entry.get("untileable") else tiles)
+    job.staging = entry["output"] + ".tiles"
+    return [Piece(i, t, "tile " + ",".join(map(str, c)), c, os.path.join(job.staging, "_".join(map(str, c)) + ".exr"))
+            for t, c in enumerate(crops)]
+
+
+def remove_temporaries(folder):
+    """Removes half-written pieces a killed driver left (their names end in .tmp)."""
+    if os.path.isdir(folder):
+        for name in os.listdir(folder):
+            if name.startswith(".") and name.endswith(".tmp"):
+                os.remove(os.path.join(folder, name))
+
+
+def merge(kelvin, job):
+    """Joins the job's staged tiles with `kelvin merge`; None or the error."""
+    os.makedirs(os.path.dirname(job.entry["output"]) or ".", exist_ok=True)
+    # The job's exposure, so that the PNG preview is the one `kelvin render` writes.
+    exposure = [] if job.entry.get("exposure") is None else ["--exposure", repr(job.entry["exposure"])]
+    cmd = [kelvin, "merge", *(p.path for p in job.pieces), "-o", job.entry["output"], *exposure]
+    run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    return None if run.returncode == 0 else f"kelvin merge: {run.stderr.strip()}"
+
+
+def merge_bake(kelvin, job):
+    """Joins the bake's staged parts with `kelvin bake --merge` (which removes its parts folder); None or the
+    error."""
+    cmd = [kelvin, "bake", *job.entry["args"], "--merge", "-o", job.entry["output"]]
     run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     return None if run.returncode == 0 else f"kelvin bake --merge: {run.stderr.strip()}"
+
+
+def check_threads(threads):
+    """Refuses --threads that no alive node has CPUs for: Ray would keep such tasks waiting, silently."""
+    cpus = [n["Resources"].get("CPU", 0) for n in ray.nodes() if n["Alive"]]
+    if threads > max(cpus, default=0):
+        sys.exit(f"--threads {threads}: no node of the cluster has {threads} CPUs (the largest has "
+                 f"{max(cpus, default=0):g}); every task would wait for one forever")
+
+
+class Farm:
+    """The driver's state: the jobs, the tasks in flight, the retries, and the figures for the summary."""
+
+    def __init__(self, kelvin, jobs, opts):
+        self.kelvin, self.opts = kelvin, opts
+        self.jobs = [Job(i, entry) for i, entry in enumerate(jobs)]
+        self.pending = {}  # object ref -> (piece, pinned node or None, attempt id)
+        self.pinned = {}  # node -> tasks pinned there in flight, to spread retries
+        self.per_node = {}  # node id -> [tiles, task seconds, CPU seconds]
+        self.retry_log = []  # one entry per retry: task, node, cause
+        self.tasks = self.done = self.resumed = 0
+        self.start = time.monotonic()
+        here = ray.get_runtime_context().get_node_id()
+        # On the driver's node, which outlives the nodes whose tasks it tracks.
+        self.tracker = Whereabouts.options(scheduling_strategy=NodeAffinitySchedulingStrategy(here, soft=False)).remote()
+
+    # -- starting
+
+    def plan_jobs(self):
+        """Decides what each job needs: nothing (failed in the plan, or finished), a merge of what is staged,
+        or tasks for its missing pieces."""
+        for i, job in enumerate(self.jobs):
+            entry = job.entry
+            if entry["error"]:
+                job.status = ("FAILED", entry["error"])
+                continue
+            job.pieces = pieces_of(i, job, self.opts.tiles)
+            if entry["done"] and not self.opts.force:
+                job.status = ("skipped", f"{entry['output']} exists")
+                # A driver killed between a merge and its clean-up leaves the staged pieces behind.
+                shutil.rmtree(job.staging, ignore_errors=True)
+                continue
+            if entry.get("untileable"):
+                print(f"{job.name}: one tile: {entry['untileable']}", flush=True)
+            remove_temporaries(job.staging)
+            missing = [p for p in job.pieces if not p.staged()]
+            job.have = len(job.pieces) - len(missing)
+            self.resumed += job.have
+            if job.have:
+                print(f"{job.name}: {job.have} of {len(job.pieces)} staged in "
+                      f"{job.staging}, not rendered again", flush=True)
+            for piece in missing:
+                self.submit(piece)
+            if not missing:
+                self.finish(job)
+        self.tasks = len(self.pending)
+
+    def submit(self, piece, node=None):
+        """Starts a task for `piece`, pinned to `node` if given. Ray does not retry it itself (max_retries=0):
+        the driver counts the retries and chooses their node."""
+        job = self.jobs[piece.job]
+        attempt = f"{piece.job}/{piece.index}/{piece.retries}"
+        strategy = NodeAffinitySchedulingStrategy(node, soft=False) if node else "DEFAULT"
+        o = self.opts
+        if job.bake:
+            task = bake_part.options(num_cpus=o.threads, max_retries=0, scheduling_strategy=strategy)
+            ref = task.remote(self.kelvin, job.entry["args"], *piece.spec, o.threads, o.task_timeout, self.tracker, attempt)
+        else:
+            task = render_tile.options(num_cpus=o.threads, max_retries=0, scheduling_strategy=strategy)
+            ref = task.remote(self.kelvin, job.entry["args"], piece.spec, o.threads, o.task_timeout, self.tracker, attempt)
+        self.pending[ref] = (piece, node, attempt)
+        if node:
+            self.pinned[node] = self.pinned.get(node, 0) + 1
+
+    # -- the loop
+
+    def run(self):
+        """Handles finished tasks in batches until none is left or the time is up. One ray.wait per batch for
+        all of them (not one per completion), so the loop's cost grows with the tasks, not their square."""
+        deadline = self.start + self.opts.timeout
+        while self.pending:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                self.time_out()
+                break
+            ready, _ = ray.wait(list(self.pending), num_returns=len(self.pending), timeout=min(left, WAIT_SECONDS))
+            for ref in ready:
+                self.handle(ref)
+
+    def handle(self, ref):
+        """Stages a finished piece (merging its job when it was the last), or deals with its failure."""
+        piece, pinned, attempt = self.pending.pop(ref)
+        if pinned:
+            self.pinned[pinned] -= 1
+        job = self.jobs[piece.job]
+        if job.status:  # the job failed already; its other tasks are of no use
+            return
+        try:
+            data, node, secs, cpu = ray.get(ref)
+        except Exception as err:  # a task's failure is its job's, not the run's
+            self.failed(piece, err, pinned, attempt)
+            return
+        try:
+            write_durably(piece.path, data)
+        except OSError as e:  # the driver's disk: no other node would help
+            self.fail(job, f"job {job.index} ({job.name}): cannot stage {piece.what}: {e}")
+            return
+        self.done += 1
+        stats = self.per_node.setdefault(node, [0, 0.0, 0.0])
+        stats[0], stats[1], stats[2] = stats[0] + 1, stats[1] + secs, stats[2] + cpu
+        job.have += 1
+        print(f"[{time.monotonic() - self.start:6.1f} s] tiles {self.done}/{self.tasks}: {job.name} "
+              f"{job.have}/{len(job.pieces)}", flush=True)
+        if job.have == len(job.pieces):
+            self.finish(job)
+
+    def failed(self, piece, err, pinned, attempt):
+        """Retries a transient failure away from the nodes it failed on; fails the job on a permanent one."""
+        job = self.jobs[piece.job]
+        transient, message, node = classify(err)
+        if not transient:
+            self.fail(job, f"job {job.index} ({job.name}): {message}")
+            return
+        node = node or self.where(attempt) or pinned
+        if node:
+            piece.failed_on.add(node)
+        if piece.retries >= self.opts.max_retries:
+            self.fail(job, f"job {job.index} ({job.name}): {piece.what} failed {piece.retries + 1} times, last: {message}")
+            return
+        piece.retries += 1
+        target = self.other_node(piece.failed_on)
+        self.retry_log.append({"job": job.name, "task": piece.what, "retry": piece.retries, "failed_on": node,
+                               "cause": message, "retried_on": target})
+        print(f"retry {piece.retries}/{self.opts.max_retries}: {job.name} {piece.what} failed on node "
+              f"{(node or 'unknown')[:12]} ({message}); now on {'node ' + target[:12] if target else 'any node'}",
+              flush=True)
+        self.submit(piece, target)
+
+    def where(self, attempt):
+        """The node an attempt started on, as the tracker heard it; None if it never started (or is unknown)."""
+        try:
+            return ray.get(self.tracker.node_of.remote(attempt), timeout=30)
+        except Exception:
+            return None
+
+    def other_node(self, avoid):
+        """An alive node with the CPUs for a task, not one of `avoid` (the one with the fewest pinned tasks in
+        flight), or None if every such node is in `avoid`: then the task may run anywhere."""
+        fit = [n["NodeID"] for n in ray.nodes()
+               if n["Alive"] and n["Resources"].get("CPU", 0) >= self.opts.threads and n["NodeID"] not in avoid]
+        return min(fit, key=lambda n: self.pinned.get(n, 0), default=None)
+
+    def fail(self, job, detail):
+        """Fails one job: cancels its tasks in flight (no other job's) and removes its staged pieces, which a
+        fixed job would not merge with."""
+        job.status = ("FAILED", detail)
+        for ref, (piece, _, _) in list(self.pending.items()):
+            if piece.job == job.index:
+                ray.cancel(ref)
+        shutil.rmtree(job.staging, ignore_errors=True)
+
+    def finish(self, job):
+        """Merges a job whose pieces are all staged. A refused merge (pieces of another build or other
+        settings, say) removes them, so that a rerun renders the job fresh."""
+        error = merge_bake(self.kelvin, job) if job.bake else merge(self.kelvin, job)
+        shutil.rmtree(job.staging, ignore_errors=True)
+        if error:
+            job.status = ("FAILED", f"job {job.index} ({job.name}): {error}; its staged pieces are removed")
+        else:
+            job.status = ("rendered", job.entry["output"])
+
+    def time_out(self):
+        """Cancels what is left; the staged pieces stay for a rerun."""
+        for ref, (piece, _, _) in self.pending.items():
+            ray.cancel(ref, force=True)
+            job = self.jobs[piece.job]
+            job.status = job.status or ("FAILED", f"timed out after {self.opts.timeout} s (finished tiles stay staged)")
+        self.pending.clear()
+
+    # -- the outcome
+
+    def report(self):
+        wall = time.monotonic() - self.start
+        print(f"{'status':<9} {'job':<24} output / cause")
+        for job in self.jobs:
+            state, detail = job.status or ("FAILED", "not finished")
+            print(f"{state:<9} {job.name:<24} {detail}")
+        states = [(job.status or ("FAILED",))[0] for job in self.jobs]
+        counts = {s: states.count(s) for s in ("rendered", "skipped", "FAILED")}
+        print(f"{len(self.jobs)} jobs: {counts['rendered']} rendered, {counts['skipped']} skipped, {counts['FAILED']} failed")
+        print(f"{self.tasks} tiles in {wall:.2f} s ({self.resumed} staged before, {len(self.retry_log)} retries)")
+        for node, (n, secs, cpu) in sorted(self.per_node.items()):
+            print(f"node {node[:12]}: {n} tiles, {secs:.2f} s in tasks ({cpu:.2f} CPU s), {n / wall:.2f} tiles/s")
+        if self.opts.summary:
+            self.write_summary(wall)
+        return 1 if counts["FAILED"] else 0
+
+    def write_summary(self, wall):
+        summary = {
+            "wall_seconds": wall,
+            "tiles": self.tasks,  # tasks started this run (first attempts), staged pieces not counted
+            "resumed": self.resumed,  # pieces found staged by an earlier run
+            "retries": len(self.retry_log),
+            "retry_log": self.retry_log,
+            "jobs": {str(i): {"status": s[0], "detail": s[1]} for i, job in enumerate(self.jobs)
+                     for s in [job.status or ("FAILED", "not finished")]},
+            "nodes": {k: {"tiles": v[0], "task_seconds": v[1], "cpu_seconds": v[2]} for k, v in self.per_node.items()},
+        }
+        with open(self.opts.summary, "w") as f:
+            json.dump(summary, f, indent=2)
 
 
 def run(opts):
@@ -162,90 +525,11 @@ def run(opts):
         ray.init(address=opts.address, log_to_driver=False)
     else:
         ray.init(log_to_driver=False)
-    start = time.monotonic()
-    # Jobs are keyed by their place in the plan: the frames of one manifest job share its index.
-    status = {}  # plan position -> ("rendered" | "skipped" | "FAILED", detail)
-    pending = {}  # object ref -> (plan position, tile index)
-    tiles = {}  # plan position -> [EXR bytes or None]
-    for i, job in enumerate(jobs):
-        if job["error"]:
-            status[i] = ("FAILED", job["error"])
-        elif job["done"] and not opts.force:
-            status[i] = ("skipped", f"{job['output']} exists")
-        elif job.get("command") == "bake":
-            n = job["parts"]
-            tiles[i] = [None] * n
-            for k in range(n):
-                task = bake_part.options(num_cpus=opts.threads, max_retries=opts.max_retries)
-                ref = task.remote(kelvin, job["args"], k + 1, n, opts.threads, opts.task_timeout)
-                pending[ref] = (i, k)
-        else:
-            # A job whose tiles would not merge into its image (ReSTIR's reuse) renders as one tile.
-            if job.get("untileable"):
-                print(f"{job['name']}: one tile: {job['untileable']}", flush=True)
-            crops = tile_grid(job["width"], job["height"], 1 if job.get("untileable") else opts.tiles)
-            tiles[i] = [None] * len(crops)
-            for t, crop in enumerate(crops):
-                task = render_tile.options(num_cpus=opts.threads, max_retries=opts.max_retries)
-                ref = task.remote(kelvin, job["args"], crop, opts.threads, opts.task_timeout)
-                pending[ref] = (i, t)
-    total, done = len(pending), 0
-    per_node = {}  # node id -> [tiles, task seconds]
-    deadline = start + opts.timeout
-    while pending:
-        left = deadline - time.monotonic()
-        if left <= 0:
-            for ref, (i, _) in pending.items():
-                ray.cancel(ref, force=True)
-                status.setdefault(i, ("FAILED", f"timed out after {opts.timeout} s"))
-            break
-        ready, _ = ray.wait(list(pending), num_returns=1, timeout=min(left, 10))
-        for ref in ready:
-            i, t = pending.pop(ref)
-            done += 1
-            try:
-                data, node, secs, cpu = ray.get(ref)
-            except Exception as err:  # a task's failure is that job's, not the run's
-                if i not in status:
-                    status[i] = ("FAILED", f"job {i} ({jobs[i]['name']}): {cause(err)}")
-                    # The job's other tiles are of no use now.
-                    for other, (j, _) in list(pending.items()):
-                        if j == i:
-                            ray.cancel(other)
-                            del pending[other]
-                            done += 1
-                continue
-            tiles[i][t] = data
-            stats = per_node.setdefault(node, [0, 0.0, 0.0])
-            stats[0], stats[1], stats[2] = stats[0] + 1, stats[1] + secs, stats[2] + cpu
-            name = jobs[i]["name"]
-            have = sum(d is not None for d in tiles[i])
-            print(f"[{time.monotonic() - start:6.1f} s] tiles {done}/{total}: {name} {have}/{len(tiles[i])}", flush=True)
-            if have == len(tiles[i]) and i not in status:
-                join = merge_bake if jobs[i].get("command") == "bake" else merge
-                error = join(kelvin, jobs[i], tiles[i])
-                status[i] = ("FAILED", f"job {i} ({name}): {error}") if error else ("rendered", jobs[i]["output"])
-                tiles[i] = []  # the bytes are written; free them
-    wall = time.monotonic() - start
-    print(f"{'status':<9} {'job':<24} output / cause")
-    for i, job in enumerate(jobs):
-        state, detail = status.get(i, ("FAILED", "not finished"))
-        print(f"{state:<9} {job['name']:<24} {detail}")
-    counts = {s: sum(1 for v in status.values() if v[0] == s) for s in ("rendered", "skipped", "FAILED")}
-    print(f"{len(jobs)} jobs: {counts['rendered']} rendered, {counts['skipped']} skipped, {counts['FAILED']} failed")
-    print(f"{total} tiles in {wall:.2f} s")
-    for node, (n, secs, cpu) in sorted(per_node.items()):
-        print(f"node {node[:12]}: {n} tiles, {secs:.2f} s in tasks ({cpu:.2f} CPU s), {n / wall:.2f} tiles/s")
-    if opts.summary:
-        summary = {
-            "wall_seconds": wall,
-            "tiles": total,
-            "jobs": {str(k): {"status": v[0], "detail": v[1]} for k, v in status.items()},
-            "nodes": {k: {"tiles": v[0], "task_seconds": v[1], "cpu_seconds": v[2]} for k, v in per_node.items()},
-        }
-        with open(opts.summary, "w") as f:
-            json.dump(summary, f, indent=2)
-    return 1 if counts["FAILED"] else 0
+    check_threads(opts.threads)
+    farm = Farm(kelvin, jobs, opts)
+    farm.plan_jobs()
+    farm.run()
+    return farm.report()
 
 
 def main():
@@ -255,7 +539,8 @@ def main():
     p.add_argument("--address", help="Ray cluster to attach to (HOST:PORT or auto); a local one when absent")
     p.add_argument("--kelvin", default="kelvin", help="the kelvin binary, at this path on every node")
     p.add_argument("--threads", type=int, default=1, help="CPUs (and kelvin threads) per tile task")
-    p.add_argument("--max-retries", type=int, default=3, help="retries of a tile whose worker or node died")
+    p.add_argument("--max-retries", type=int, default=3,
+                   help="retries of a tile whose kelvin, worker or node failed (on another node if one is alive)")
     p.add_argument("--task-timeout", type=float, default=1800, help="seconds one kelvin render may take")
     p.add_argument("--timeout", type=float, default=24 * 3600, help="seconds the whole run may take")
     p.add_argument("--force", action="store_true", help="render jobs whose output exists again")
@@ -263,9 +548,10 @@ def main():
     opts = p.parse_args()
     if opts.tiles < 1:
         p.error("--tiles must be at least 1")
+    if opts.threads < 1:
+        p.error("--threads must be at least 1")
     if os.sep not in opts.kelvin:
-        found = __import__("shutil").which(opts.kelvin)
-        opts.kelvin = found or opts.kelvin
+        opts.kelvin = shutil.which(opts.kelvin) or opts.kelvin
     sys.exit(run(opts))
 
 

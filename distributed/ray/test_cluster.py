@@ -7,9 +7,18 @@
    scene, a ReSTIR job with an exposure (rendered as one tile: its reuse does not tile), a lightmap bake in 5 parts,
    and 2 bad ones (a missing scene, a bad size), split into 16 tiles each: every merged image and its PNG preview
    is byte for byte a plain `kelvin render`'s (every baked file a plain `kelvin bake`'s), both nodes rendered
-   tiles, the bad jobs fail with kelvin's message and the exit code says so.
-2. The same good jobs again while the second node's worker processes are killed mid-run: Ray retries their
-   tiles and the images are still byte-identical.
+   tiles, the bad jobs fail with kelvin's message and the exit code says so, without retries. --threads 2 (more
+   than any node's CPUs) is refused at start.
+2. The same good jobs again while the second node's worker processes are killed mid-run: the driver retries their
+   tiles on the head and the images are still byte-identical.
+3. The same jobs with a kelvin that dies on the second node (a wrapper that kills itself with SIGKILL for a render,
+   exits 127 for a bake, when the second node's environment says so): every tile that ran there is retried on the
+   head, and the summary shows those retries.
+4. The driver is killed (SIGKILL) once some tiles are staged, a tile of another seed is planted among one job's
+   staged tiles, and the driver is run again: it renders only the missing tiles, the planted tile's job fails
+   naming the differing settings and its staging folder is gone; a third run renders that job fresh.
+5. Last, as it leaves one node: the whole second node (raylet, workers, kelvin) is killed with SIGKILL mid-run;
+   its tiles are retried on the head and every output is byte-identical.
 
 Every wait is bounded. The cluster runs in its own temporary folder and is stopped at the end, also when a
 check fails, by ending the processes that folder names (and their children): nothing else on the machine.
@@ -30,6 +39,10 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
 SECOND_NODE = "kelvin_second_node"
+# Set in the second node's environment only (its workers inherit it): the broken kelvin of section 3 dies there.
+SECOND_NODE_ENV = "KELVIN_TEST_SECOND_NODE"
+sys.path.insert(0, HERE)
+from kelvin_ray import tile_grid  # noqa: E402  (the driver's grid, to count the tiles of a job)
 
 
 def processes():
@@ -80,6 +93,10 @@ class Cluster:
         # A token of its own, for its nodes and drivers only: the GCS listens on the machine's address, and a
         # token file that another Ray left in ~/.ray must not decide whether this cluster checks tokens.
         self.env.update(RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=secrets.token_hex(32))
+        # The GCS declares a silent node dead after about 1.5 s (default 3 s x 5 failures + timeouts), so that
+        # section 5 does not wait half a minute for it.
+        self.env.update(RAY_health_check_period_ms="500", RAY_health_check_timeout_ms="500",
+                        RAY_health_check_failure_threshold="3")
         os.makedirs(self.env["TMPDIR"], exist_ok=True)
 
     def start(self):
@@ -87,8 +104,8 @@ class Cluster:
         common += ["--node-ip-address", "127.0.0.1", "--disable-usage-stats"]
         head = [self.ray, "start", "--head", "--port", str(self.port), "--include-dashboard=false", *common]
         second = [self.ray, "start", "--address", self.address, "--resources", json.dumps({SECOND_NODE: 1}), *common]
-        for cmd in (head, second):
-            run = subprocess.run(cmd, env=self.env, capture_output=True, text=True, timeout=120)
+        for cmd, env in ((head, self.env), (second, dict(self.env, **{SECOND_NODE_ENV: "1"}))):
+            run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120)
             if run.returncode != 0:
                 raise AssertionError(f"{' '.join(cmd)} failed:\n{run.stdout}\n{run.stderr}")
 
@@ -97,20 +114,48 @@ class Cluster:
         roots = [pid for pid, (_, argv) in procs.items() if any(self.temp in a for a in argv)]
         return descendants(procs, roots)
 
-    def second_node_workers(self):
-        """Worker processes of the second node (children of its raylet that run tasks), and their children."""
-        procs = processes()
-        raylets = [
+    def node_ids(self):
+        """{"head": id, "second": id} of the nodes, from Ray (in a process of its own, so that this one never
+        attaches to the cluster)."""
+        code = ("import json, ray; ray.init(address=%r, log_to_driver=False); "
+                "print(json.dumps({('second' if %r in n['Resources'] else 'head'): n['NodeID'] "
+                "for n in ray.nodes() if n['Alive']}))" % (self.address, SECOND_NODE))
+        run = subprocess.run([sys.executable, "-c", code], env=self.env, capture_output=True, text=True, timeout=120)
+        check(run.returncode == 0, run.stderr)
+        ids = json.loads(run.stdout.strip().splitlines()[-1])
+        check(set(ids) == {"head", "second"}, f"two alive nodes: {ids}")
+        return ids
+
+    def second_raylet(self, procs):
+        return [
             pid
             for pid, (_, argv) in procs.items()
             if argv and argv[0].endswith("raylet") and any(SECOND_NODE in a for a in argv) and any(self.temp in a for a in argv)
         ]
+
+    def kill_second_node(self):
+        """SIGKILL to the second node's raylet and everything under it (workers, agents, kelvin): a lost node."""
+        procs = processes()
+        victims = descendants(procs, self.second_raylet(procs))
+        kill(victims, signal.SIGKILL)
+        return sorted(victims)
+
+    def second_node_workers(self):
+        """Worker processes of the second node (children of its raylet that run tasks), and their children."""
+        procs = processes()
+        raylets = self.second_raylet(procs)
         workers = []
         for pid, (ppid, argv) in procs.items():
             title = " ".join(argv)
             if ppid in raylets and (title.startswith("ray::") or "default_worker.py" in title) and "Agent" not in title:
                 workers.append((pid, title))
         return workers, procs
+
+    def second_node_busy(self):
+        """The second node's workers and the process table, if one of them is running a tile or a part."""
+        workers, procs = self.second_node_workers()
+        busy = [pid for pid, title in workers if "render_tile" in title or "bake_part" in title]
+        return (workers, procs) if busy else None
 
     def stop(self):
         procs = self.own(processes())
@@ -119,6 +164,7 @@ class Cluster:
         while time.monotonic() < deadline and any(os.path.exists(f"/proc/{p}") for p in procs):
             time.sleep(0.2)
         kill([p for p in procs if os.path.exists(f"/proc/{p}")], signal.SIGKILL)
+
 
 
 def check(cond, msg):
@@ -158,11 +204,6 @@ def references(kelvin, jobs, folder):
     return refs
 
 
-def driver(python, kelvin, manifest, address, summary):
-    cmd = [python, os.path.join(HERE, "kelvin_ray.py"), manifest, "--tiles", "16", "--kelvin", kelvin]
-    return cmd + ["--address", address, "--summary", summary, "--timeout", "240", "--max-retries", "5"]
-
-
 def same_images(refs):
     for output, want in refs.items():
         check(os.path.exists(output), f"{output}: not written")
@@ -170,20 +211,284 @@ def same_images(refs):
             check(f.read() == want, f"{output}: differs from a plain kelvin render")
 
 
-def main():
-    p = argparse.ArgumentParser()
-    p.add_argument("--kelvin", default=os.environ.get("KELVIN_BIN", os.path.join(REPO, "target/debug/kelvin")))
-    opts = p.parse_args()
-    kelvin = os.path.abspath(opts.kelvin)
-    check(os.access(kelvin, os.X_OK), f"{kelvin}: no kelvin binary (cargo build --bin kelvin)")
-    ray_bin = os.path.join(os.path.dirname(sys.executable), "ray")
-    check(os.access(ray_bin, os.X_OK), f"{ray_bin}: run from the venv of requirements.txt")
+def pieces(job):
+    """Where the driver stages each tile (or bake part) of a plan entry: the names are its documented layout."""
+    if job["command"] == "bake":
+        n = job["parts"]
+        return [os.path.join(job["parts_dir"], f"part-{k}-of-{n}.kbake") for k in range(1, n + 1)]
+    crops = tile_grid(job["width"], job["height"], 1 if job["untileable"] else 16)
+    return [os.path.join(job["output"] + ".tiles", "_".join(map(str, c)) + ".exr") for c in crops]
+
+
+class Section:
+    """One run of the driver on the good jobs, in a folder of its own (outputs, summary, log)."""
+
+    def __init__(self, ctx, name, kelvin=None):
+        self.ctx, self.folder = ctx, os.path.join(ctx.work, name)
+        os.makedirs(self.folder)
+        self.manifest = os.path.join(self.folder, "jobs.json")
+        with open(self.manifest, "w") as f:
+            json.dump({"jobs": ctx.good}, f)
+        self.refs = {os.path.join(self.folder, os.path.relpath(k, ctx.work)): v for k, v in ctx.refs.items()}
+        self.summary_path = os.path.join(self.folder, "summary.json")
+        self.kelvin = kelvin or ctx.kelvin
+        self.started = time.monotonic()
+
+    def command(self, *extra):
+        cmd = [sys.executable, os.path.join(HERE, "kelvin_ray.py"), self.manifest, "--tiles", "16"]
+        cmd += ["--kelvin", self.kelvin, "--address", self.ctx.cluster.address, "--summary", self.summary_path]
+        return cmd + ["--timeout", "240", "--max-retries", "5", *extra]
+
+    def run(self, *extra):
+        """Runs the driver to its end; (exit code, output)."""
+        run = subprocess.run(self.command(*extra), env=self.ctx.cluster.env, capture_output=True, text=True, timeout=300)
+        return run.returncode, run.stdout + run.stderr
+
+    def start(self):
+        """Starts the driver, its output into a log file (a pipe nobody reads could fill and stall it)."""
+        self.log = open(os.path.join(self.folder, "driver.log"), "w+")
+        return subprocess.Popen(self.command(), env=self.ctx.cluster.env, stdout=self.log, stderr=subprocess.STDOUT)
+
+    def finish(self, proc, deadline):
+        """Waits (bounded) for a started driver; (exit code, output)."""
+        try:
+            proc.wait(timeout=max(1, deadline - time.monotonic()))
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(timeout=10)
+        self.log.seek(0)
+        return proc.returncode, self.log.read()
+
+    def summary(self):
+        with open(self.summary_path) as f:
+            return json.load(f)
+
+    def elapsed(self):
+        return f"{time.monotonic() - self.started:.1f} s, total {time.monotonic() - self.ctx.started:.1f} s"
+
+
+def show(out):
+    """The driver's retries (the first few) and its report, without the per-tile progress lines."""
+    lines = out.splitlines()
+    retries = [l for l in lines if l.startswith("retry ")]
+    report = next((k for k, l in enumerate(lines) if l.startswith("status ")), max(0, len(lines) - 20))
+    shown = retries[:4] + ([f"... and {len(retries) - 4} more retries"] if len(retries) > 4 else [])
+    shown += [l[:400] for l in lines[report:] if not l.startswith("[")]
+    print("\n".join(shown), flush=True)
+
+
+def retries_from_second(ctx, result, causes=None):
+    """Checks that the run retried, every retry of a known node away from the second node to the head; returns
+    the retries by cause kind."""
+    log = result["retry_log"]
+    check(result["retries"] == len(log) and log, f"no retries: {result}")
+    for r in log:
+        check(r["failed_on"] in (ctx.ids["second"], None), f"a retry of a tile that failed on the head: {r}")
+        if r["failed_on"]:
+            check(r["retried_on"] == ctx.ids["head"], f"retried elsewhere than the head: {r}")
+        check(causes is None or any(c in r["cause"] for c in causes), f"unexpected cause: {r}")
+    kinds = {}
+    for r in log:
+        kind = next((c for c in causes or [] if c in r["cause"]), r["cause"].split(":")[0])
+        kinds[kind] = kinds.get(kind, 0) + 1
+    return kinds
+
+
+def section_jobs(ctx):
+    """1. Good and bad jobs: byte-identity, both nodes used, clear failures; --threads 2 refused."""
+    summary = os.path.join(ctx.work, "summary.json")
+    cmd = [sys.executable, os.path.join(HERE, "kelvin_ray.py"), ctx.manifest, "--tiles", "16", "--kelvin", ctx.kelvin,
+           "--address", ctx.cluster.address, "--summary", summary, "--timeout", "240", "--max-retries", "5"]
     started = time.monotonic()
-    # Short: Ray's socket paths live under it and must fit in 107 bytes.
-    work = tempfile.mkdtemp(prefix="kray-", dir="/tmp")
-    cluster = Cluster(ray_bin, work)
+    run = subprocess.run(cmd, env=ctx.cluster.env, capture_output=True, text=True, timeout=300)
+    show(run.stdout + run.stderr[-2000:])
+    check(run.returncode == 1, f"the bad jobs fail the run: exit code {run.returncode}")
+    same_images(ctx.refs)
+    with open(summary) as f:
+        result = json.load(f)
+    states = {int(k): v for k, v in result["jobs"].items()}
+    check([states[i]["status"] for i in range(9)] == ["rendered"] * 7 + ["FAILED"] * 2, f"{states}")
+    check("no/such/scene.glb: no such file" in states[7]["detail"], states[7]["detail"])
+    check("'0x10'" in states[8]["detail"], states[8]["detail"])
+    check(result["retries"] == 0, f"kelvin's own errors are not retried: {result['retry_log']}")
+    check(len(result["nodes"]) == 2, f"tiles ran on both nodes: {result['nodes']}")
+    check(sum(n["tiles"] for n in result["nodes"].values()) == 86, f"{result['nodes']}")
+    # No node has 2 CPUs: refused at once, not left waiting.
+    run = subprocess.run(cmd + ["--threads", "2"], env=ctx.cluster.env, capture_output=True, text=True, timeout=120)
+    check(run.returncode != 0 and "--threads 2: no node of the cluster has 2 CPUs" in run.stderr,
+          f"--threads 2 on 1-CPU nodes: exit code {run.returncode}: {run.stderr[-2000:]}")
+    print(f"1. 3 jobs and 2 frames x 16 tiles, a whole ReSTIR job and a bake of 5 parts byte-identical, PNGs "
+          f"included; bad jobs failed clearly, not retried; --threads 2 refused "
+          f"({time.monotonic() - started:.1f} s, total {time.monotonic() - ctx.started:.1f} s)", flush=True)
+
+
+def section_killed_workers(ctx):
+    """2. The second node's workers killed (twice) while they run tiles."""
+    sec = Section(ctx, "workers")
+    proc, kills, deadline = sec.start(), [], time.monotonic() + 300
     try:
-        good = [
+        while proc.poll() is None and time.monotonic() < deadline and len(kills) < 2:
+            found = ctx.cluster.second_node_busy()
+            if found:
+                workers, procs = found
+                victims = descendants(procs, [pid for pid, _ in workers])
+                kill(victims, signal.SIGKILL)
+                kills.append(sorted(victims))
+                print(f"killed the second node's workers {sorted(victims)}", flush=True)
+                time.sleep(2.0)
+            time.sleep(0.05)
+    finally:
+        code, out = sec.finish(proc, deadline)
+    show(out)
+    check(kills, "no tile was seen running on the second node, so nothing was killed")
+    check(code == 0, f"the run with killed workers failed: exit code {code}")
+    same_images(sec.refs)
+    kinds = retries_from_second(ctx, sec.summary())
+    print(f"2. killed workers {len(kills)} times; retries on the head {kinds}; outputs still byte-identical "
+          f"({sec.elapsed()})", flush=True)
+
+
+def broken_kelvin(ctx):
+    """A kelvin that dies on the second node: `exit 127` (cannot execute) for a bake and for the tiles of an
+    image's left column (crop 0,...), killed by SIGKILL for the other tiles; elsewhere the real binary."""
+    path = os.path.join(ctx.work, "kelvin-broken-on-second-node")
+    with open(path, "w") as f:
+        f.write(f'#!/bin/sh\nif [ -n "${SECOND_NODE_ENV}" ]; then\n'
+                f'  if [ "$1" = bake ]; then exit 127; fi\n'
+                f'  for a in "$@"; do case "$a" in 0,*) exit 127;; esac; done\n'
+                f'  kill -9 $$\nfi\nexec {ctx.kelvin} "$@"\n')
+    os.chmod(path, 0o755)
+    return path
+
+
+def section_broken_binary(ctx):
+    """3. kelvin dies on the second node: every tile that ran there is retried on the head."""
+    sec = Section(ctx, "broken", kelvin=broken_kelvin(ctx))
+    code, out = sec.run()
+    show(out)
+    check(code == 0, f"the run with a broken second node failed: exit code {code}")
+    same_images(sec.refs)
+    result = sec.summary()
+    kinds = retries_from_second(ctx, result, causes=["killed by SIGKILL", "exit code 127"])
+    check(all(r["failed_on"] == ctx.ids["second"] for r in result["retry_log"]), "the failing node is known")
+    check(set(result["nodes"]) == {ctx.ids["head"]}, f"tiles succeed on the head only: {result['nodes']}")
+    check(result["nodes"][ctx.ids["head"]]["tiles"] == 86, f"{result['nodes']}")
+    check(len(kinds) == 2, f"both kinds of death retried: {kinds}")
+    print(f"3. kelvin broken on the second node: {result['retries']} retries on the head {kinds}; outputs "
+          f"byte-identical ({sec.elapsed()})", flush=True)
+
+
+def staged(jobs):
+    """Pieces already staged, by plan position, for the jobs not finished."""
+    return {i: [p for p in pieces(job) if os.path.exists(p)] for i, job in enumerate(jobs) if not job["done"]}
+
+
+def plant_foreign_tile(ctx, jobs, have):
+    """Renders one missing tile of an unfinished render job with another seed into its staging folder, as if
+    left by an older job; returns that job's plan position."""
+    for i, job in enumerate(jobs):
+        missing = [p for p in pieces(job) if p not in have.get(i, [])]
+        if job["done"] or job["command"] != "render" or job["untileable"] or not missing:
+            continue
+        args = list(job["args"])
+        if "--seed" in args:
+            args[args.index("--seed") + 1] = "77"
+        else:
+            args += ["--seed", "77"]
+        crop = os.path.splitext(os.path.basename(missing[0]))[0].replace("_", ",")
+        os.makedirs(os.path.dirname(missing[0]), exist_ok=True)
+        run = subprocess.run([ctx.kelvin, "render", *args, "--crop", crop, "-o", missing[0]],
+                             capture_output=True, text=True, timeout=120)
+        check(run.returncode == 0, run.stderr)
+        return i
+    raise AssertionError("no unfinished render job to plant a tile in")
+
+
+def section_resume(ctx):
+    """4. The driver killed and restarted: only missing tiles rendered; a foreign staged tile fails its job."""
+    sec = Section(ctx, "resume")
+    every = [p for job in kelvin_plan(ctx.kelvin, sec.manifest) for p in pieces(job)]
+    proc, deadline = sec.start(), time.monotonic() + 300
+    try:
+        while proc.poll() is None and time.monotonic() < deadline:
+            # Preferably while a bake part is staged too (its parts run alongside the tiles and finish quickly).
+            have = [p for p in every if os.path.exists(p)]
+            if len(have) >= 16 or (len(have) >= 4 and any(p.endswith(".kbake") for p in have)):
+                proc.send_signal(signal.SIGKILL)
+                break
+            time.sleep(0.1)
+    finally:
+        code, _ = sec.finish(proc, deadline)
+    check(code == -signal.SIGKILL, f"the driver was killed mid-run: exit code {code} (it finished first?)")
+    jobs = kelvin_plan(ctx.kelvin, sec.manifest)
+    have = staged(jobs)
+    total, before = sum(len(pieces(jobs[i])) for i in have), sum(map(len, have.values()))
+    victim = plant_foreign_tile(ctx, jobs, have)
+    parts = sum(p.endswith(".kbake") for ps in have.values() for p in ps)
+    print(f"killed the driver with {before} tiles of {total} of the unfinished jobs staged ({parts} of them bake "
+          f"parts); planted a tile of seed 77 in {jobs[victim]['name']}", flush=True)
+
+    code, out = sec.run()
+    show(out)
+    result = sec.summary()
+    rendered = result["tiles"]
+    check(code == 1, f"the job with the foreign tile fails the run: exit code {code}")
+    check(result["resumed"] == before + 1, f"staged tiles found: {result['resumed']}, want {before + 1}")
+    check(result["tiles"] == total - before - 1, f"tiles rendered: {result['tiles']}, want {total - before - 1}")
+    check(sum(n["tiles"] for n in result["nodes"].values()) == result["tiles"], f"{result['nodes']}")
+    detail = result["jobs"][str(victim)]["detail"]
+    check(result["jobs"][str(victim)]["status"] == "FAILED" and "settings" in detail, detail)
+    check(not os.path.exists(jobs[victim]["output"] + ".tiles"), "the refused tiles are removed")
+    victim_out = jobs[victim]["output"]
+    same_images({k: v for k, v in sec.refs.items() if k not in (victim_out, png_of(victim_out))})
+
+    code, out = sec.run()
+    show(out)
+    result = sec.summary()
+    check(code == 0, f"the third run failed: exit code {code}")
+    check(result["resumed"] == 0 and result["tiles"] == len(pieces(jobs[victim])), f"{result}")
+    same_images(sec.refs)
+    leftovers = [d for d, _, _ in os.walk(sec.folder) if d.endswith(".tiles") or d.endswith("parts")]
+    check(not leftovers, f"staging folders left: {leftovers}")
+    print(f"4. driver killed with {before}/{total} tiles staged; the rerun rendered the {rendered} "
+          f"missing ones only, failed the job with the foreign tile, a third run rendered it fresh; byte-identical "
+          f"({sec.elapsed()})", flush=True)
+
+
+def section_node_death(ctx):
+    """5. The whole second node killed mid-run: its tiles are retried on the head."""
+    sec = Section(ctx, "node-death")
+    proc, victims, deadline = sec.start(), [], time.monotonic() + 300
+    try:
+        while proc.poll() is None and time.monotonic() < deadline and not victims:
+            # Once a quarter of the tiles are done, so that the second node has finished some and runs more.
+            sec.log.seek(0)
+            progress = sum(1 for l in sec.log if l.startswith("["))
+            if progress >= 20 and ctx.cluster.second_node_busy():
+                victims = ctx.cluster.kill_second_node()
+                print(f"killed the second node: raylet and {len(victims) - 1} processes under it", flush=True)
+            time.sleep(0.05)
+    finally:
+        code, out = sec.finish(proc, deadline)
+    show(out)
+    check(victims, "no tile was seen running on the second node, so it was not killed")
+    check(code == 0, f"the run that lost a node failed: exit code {code}")
+    same_images(sec.refs)
+    result = sec.summary()
+    kinds = retries_from_second(ctx, result)
+    check(result["nodes"].get(ctx.ids["second"], {}).get("tiles"), f"the second node rendered before: {result['nodes']}")
+    tiles = {("second" if k == ctx.ids["second"] else "head"): v["tiles"] for k, v in result["nodes"].items()}
+    print(f"5. second node killed after {tiles['second']} tiles; retries on the head {kinds}; outputs byte-identical "
+          f"({sec.elapsed()})", flush=True)
+
+
+class Context:
+    """What the sections share: the cluster, the binary, the good jobs and their reference outputs."""
+
+    def __init__(self, kelvin, work, cluster):
+        self.kelvin, self.work, self.cluster, self.started = kelvin, work, cluster, time.monotonic()
+        self.good = [
             {"name": "room", "output": "out/room.exr", "size": "96x72", "spp": 128},
             {"name": "box-spectral", "scene": os.path.join(REPO, "tests/data/gltf/bevy/CornellBox.glb"),
              "output": "out/box.exr", "size": "80x80", "spp": 128, "settings": {"color": "spectral", "seed": 3}},
@@ -203,63 +508,37 @@ def main():
             {"name": "missing-scene", "scene": "no/such/scene.glb", "output": "out/missing.exr"},
             {"name": "bad-size", "output": "out/bad.exr", "size": "0x10"},
         ]
-        manifest = os.path.join(work, "jobs.json")
-        with open(manifest, "w") as f:
-            json.dump({"jobs": good + bad}, f)
-        refs = references(kelvin, kelvin_plan(kelvin, manifest)[:7], work)
+        self.manifest = os.path.join(work, "jobs.json")
+        with open(self.manifest, "w") as f:
+            json.dump({"jobs": self.good + bad}, f)
+        self.refs = references(kelvin, kelvin_plan(kelvin, self.manifest)[:7], work)
+        self.ids = None
 
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--kelvin", default=os.environ.get("KELVIN_BIN", os.path.join(REPO, "target/debug/kelvin")))
+    opts = p.parse_args()
+    kelvin = os.path.abspath(opts.kelvin)
+    check(os.access(kelvin, os.X_OK), f"{kelvin}: no kelvin binary (cargo build --bin kelvin)")
+    ray_bin = os.path.join(os.path.dirname(sys.executable), "ray")
+    check(os.access(ray_bin, os.X_OK), f"{ray_bin}: run from the venv of requirements.txt")
+    started = time.monotonic()
+    # Short: Ray's socket paths live under it and must fit in 107 bytes.
+    work = tempfile.mkdtemp(prefix="kray-", dir="/tmp")
+    cluster = Cluster(ray_bin, work)
+    try:
+        ctx = Context(kelvin, work, cluster)
+        ctx.started = started
         cluster.start()
-        print(f"cluster up at {cluster.address} in {time.monotonic() - started:.1f} s", flush=True)
-
-        # 1. Three jobs and two bad entries.
-        summary = os.path.join(work, "summary.json")
-        run = subprocess.run(driver(sys.executable, kelvin, manifest, cluster.address, summary),
-                             env=cluster.env, capture_output=True, text=True, timeout=300)
-        print(run.stdout[-3000:], run.stderr[-3000:], flush=True)
-        check(run.returncode == 1, f"the bad jobs fail the run: exit code {run.returncode}")
-        same_images(refs)
-        with open(summary) as f:
-            result = json.load(f)
-        states = {int(k): v for k, v in result["jobs"].items()}
-        check([states[i]["status"] for i in range(9)] == ["rendered"] * 7 + ["FAILED"] * 2, f"{states}")
-        check("no/such/scene.glb: no such file" in states[7]["detail"], states[7]["detail"])
-        check("'0x10'" in states[8]["detail"], states[8]["detail"])
-        check(len(result["nodes"]) == 2, f"tiles ran on both nodes: {result['nodes']}")
-        check(sum(n["tiles"] for n in result["nodes"].values()) == 86, f"{result['nodes']}")
-        print(f"1. 3 jobs and 2 frames x 16 tiles, a whole ReSTIR job and a bake of 5 parts byte-identical, "
-              f"PNGs included; bad jobs failed clearly ({time.monotonic() - started:.1f} s)")
-
-        # 2. The same jobs while the second node's workers are killed.
-        fault = os.path.join(work, "fault")
-        os.makedirs(fault)
-        manifest = os.path.join(fault, "jobs.json")
-        with open(manifest, "w") as f:
-            json.dump({"jobs": good}, f)
-        refs = {os.path.join(fault, os.path.relpath(k, work)): v for k, v in refs.items()}
-        summary = os.path.join(fault, "summary.json")
-        proc = subprocess.Popen(driver(sys.executable, kelvin, manifest, cluster.address, summary),
-                                env=cluster.env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        kills, deadline = [], time.monotonic() + 300
-        try:
-            while proc.poll() is None and time.monotonic() < deadline:
-                workers, procs = cluster.second_node_workers()
-                busy = [pid for pid, title in workers if "render_tile" in title or "bake_part" in title]
-                if busy and len(kills) < 2:
-                    victims = descendants(procs, [pid for pid, _ in workers])
-                    kill(victims, signal.SIGKILL)
-                    kills.append(sorted(victims))
-                    print(f"killed the second node's workers {sorted(victims)}", flush=True)
-                    time.sleep(2.0)
-                time.sleep(0.05)
-            out, _ = proc.communicate(timeout=max(1, deadline - time.monotonic()))
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-        print(out[-3000:], flush=True)
-        check(kills, "no tile was seen running on the second node, so nothing was killed")
-        check(proc.returncode == 0, f"the run with killed workers failed: exit code {proc.returncode}")
-        same_images(refs)
-        print(f"2. killed workers {len(kills)} times; outputs still byte-identical ({time.monotonic() - started:.1f} s)")
+        ctx.ids = cluster.node_ids()
+        print(f"cluster up at {cluster.address} in {time.monotonic() - started:.1f} s: head {ctx.ids['head'][:12]}, "
+              f"second {ctx.ids['second'][:12]}", flush=True)
+        section_jobs(ctx)
+        section_killed_workers(ctx)
+        section_broken_binary(ctx)
+        section_resume(ctx)
+        section_node_death(ctx)  # last: the cluster has one node after it
     finally:
         cluster.stop()
         shutil.rmtree(work, ignore_errors=True)
