@@ -14,6 +14,9 @@ Bake jobs (`"bake"` in the manifest) split into the parts the manifest gives: ea
 runs `kelvin bake ... --part K/N` and returns the part's sums; `kelvin bake ... --merge` joins them into the
 lightmaps (or volume) byte for byte as one `kelvin bake` writes them.
 
+A chunk of frames (`"chunk"` in the manifest) is one task that renders its frames whole in one process
+(`kelvin render --frames A,B,C`) and returns their files, written beside the job's output pattern.
+
 Failures are sorted. A task whose kelvin was killed by a signal (the OOM killer, say), timed out, could not be
 executed (exit code 126/127), or whose worker, node or result was lost, is retried (--max-retries) on another
 node where one is alive: the driver pins the retry away from every node the task failed on. A task that kelvin
@@ -33,6 +36,7 @@ Without --address a local Ray cluster is started for the run.
 
 import argparse
 import ctypes
+import io
 import json
 import math
 import os
@@ -41,6 +45,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tarfile
 import tempfile
 import time
 from dataclasses import dataclass, field
@@ -183,6 +188,26 @@ def bake_part(kelvin, args, part, parts, threads, timeout, tracker, attempt):
         raise TaskFault(node, f"{what}: {e}")
 
 
+@ray.remote
+def render_chunk(kelvin, args, pattern, threads, timeout, tracker, attempt):
+    """Runs `kelvin render ARGS` for a chunk of frames (whole frames, one process) in a temporary folder; returns
+    (a tar of every file it wrote, named as the job's output pattern numbers them, node, seconds, CPU seconds)."""
+    start, cpu = time.monotonic(), cpu_seconds()
+    node = report_start(tracker, attempt)
+    what = f"frames {args[args.index('--frames') + 1]}"
+    try:
+        with tempfile.TemporaryDirectory(prefix="kelvin-chunk-") as tmp:
+            cmd = [kelvin, "render", *args, "--threads", str(threads), "-o", os.path.join(tmp, pattern)]
+            run_kelvin(cmd, what, timeout, node)
+            packed = io.BytesIO()
+            with tarfile.open(fileobj=packed, mode="w") as tar:
+                for name in sorted(os.listdir(tmp)):
+                    tar.add(os.path.join(tmp, name), arcname=name)
+            return packed.getvalue(), node, time.monotonic() - start, cpu_seconds() - cpu
+    except OSError as e:
+        raise TaskFault(node, f"{what}: {e}")
+
+
 def cpu_seconds():
     """User and system CPU seconds of this process's finished children (a worker runs one task at a time)."""
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -266,6 +291,11 @@ class Job:
     def bake(self):
         return self.entry.get("command") == "bake"
 
+    @property
+    def chunk(self):
+        """A chunk of frames: rendered whole, in one process, as one task."""
+        return len(self.entry.get("frames") or []) > 1
+
 
 def pieces_of(i, job, tiles):
     """The job's tiles (or bake parts) and where each is staged."""
@@ -275,6 +305,10 @@ def pieces_of(i, job, tiles):
         job.staging = entry["parts_dir"]
         return [Piece(i, k, f"part {k + 1}/{n}", (k + 1, n), os.path.join(job.staging, f"part-{k + 1}-of-{n}.kbake"))
                 for k in range(n)]
+    if job.chunk:
+        job.staging = entry["output"] + ".chunk"
+        frames = entry["frames"]
+        return [Piece(i, 0, f"frames {frames[0]}-{frames[-1]}", (), os.path.join(job.staging, "frames.tar"))]
     # A job whose tiles would not merge into its image (ReSTIR's reuse) renders as one tile.
     crops = tile_grid(entry["width"], entry["height"], 1 if entry.get("untileable") else tiles)
     job.staging = entry["output"] + ".tiles"
@@ -298,6 +332,20 @@ def merge(kelvin, job):
     cmd = [kelvin, "merge", *(p.path for p in job.pieces), "-o", job.entry["output"], *exposure]
     run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     return None if run.returncode == 0 else f"kelvin merge: {run.stderr.strip()}"
+
+
+def unpack_chunk(job):
+    """Writes the frames of a chunk's staged tar beside its output pattern, each durably; None or the error."""
+    folder = os.path.dirname(job.entry["output"]) or "."
+    os.makedirs(folder, exist_ok=True)
+    try:
+        with tarfile.open(job.pieces[0].path) as tar:
+            for member in tar.getmembers():
+                name = os.path.basename(member.name)
+                write_durably(os.path.join(folder, name), tar.extractfile(member).read())
+    except (OSError, tarfile.TarError) as e:
+        return f"unpacking {job.pieces[0].path}: {e}"
+    return None
 
 
 def merge_bake(kelvin, job):
@@ -348,7 +396,7 @@ class Farm:
                 # A driver killed between a merge and its clean-up leaves the staged pieces behind.
                 shutil.rmtree(job.staging, ignore_errors=True)
                 continue
-            if entry.get("untileable"):
+            if entry.get("untileable") and not job.chunk:
                 print(f"{job.name}: one tile: {entry['untileable']}", flush=True)
             remove_temporaries(job.staging)
             missing = [p for p in job.pieces if not p.staged()]
@@ -373,6 +421,10 @@ class Farm:
         if job.bake:
             task = bake_part.options(num_cpus=o.threads, max_retries=0, scheduling_strategy=strategy)
             ref = task.remote(self.kelvin, job.entry["args"], *piece.spec, o.threads, o.task_timeout, self.tracker, attempt)
+        elif job.chunk:
+            task = render_chunk.options(num_cpus=o.threads, max_retries=0, scheduling_strategy=strategy)
+            pattern = os.path.basename(job.entry["output"])
+            ref = task.remote(self.kelvin, job.entry["args"], pattern, o.threads, o.task_timeout, self.tracker, attempt)
         else:
             task = render_tile.options(num_cpus=o.threads, max_retries=0, scheduling_strategy=strategy)
             ref = task.remote(self.kelvin, job.entry["args"], piece.spec, o.threads, o.task_timeout, self.tracker, attempt)
@@ -470,7 +522,10 @@ class Farm:
     def finish(self, job):
         """Merges a job whose pieces are all staged. A refused merge (pieces of another build or other
         settings, say) removes them, so that a rerun renders the job fresh."""
-        error = merge_bake(self.kelvin, job) if job.bake else merge(self.kelvin, job)
+        if job.bake:
+            error = merge_bake(self.kelvin, job)
+        else:
+            error = unpack_chunk(job) if job.chunk else merge(self.kelvin, job)
         shutil.rmtree(job.staging, ignore_errors=True)
         if error:
             job.status = ("FAILED", f"job {job.index} ({job.name}): {error}; its staged pieces are removed")
