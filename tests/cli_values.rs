@@ -59,6 +59,7 @@ const BAD_OPTIONS: &[(&[&str], &str, &str, &str)] = &[
     (&["merge", "tile.exr"], "--exposure", "inf", "[-64, 64]"),
     (&["merge", "tile.exr"], "--output", "", "output"),
     (&["batch", "jobs.json"], "--threads", "4096", "1..=1024"),
+    (&["batch", "jobs.json"], "--task", "x", "invalid digit"),
     (&["report", "accuracy"], "--threads", "0", "1..=1024"),
     (&["bench", "lights"], "--counts", "0", "1..=100000000"),
     (&["bench", "lights"], "--points", "0", "1..=16777216"),
@@ -79,6 +80,18 @@ const BAD_OPTIONS: &[(&[&str], &str, &str, &str)] = &[
     (&["bake", "lightmaps"], "--seed", "-3", "invalid digit"),
     (&["bake", "lightmaps"], "--threads", "0", "1..=1024"),
     (&["bake", "lightmaps"], "--time", "-1", "[0, 10000000)"),
+    (&["bake", "lightmaps"], "--texels-per-unit", "0", "[0.000001, 1000000]"),
+    (&["bake", "lightmaps"], "--part", "0/2", "1 <= K <= N"),
+    (&["bake", "lightmaps"], "--env", "no-such-map.exr", "file not found"),
+    (&["bake", "lightmaps"], "--env-intensity", "-2", "[0, 1000000000000]"),
+    (&["bake", "lightmaps"], "--sky", "95,0,2024-06-21T10:00", "latitude"),
+    (&["bake", "lightmaps"], "--sky-intensity", "nan", "[0, 1000000000000]"),
+    (&["bake", "volume"], "--part", "3/2", "1 <= K <= N"),
+    (&["bake", "volume"], "--node", "no-such-node", "nodes with meshes"),
+    (&["bake", "volume"], "--env", "no-such-map.exr", "file not found"),
+    (&["bake", "volume"], "--env-intensity", "inf", "[0, 1000000000000]"),
+    (&["bake", "volume"], "--sky", "0,200,2024-06-21T10:00", "longitude"),
+    (&["bake", "volume"], "--sky-intensity", "-1", "[0, 1000000000000]"),
     (&["bake", "volume"], "--time", "nan", "[0, 10000000)"),
     (&["bake", "volume"], "--resolution", "0,2,2", "each in 1..=128"),
     (&["bake", "volume"], "--resolution", "2,2", "three whole numbers"),
@@ -121,6 +134,14 @@ fn base_args(subcommand: &[&str], option: &str) -> Vec<&'static str> {
             base
         }
         "merge" if option != "--output" => vec!["-o", "never-written.exr"],
+        // Options checked once the scene loads (files, the sky's place, a node) need a whole command.
+        "bake" if ["--env", "--sky", "--node"].contains(&option) => {
+            let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/gltf/bevy/CornellBox.glb");
+            match subcommand[1] {
+                "volume" => vec![scene, "-o", "never-written.ktx2", "--resolution", "1,1,1", "--spp", "1"],
+                _ => vec![scene, "-o", "never-written", "--size", "1", "--spp", "1"],
+            }
+        }
         _ => vec![],
     }
 }

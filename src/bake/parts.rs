@@ -167,7 +167,18 @@ impl BakePart {
         if header.format != FORMAT {
             return Err(bad(format!("format {} (this build reads {FORMAT})", header.format)));
         }
-        let count = header.end.checked_sub(header.first).ok_or_else(|| bad("range ends before it starts".into()))?;
+        let part = Part { index: header.part, count: header.parts };
+        if part.check().is_err() || part.range(header.cells) != (header.first..header.end) {
+            return Err(bad(format!(
+                "part {} of {} does not hold cells {}..{} of {}",
+                header.part + 1,
+                header.parts,
+                header.first,
+                header.end,
+                header.cells
+            )));
+        }
+        let count = header.end - header.first;
         if header.end > header.cells || count.checked_mul(CELL_BYTES as u64) != Some(cells.len() as u64) {
             return Err(bad(format!(
                 "{} bytes of cells for cells {}..{} of {}",

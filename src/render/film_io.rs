@@ -151,11 +151,17 @@ pub fn write_exr_tile(
 /// image's size. An EXR of a whole image reads as a tile that covers it.
 pub fn read_exr_tile(path: &Path) -> Result<Tile, ImageIoError> {
     let what = path.display().to_string();
-    let (image, pixels) = read_exr_image(path)?;
+    let bytes = std::fs::read(path).map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
+    read_exr_tile_from_bytes(&bytes, &what)
+}
+
+/// [`read_exr_tile`] of a file's bytes; `what` names it in errors.
+pub fn read_exr_tile_from_bytes(bytes: &[u8], what: &str) -> Result<Tile, ImageIoError> {
+    let (image, pixels) = read_exr_image(bytes, what)?;
     let (w, h) = (image.layer_data.size.width(), image.layer_data.size.height());
     let display = image.attributes.display_window;
     let position = image.layer_data.attributes.layer_position;
-    let bad = |msg: String| ImageIoError::Read { what: what.clone(), msg };
+    let bad = |msg: String| ImageIoError::Read { what: what.to_owned(), msg };
     if display.position.x() != 0 || display.position.y() != 0 {
         return Err(bad(format!("display window starts at {:?}, not at 0,0", display.position)));
     }
@@ -163,22 +169,35 @@ pub fn read_exr_tile(path: &Path) -> Result<Tile, ImageIoError> {
     let (Ok(x0), Ok(y0)) = (x0, y0) else {
         return Err(bad(format!("data window starts at {position:?}, left of or above the image")));
     };
-    let crop = Crop { x0, y0, x1: x0 + w as u32, y1: y0 + h as u32 };
-    let (width, height) = (display.size.width() as u32, display.size.height() as u32);
-    Ok(Tile { name: what.clone(), width, height, crop, pixels })
+    let end = |start: u32, len: usize| u32::try_from(len).ok().and_then(|l| start.checked_add(l));
+    let (Some(x1), Some(y1)) = (end(x0, w), end(y0, h)) else {
+        return Err(bad(format!("data window of {w}x{h} at {position:?} ends past 2^32")));
+    };
+    let (Ok(width), Ok(height)) = (u32::try_from(display.size.width()), u32::try_from(display.size.height())) else {
+        return Err(bad(format!("display window of {:?} is too large", display.size)));
+    };
+    Ok(Tile { name: what.to_owned(), width, height, crop: Crop { x0, y0, x1, y1 }, pixels })
 }
 
 /// The provenance an EXR records (its `kelvin` text attribute; empty for a file from elsewhere),
 /// read from the header alone.
 pub fn read_exr_provenance(path: &Path) -> Result<Provenance, ImageIoError> {
-    use exr::meta::attribute::AttributeValue;
     let what = path.display().to_string();
-    let meta = exr::meta::MetaData::read_from_file(path, false)
-        .map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
+    let bytes = std::fs::read(path).map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
+    read_exr_provenance_from_bytes(&bytes, &what)
+}
+
+/// [`read_exr_provenance`] of a file's bytes; `what` names it in errors.
+pub fn read_exr_provenance_from_bytes(bytes: &[u8], what: &str) -> Result<Provenance, ImageIoError> {
+    use exr::meta::attribute::AttributeValue;
+    let what = what.to_owned();
+    let read = || exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false);
+    let meta =
+        catch_decoder_panic(read, &what)?.map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
     let Some(header) = meta.headers.first() else { return Ok(Provenance::default()) };
     let attributes = header.shared_attributes.other.iter().chain(&header.own_attributes.other);
     for (name, value) in attributes {
-        if let (true, AttributeValue::Text(text)) = (name.to_string() == ATTRIBUTE, value) {
+        if let (true, AttributeValue::Text(text)) = (name.eq(ATTRIBUTE), value) {
             let entries = serde_json::from_str(&text.to_string())
                 .map_err(|e| ImageIoError::Read { what: what.clone(), msg: format!("attribute {ATTRIBUTE}: {e}") })?;
             return Ok(Provenance(entries));
@@ -190,7 +209,9 @@ pub fn read_exr_provenance(path: &Path) -> Result<Provenance, ImageIoError> {
 /// Reads an OpenEXR written by [`write_exr`] back exactly (negative values included, unlike the
 /// validating loader for light maps in `scene::image`): width, height and the row-major pixels.
 pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<Vec3>), ImageIoError> {
-    let (image, pixels) = read_exr_image(path)?;
+    let what = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
+    let (image, pixels) = read_exr_image(&bytes, &what)?;
     let size = image.layer_data.size;
     Ok((size.width(), size.height(), pixels))
 }
@@ -198,24 +219,47 @@ pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<Vec3>), ImageIoError> 
 type ExrRgb =
     exr::image::Image<exr::image::Layer<exr::image::SpecificChannels<(usize, Vec<Vec3>), exr::prelude::RgbChannels>>>;
 
-/// The first RGB layer of an EXR, with its attributes (and size), and its row-major pixels.
-fn read_exr_image(path: &Path) -> Result<(ExrRgb, Vec<Vec3>), ImageIoError> {
+/// Most pixels an EXR read back may hold: a 16384 x 16384 image (kelvin's largest).
+const MAX_READ_PIXELS: usize = 1 << 28;
+
+/// Runs a decoder call, turning a panic inside it (a malformed file can reach one in the exr
+/// crate) into a read error.
+fn catch_decoder_panic<R>(f: impl FnOnce() -> R, what: &str) -> Result<R, ImageIoError> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
+        .map_err(|_| ImageIoError::Read { what: what.to_owned(), msg: "the EXR decoder panicked on this file".into() })
+}
+
+/// The first RGB layer of an EXR's bytes, with its attributes (and size), and its row-major pixels.
+fn read_exr_image(bytes: &[u8], what: &str) -> Result<(ExrRgb, Vec<Vec3>), ImageIoError> {
     use exr::prelude::{ReadChannels, ReadLayers};
-    let what = path.display().to_string();
-    let mut image = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgb_channels(
-            |size, _| (size.width(), vec![Vec3::ZERO; size.width() * size.height()]),
-            |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b): (f32, f32, f32)| {
-                px[pos.y() * *w + pos.x()] = Vec3::new(r, g, b)
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .non_parallel()
-        .from_file(path)
+    let what = what.to_owned();
+    // The pixels are allocated from the header's size before any is read: refuse what no kelvin
+    // image is (a file of a few bytes can claim billions of pixels).
+    let meta = catch_decoder_panic(|| exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false), &what)?
         .map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
+    for h in &meta.headers {
+        let (w, ht) = (h.layer_size.width(), h.layer_size.height());
+        if w.checked_mul(ht).is_none_or(|n| n > MAX_READ_PIXELS) {
+            return Err(ImageIoError::Read { what, msg: format!("{w} x {ht} pixels: larger than kelvin reads") });
+        }
+    }
+    let read = || {
+        exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .rgb_channels(
+                |size, _| (size.width(), vec![Vec3::ZERO; size.width() * size.height()]),
+                |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b): (f32, f32, f32)| {
+                    px[pos.y() * *w + pos.x()] = Vec3::new(r, g, b)
+                },
+            )
+            .first_valid_layer()
+            .all_attributes()
+            .non_parallel()
+            .from_buffered(Cursor::new(bytes))
+    };
+    let mut image =
+        catch_decoder_panic(read, &what)?.map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
     let pixels = std::mem::take(&mut image.layer_data.channel_data.pixels.1);
     Ok((image, pixels))
 }
