@@ -25,6 +25,6 @@ fi
 
 cd "$fuzz_dir"
 cargo run --quiet --example make_seeds -- "$corpus" "$data"
-for t in gltf_import ies_parse env_map; do
+for t in gltf_import ies_parse env_map tile_exr bake_part; do
     echo "$t: $(ls "$corpus/$t" | wc -l) seed files, $(du -sh "$corpus/$t" | cut -f1)"
 done

@@ -9,7 +9,11 @@
 //! With the test data folder as second argument, `renderling/shadow_mapping_sanity.gltf` and its `.bin` are also
 //! packed into one `.glb` (the fuzz target loads from memory, where external buffers cannot be resolved).
 //!
-//! Usage: `cargo run --example make_seeds -- <corpus dir> [<data dir>]` (writes `<dir>/{env_map,ies_parse,gltf_import}/`).
+//! - `tile_exr`: tiles as `kelvin render --crop` writes them (with provenance), a whole image, a tile of an image
+//!   from elsewhere (no provenance).
+//! - `bake_part`: part files of a lightmap and a volume bake of a small scene.
+//!
+//! Usage: `cargo run --example make_seeds -- <corpus dir> [<data dir>]` (writes `<dir>/<target>/`).
 
 use std::path::{Path, PathBuf};
 
@@ -23,7 +27,14 @@ use serde_json::json;
 
 fn main() {
     let root = PathBuf::from(std::env::args().nth(1).expect("usage: make_seeds <corpus dir>"));
-    for (name, write) in [("env_map", env_seeds as fn(&Path)), ("ies_parse", ies_seeds), ("gltf_import", gltf_seeds)] {
+    let targets = [
+        ("env_map", env_seeds as fn(&Path)),
+        ("ies_parse", ies_seeds),
+        ("gltf_import", gltf_seeds),
+        ("tile_exr", tile_seeds),
+        ("bake_part", bake_part_seeds),
+    ];
+    for (name, write) in targets {
         let dir = root.join(name);
         std::fs::create_dir_all(&dir).expect("create corpus dir");
         write(&dir);
@@ -31,6 +42,38 @@ fn main() {
     if let Some(data) = std::env::args().nth(2) {
         pack_external_gltf(&Path::new(&data).join("gltf/renderling/shadow_mapping_sanity.gltf"), &root);
     }
+}
+
+fn tile_seeds(dir: &Path) {
+    use kelvin::provenance::Provenance;
+    use kelvin::render::film_io::{write_exr_tile, write_exr_with};
+    use kelvin::render::tiles::Crop;
+    let (w, h) = (6u32, 5u32);
+    let rgb = |c: Crop| (c.y0..c.y1).flat_map(|y| (c.x0..c.x1).map(move |x| pixel(x as usize, y as usize))).collect::<Vec<_>>();
+    let made = Provenance::of_program().with("settings", "seed").with("scene", "sha256:00");
+    for (k, crop) in [Crop { x0: 0, y0: 0, x1: 3, y1: 5 }, Crop { x0: 3, y0: 2, x1: 6, y1: 5 }].into_iter().enumerate() {
+        let p = made.clone().with("tile", crop.to_string());
+        write_exr_tile(&dir.join(format!("tile{k}.exr")), crop, w, h, &rgb(crop), &p).expect("write tile");
+    }
+    let whole = Crop { x0: 0, y0: 0, x1: w, y1: h };
+    write_exr_with(&dir.join("whole.exr"), w as usize, h as usize, &rgb(whole), &made).expect("write image");
+    write_exr_with(&dir.join("no_provenance.exr"), 2, 2, &[Vec3::ONE; 4], &Provenance::default()).expect("write");
+}
+
+fn bake_part_seeds(dir: &Path) {
+    use kelvin::bake::{LightmapOptions, Part, VolumeOptions, bake_lightmaps_part, bake_volume_part};
+    use kelvin::render::job::RenderJob;
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/gltf/bevy/CornellBox.glb");
+    let job = RenderJob { scene: Some(scene), ..RenderJob::default() };
+    let Ok(mut loaded) = job.load() else { return };
+    let opts = LightmapOptions { size: 4, spp: 1, ..LightmapOptions::default() };
+    for index in 0..2 {
+        let part = bake_lightmaps_part(&mut loaded, &opts, Part { index, count: 2 }, |_| {}).expect("bake part");
+        std::fs::write(dir.join(format!("lightmaps{index}.kbake")), part.to_bytes()).expect("write part");
+    }
+    let opts = VolumeOptions { resolution: glam::UVec3::new(2, 1, 1), spp: 1, ..VolumeOptions::default() };
+    let part = bake_volume_part(&mut loaded, &opts, Part { index: 0, count: 3 }, |_| {}).expect("bake part");
+    std::fs::write(dir.join("volume.kbake"), part.to_bytes()).expect("write part");
 }
 
 /// A `.gltf` whose single buffer is an external `.bin`, repacked as `.glb`.

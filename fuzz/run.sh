@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Runs every fuzz target (or those named) for SECONDS each, one after another, seeding the corpora
+# first, and prints each run's executions and coverage (libFuzzer's final stats) for the README's table.
+# Usage: fuzz/run.sh SECONDS [TARGET...]     (needs `cargo install cargo-fuzz`; stable Rust with RUSTC_BOOTSTRAP=1)
+set -euo pipefail
+seconds="${1:?usage: fuzz/run.sh SECONDS [TARGET...]}"
+shift
+fuzz_dir="$(cd "$(dirname "$0")" && pwd)"
+targets=("$@")
+[ ${#targets[@]} -eq 0 ] && targets=(gltf_import ies_parse env_map tile_exr bake_part)
+"$fuzz_dir/seed.sh" > /dev/null
+cd "$fuzz_dir"
+for t in "${targets[@]}"; do
+    log="$fuzz_dir/artifacts/$t.log"
+    mkdir -p "$fuzz_dir/artifacts"
+    start=$(date +%s)
+    status=0
+    RUSTC_BOOTSTRAP=1 cargo fuzz run "$t" -- -max_total_time="$seconds" -rss_limit_mb=4096 -print_final_stats=1 \
+        > "$log" 2>&1 || status=$?
+    runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")
+    edges=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*' || echo "?")
+    crashes=$(ls "$fuzz_dir/artifacts/$t" 2>/dev/null | grep -c '^crash-' || true)
+    echo "$t: $(( $(date +%s) - start )) s, $runs executions, $edges edges, exit $status, $crashes crash files (log $log)"
+done
