@@ -69,9 +69,11 @@ impl Material {
     pub fn mapped_normal(&self, uv: Vec2, ns: Vec3, tangent: Vec3, bitangent: Vec3) -> Option<Vec3> {
         let map = self.normal_texture.as_ref()?;
         let t = map.bilinear(uv) * 2.0 - Vec3::ONE;
-        let local = Vec3::new(t.x * self.normal_scale, t.y * self.normal_scale, t.z).normalize_or_zero();
+        // Not normalised: scaling `local` leaves the direction of `n` (normalised below) as it is,
+        // and a zero `local` still gives a zero `n`, hence None. That spares a sqrt and a division.
+        let local = Vec3::new(t.x * self.normal_scale, t.y * self.normal_scale, t.z);
         let tangent = (tangent - ns * ns.dot(tangent)).normalize_or_zero();
-        if local == Vec3::ZERO || tangent == Vec3::ZERO {
+        if tangent == Vec3::ZERO {
             return None;
         }
         // The bitangent's side follows the uv layout (mirrored uvs flip it), as glTF's tangent.w.

@@ -214,6 +214,20 @@ impl ImageFormat {
     }
 }
 
+/// `x.floor()`, inline: without SSE4.1 (kelvin's baseline target) `f32::floor` is a call into
+/// libm, twice per bilinear lookup. Equal to it for every input (NaN and infinities included; -0.0
+/// gives 0.0, which the lookup cannot tell apart).
+#[inline]
+fn floor(x: f32) -> f32 {
+    // Floats of magnitude 2^23 and above are whole numbers; below it the i32 cast is exact.
+    if x.abs() < 8_388_608.0 {
+        let t = x as i32 as f32;
+        if t > x { t - 1.0 } else { t }
+    } else {
+        x
+    }
+}
+
 impl RgbImage {
     /// The pixel at column `x`, row `y` (row 0 at the top). Panics if `x >= width` or `y >= height`.
     pub fn get(&self, x: usize, y: usize) -> Vec3 {
@@ -234,13 +248,14 @@ impl RgbImage {
         let (w, h) = (self.width as i64, self.height as i64);
         let fx = uv.x * self.width as f32 - 0.5;
         let fy = uv.y * self.height as f32 - 0.5;
-        let (x0, y0) = (fx.floor(), fy.floor());
+        let (x0, y0) = (floor(fx), floor(fy));
         let (tx, ty) = (fx - x0, fy - y0);
         // Float-to-int casts saturate (NaN -> 0), so any uv gives an index in range after wrap / clamp.
-        let col = |i: i64| (i.rem_euclid(w)) as usize;
         let row = |j: i64| j.clamp(0, h - 1) as usize;
         let (x0, y0) = (x0 as i64, y0 as i64);
-        let (c0, c1) = (col(x0), col(x0.saturating_add(1)));
+        // One 64-bit remainder, not two: x0 + 1 wraps to column 0 exactly when x0 is the last.
+        let c0 = x0.rem_euclid(w) as usize;
+        let c1 = if c0 + 1 == self.width { 0 } else { c0 + 1 };
         let (r0, r1) = (row(y0), row(y0.saturating_add(1)));
         let px = |c: usize, r: usize| self.pixels[r * self.width + c];
         let top = px(c0, r0).lerp(px(c1, r0), tx);
@@ -455,5 +470,16 @@ mod tests {
         assert_eq!(ImageFormat::from_hint("image/jpeg"), Some(ImageFormat::Jpeg));
         assert_eq!(ImageFormat::from_hint(".EXR"), Some(ImageFormat::Exr));
         assert_eq!(ImageFormat::from_hint("tiff"), None);
+    }
+
+    #[test]
+    fn inline_floor_equals_f32_floor() {
+        let specials = [0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 8_388_607.5, -8_388_607.5, 8_388_608.0, -8_388_609.0, 3e9, -3e9];
+        let walk = (-40_000..=40_000).map(|i| i as f32 * 0.37 + 0.01);
+        let ulps = (0..2000u32).flat_map(|i| [f32::from_bits(0x3f80_0000 - i), f32::from_bits(0xbf80_0000 - i)]);
+        for x in specials.into_iter().chain(walk).chain(ulps).chain([f32::INFINITY, f32::NEG_INFINITY, f32::MAX, f32::MIN]) {
+            assert_eq!(floor(x), x.floor(), "{x}");
+        }
+        assert!(floor(f32::NAN).is_nan());
     }
 }
