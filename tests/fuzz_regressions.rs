@@ -192,12 +192,24 @@ fn tiny_files_claiming_huge_images_are_refused_before_decoding() {
     const { assert!(MAX_PIXELS_PER_BYTE >= 1024, "real EXR / HDR compression ratios must stay accepted") };
 }
 
+/// tile_exr, memory: 665 bytes of tile EXR (tests/fuzz_cases/tile_exr/tile_claims_huge_image.exr) whose display
+/// window claims an image of billions of pixels; `merge_tiles` allocated it (12.7 GB) and `kelvin merge` died of
+/// it. The merge now refuses images larger than kelvin renders, naming the tile.
+#[test]
+fn a_tile_claiming_a_huge_image_is_refused_before_merging() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_cases/tile_exr/tile_claims_huge_image.exr");
+    let tile = kelvin::render::film_io::read_exr_tile(&path).expect("the tile itself reads");
+    assert!(tile.width > 16384 || tile.height > 16384, "{}x{}", tile.width, tile.height);
+    let err = kelvin::render::tiles::merge_tiles(&[tile]).unwrap_err().to_string();
+    assert!(err.contains("at most 16384 pixels a side"), "{err}");
+}
+
 /// Every file under tests/fuzz_cases/<target>/ goes through its target's path without a panic.
 #[test]
 fn saved_fuzz_cases_replay_without_panics() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_cases");
     let mut count = 0;
-    for target in ["gltf_import", "ies_parse", "env_map"] {
+    for target in ["gltf_import", "ies_parse", "env_map", "tile_exr"] {
         let Ok(dir) = std::fs::read_dir(root.join(target)) else { continue };
         let mut files: Vec<_> = dir.flatten().map(|e| e.path()).collect();
         files.sort();
@@ -211,6 +223,11 @@ fn saved_fuzz_cases_replay_without_panics() {
                         let (flux, phi) = resolve_ies(p);
                         assert!(flux.is_finite() && flux >= 0.0, "{what}: flux {flux}");
                         assert!(phi.is_none_or(|p| p.is_finite() && p >= 0.0), "{what}: power {phi:?}");
+                    }
+                }
+                "tile_exr" => {
+                    if let Ok(tile) = kelvin::render::film_io::read_exr_tile_from_bytes(&bytes, &what) {
+                        drop(kelvin::render::tiles::merge_tiles(&[tile]));
                     }
                 }
                 _ => drop(load_env(&bytes, &what)),

@@ -4,6 +4,7 @@
 //! A crop renders the same camera rays and random streams as the full image (pixel ids are the
 //! full image's), so a tile's pixels equal the same region of the full render bit for bit.
 
+use super::job::MAX_SIDE;
 use glam::Vec3;
 
 /// A rectangle of pixels `x0..x1` by `y0..y1` (exclusive ends) of a full image, row 0 at the top.
@@ -42,6 +43,16 @@ pub enum TileError {
         /// Image width, pixels.
         width: u32,
         /// Image height, pixels.
+        height: u32,
+    },
+    /// A tile claims a full image larger than kelvin renders (a side above [`MAX_SIDE`]).
+    #[error("{tile}: it claims a {width}x{height} image; kelvin's images are at most {MAX_SIDE} pixels a side")]
+    TooLarge {
+        /// Name of the tile.
+        tile: String,
+        /// Width of its full image, pixels.
+        width: u32,
+        /// Height of its full image, pixels.
         height: u32,
     },
     /// A tile to merge belongs to a full image of another size than the first tile's.
@@ -213,6 +224,10 @@ pub struct Tile {
 pub fn merge_tiles(tiles: &[Tile]) -> Result<(u32, u32, Vec<Vec3>), TileError> {
     let first = tiles.first().ok_or(TileError::NoTiles)?;
     let (width, height) = (first.width, first.height);
+    // The full image is allocated from what the first tile claims: a few bytes could claim gigapixels.
+    if width > MAX_SIDE || height > MAX_SIDE {
+        return Err(TileError::TooLarge { tile: first.name.clone(), width, height });
+    }
     const NONE: u32 = u32::MAX;
     let mut owner = vec![NONE; width as usize * height as usize];
     let mut pixels = vec![Vec3::ZERO; owner.len()];

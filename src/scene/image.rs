@@ -474,10 +474,13 @@ mod tests {
 
     #[test]
     fn inline_floor_equals_f32_floor() {
-        let specials = [0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 8_388_607.5, -8_388_607.5, 8_388_608.0, -8_388_609.0, 3e9, -3e9];
+        let specials =
+            [0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 8_388_607.5, -8_388_607.5, 8_388_608.0, -8_388_609.0, 3e9, -3e9];
         let walk = (-40_000..=40_000).map(|i| i as f32 * 0.37 + 0.01);
         let ulps = (0..2000u32).flat_map(|i| [f32::from_bits(0x3f80_0000 - i), f32::from_bits(0xbf80_0000 - i)]);
-        for x in specials.into_iter().chain(walk).chain(ulps).chain([f32::INFINITY, f32::NEG_INFINITY, f32::MAX, f32::MIN]) {
+        for x in
+            specials.into_iter().chain(walk).chain(ulps).chain([f32::INFINITY, f32::NEG_INFINITY, f32::MAX, f32::MIN])
+        {
             assert_eq!(floor(x), x.floor(), "{x}");
         }
         assert!(floor(f32::NAN).is_nan());
