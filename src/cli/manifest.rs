@@ -294,15 +294,15 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -
 /// the same scene, settings and frame (the program may differ: a rebuilt kelvin renders the same
 /// image). Otherwise, for an existing file, why not.
 fn finished(output: &Path, args: &RenderArgs, frame: Option<u32>) -> (bool, Option<String>) {
-    use kelvin::render::film_io::{read_exr, read_exr_provenance};
+    use kelvin::render::film_io::read_exr_tile_and_provenance;
     if !output.exists() {
         return (false, None);
     }
     if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
         return (true, None);
     }
-    let recorded = match read_exr(output).and_then(|_| read_exr_provenance(output)) {
-        Ok(p) => p,
+    let recorded = match read_exr_tile_and_provenance(output) {
+        Ok((_, p)) => p,
         Err(e) => return (false, Some(format!("does not read back: {e}"))),
     };
     let wanted = match args.provenance(frame, None) {

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use kelvin::render::film_io::{read_exr_provenance, read_exr_tile};
+use kelvin::render::film_io::read_exr_tile_and_provenance;
 use kelvin::render::tiles::merge_tiles;
 
 use super::CliError;
@@ -23,9 +23,9 @@ pub struct MergeArgs {
 }
 
 pub fn run(args: MergeArgs) -> Result<(), CliError> {
-    let tiles = args.tiles.iter().map(|p| read_exr_tile(p)).collect::<Result<Vec<_>, _>>()?;
+    let read = args.tiles.iter().map(|p| read_exr_tile_and_provenance(p)).collect::<Result<Vec<_>, _>>()?;
+    let (tiles, provenance): (Vec<_>, Vec<_>) = read.into_iter().unzip();
     // Tiles of one image differ in their window only: not in the build, scene, settings or frame.
-    let provenance = args.tiles.iter().map(|p| read_exr_provenance(p)).collect::<Result<Vec<_>, _>>()?;
     for (path, p) in args.tiles.iter().zip(&provenance).skip(1) {
         if let Some((key, theirs, first)) = p.difference(&provenance[0], &["tile"]) {
             return Err(format!(

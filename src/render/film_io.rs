@@ -155,6 +155,13 @@ pub fn read_exr_tile(path: &Path) -> Result<Tile, ImageIoError> {
     read_exr_tile_from_bytes(&bytes, &what)
 }
 
+/// [`read_exr_tile`] and [`read_exr_provenance`] of one read of the file.
+pub fn read_exr_tile_and_provenance(path: &Path) -> Result<(Tile, Provenance), ImageIoError> {
+    let what = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
+    Ok((read_exr_tile_from_bytes(&bytes, &what)?, read_exr_provenance_from_bytes(&bytes, &what)?))
+}
+
 /// [`read_exr_tile`] of a file's bytes; `what` names it in errors.
 pub fn read_exr_tile_from_bytes(bytes: &[u8], what: &str) -> Result<Tile, ImageIoError> {
     let (image, pixels) = read_exr_image(bytes, what)?;
