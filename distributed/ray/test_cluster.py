@@ -13,7 +13,8 @@
    tiles on the head and the images are still byte-identical.
 3. The same jobs with a kelvin that dies on the second node (a wrapper that kills itself with SIGKILL for a render,
    exits 127 for a bake, when the second node's environment says so): every tile that ran there is retried on the
-   head, and the summary shows those retries.
+   head, and the summary shows those retries. (Before it, and before 5, a task pinned to the second node must run
+   there: a node that Ray has not recovered from section 2's kills in 60 s is replaced by a fresh one.)
 4. The driver is killed (SIGKILL) once some tiles are staged, a tile of another seed is planted among one job's
    staged tiles, and the driver is run again: it renders only the missing tiles, the planted tile's job fails
    naming the differing settings and its staging folder is gone; a third run renders that job fresh.
@@ -103,8 +104,9 @@ class Cluster:
         common = ["--num-cpus", "1", "--object-store-memory", "100000000", "--temp-dir", self.temp]
         common += ["--node-ip-address", "127.0.0.1", "--disable-usage-stats"]
         head = [self.ray, "start", "--head", "--port", str(self.port), "--include-dashboard=false", *common]
-        second = [self.ray, "start", "--address", self.address, "--resources", json.dumps({SECOND_NODE: 1}), *common]
-        for cmd, env in ((head, self.env), (second, dict(self.env, **{SECOND_NODE_ENV: "1"}))):
+        self.second = [self.ray, "start", "--address", self.address, "--resources", json.dumps({SECOND_NODE: 1}),
+                       *common]
+        for cmd, env in ((head, self.env), (self.second, dict(self.env, **{SECOND_NODE_ENV: "1"}))):
             run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120)
             if run.returncode != 0:
                 raise AssertionError(f"{' '.join(cmd)} failed:\n{run.stdout}\n{run.stderr}")
@@ -152,10 +154,32 @@ class Cluster:
         return workers, procs
 
     def second_node_busy(self):
-        """The second node's workers and the process table, if one of them is running a tile or a part."""
+        """The second node's workers that run a tile or a part, and the process table; None if none does."""
         workers, procs = self.second_node_workers()
-        busy = [pid for pid, title in workers if "render_tile" in title or "bake_part" in title]
-        return (workers, procs) if busy else None
+        busy = [(pid, title) for pid, title in workers if "render_tile" in title or "bake_part" in title]
+        return (busy, procs) if busy else None
+
+    def runs_on_second(self, node, timeout):
+        """Whether a task pinned to the second node (id `node`) runs there within `timeout` seconds."""
+        code = ("import ray; from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy as N; "
+                "ray.init(address=%r, log_to_driver=False); "
+                "f = ray.remote(num_cpus=1, max_retries=0)(lambda: ray.get_runtime_context().get_node_id()); "
+                "print(ray.get(f.options(scheduling_strategy=N(%r, soft=False)).remote(), timeout=%r))"
+                % (self.address, node, timeout))
+        try:
+            run = subprocess.run([sys.executable, "-c", code], env=self.env, capture_output=True, text=True,
+                                 timeout=timeout + 60)
+        except subprocess.TimeoutExpired:
+            return False
+        return run.returncode == 0 and run.stdout.strip().endswith(node)
+
+    def restart_second(self):
+        """Replaces the second node by a fresh one (same resources and environment)."""
+        self.kill_second_node()
+        time.sleep(3)  # the GCS declares it dead after about 1.5 s
+        run = subprocess.run(self.second, env=dict(self.env, **{SECOND_NODE_ENV: "1"}), capture_output=True,
+                             text=True, timeout=120)
+        check(run.returncode == 0, f"restarting the second node failed:\n{run.stdout}\n{run.stderr}")
 
     def stop(self):
         procs = self.own(processes())
@@ -345,6 +369,8 @@ def section_killed_workers(ctx):
         while proc.poll() is None and time.monotonic() < deadline and len(kills) < 2:
             found = ctx.cluster.second_node_busy()
             if found:
+                # Only the workers running a tile: killing one that Ray is still starting stalls the node's
+                # worker pool (its start-up concurrency is its 1 CPU) until Ray's registration timeout.
                 workers, procs = found
                 victims = descendants(procs, [pid for pid, _ in workers])
                 kill(victims, signal.SIGKILL)
@@ -376,8 +402,23 @@ def broken_kelvin(ctx):
     return path
 
 
+def second_node_back(ctx):
+    """Waits (bounded) until the second node runs tasks again after section 2's kills; replaces it by a fresh
+    node if Ray has not recovered it in 60 s, so that the next sections test the driver, not Ray's recovery."""
+    started = time.monotonic()
+    if ctx.cluster.runs_on_second(ctx.ids["second"], timeout=60):
+        print(f"the second node runs tasks ({time.monotonic() - started:.1f} s)", flush=True)
+        return
+    ctx.cluster.restart_second()
+    ctx.ids = ctx.cluster.node_ids()
+    check(ctx.cluster.runs_on_second(ctx.ids["second"], timeout=60), "a fresh second node runs no task")
+    print(f"the second node ran no task for 60 s: replaced it by {ctx.ids['second'][:12]} "
+          f"({time.monotonic() - started:.1f} s)", flush=True)
+
+
 def section_broken_binary(ctx):
     """3. kelvin dies on the second node: every tile that ran there is retried on the head."""
+    second_node_back(ctx)
     sec = Section(ctx, "broken", kelvin=broken_kelvin(ctx))
     code, out = sec.run()
     show(out)
@@ -478,6 +519,7 @@ def section_resume(ctx):
 
 def section_node_death(ctx):
     """5. The whole second node killed mid-run: its tiles are retried on the head."""
+    second_node_back(ctx)
     sec = Section(ctx, "node-death")
     proc, victims, deadline = sec.start(), [], time.monotonic() + 300
     try:
