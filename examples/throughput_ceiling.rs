@@ -14,7 +14,7 @@
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 use kelvin::render::renderer::{RenderOptions, render};
-use kelvin::rng::SampleStream;
+use kelvin::rng::{Pattern, SampleStream};
 use rayon::prelude::*;
 
 const WIDTH: usize = 128;
@@ -71,7 +71,7 @@ impl Scene {
     /// The random film offsets of `pixel`'s `sample` (the renderer's counter-based stream).
     #[inline(always)]
     fn film_position(pixel: usize, sample: usize) -> (f32, f32) {
-        let u = SampleStream::new(0, pixel as u32, sample as u32).next_2d();
+        let u = SampleStream::new(Pattern::Sobol, 0, pixel as u32, sample as u32).at_dimension(1).next_2d();
         ((pixel % WIDTH) as f32 + u.x, (pixel / WIDTH) as f32 + u.y)
     }
 

@@ -141,6 +141,9 @@ pub struct Settings {
     pub samples_per_point: u32,
     /// Seed of the counter-based random numbers.
     pub seed: u64,
+    /// Which random numbers samples draw. Defaults to Sobol. (ReSTIR's light samples are always
+    /// independent: see [`Settings::light_pattern`].)
+    pub pattern: crate::rng::Pattern,
     /// The caller combines light samples with BSDF samples by MIS, so image lights may sample
     /// their MIS-compensated tables. Set false when light samples are used alone. Resampled
     /// selections take no MIS, so under them the tables are never compensated (see
@@ -168,6 +171,17 @@ pub enum LightUpdates {
 }
 
 impl Settings {
+    /// The pattern of the light system's streams: the settings' one, but independent numbers
+    /// under ReSTIR, whose temporal reuse combines a pixel's successive samples (a stratified
+    /// pattern makes them dependent, and the combination biased).
+    pub fn light_pattern(&self) -> crate::rng::Pattern {
+        if matches!(self.selection, LightSelection::Restir(_)) {
+            crate::rng::Pattern::Independent
+        } else {
+            self.pattern
+        }
+    }
+
     /// Whether image lights sample their MIS-compensated tables (density of max(0, L - mean)):
     /// only where BSDF samples weighted by MIS cover the texels those tables skip.
     pub fn compensates_image_lights(&self) -> bool {
@@ -184,6 +198,7 @@ impl Default for Settings {
             shadows: true,
             samples_per_point: 1,
             seed: 0,
+            pattern: crate::rng::Pattern::Sobol,
             mis: true,
             shadow_offset: crate::geometry::ShadowOffset::ErrorBound,
             light_precision: LightPrecision::F32,

@@ -286,7 +286,9 @@ impl Sampling<'_> {
                 (Some((self.all_ids[j], 1.0)), 1 + 2 * j as u32)
             }
             LightSelection::OneSampled => {
-                let u = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream).next_f32();
+                let u =
+                    SampleStream::new(self.settings.light_pattern(), self.settings.seed, self.batch.pixel[i], stream)
+                        .next_f32();
                 (self.sampler.sample(&ctx, u), 1)
             }
             LightSelection::Resampled { candidates } => {
@@ -323,7 +325,9 @@ impl Sampling<'_> {
         if self.table.flags(id).contains(LightFlags::DELTA_POSITION) {
             Vec2::ZERO
         } else {
-            SampleStream::new(self.settings.seed, self.batch.pixel[i], stream).at_dimension(dim).next_2d()
+            SampleStream::new(self.settings.light_pattern(), self.settings.seed, self.batch.pixel[i], stream)
+                .at_dimension(dim)
+                .next_2d()
         }
     }
 
@@ -452,7 +456,7 @@ impl Sampling<'_> {
             return self.resampled_block(first, e, n, cols, candidates);
         }
         let Block { point, pixel, stream, p, normal } = self.block(first, e, n);
-        let [u] = SampleStream::lanes::<1>(self.settings.seed, &pixel, &stream);
+        let [u] = SampleStream::lanes::<1>(self.settings.light_pattern(), self.settings.seed, &pixel, &stream);
         // The choices as plain lane arrays: arrays of `Option<(LightId, f32)>` cost store-to-load
         // forwarding stalls on every read.
         let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);

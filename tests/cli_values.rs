@@ -43,6 +43,7 @@ const BAD_OPTIONS: &[(&[&str], &str, &str, &str)] = &[
     (&["render"], "--roulette-depth", "-1", "0..=1024"),
     (&["render"], "--light-sampler", "magic", "possible values"),
     (&["render"], "--color", "purple", "possible values"),
+    (&["render"], "--pattern", "halton", "possible values"),
     (&["render"], "--candidates", "0", "1..=4096"),
     (&["render"], "--neighbours", "1000", "0..=256"),
     (&["render"], "--radius", "0", "1..=16384"),
@@ -77,6 +78,7 @@ const BAD_OPTIONS: &[(&[&str], &str, &str, &str)] = &[
     (&["bake", "lightmaps"], "--spp", "0", "1..=1048576"),
     (&["bake", "lightmaps"], "--max-depth", "2000", "0..=1024"),
     (&["bake", "lightmaps"], "--light", "direct", "possible values"),
+    (&["bake", "lightmaps"], "--pattern", "random", "possible values"),
     (&["bake", "lightmaps"], "--seed", "-3", "invalid digit"),
     (&["bake", "lightmaps"], "--threads", "0", "1..=1024"),
     (&["bake", "lightmaps"], "--time", "-1", "[0, 10000000)"),
@@ -100,6 +102,7 @@ const BAD_OPTIONS: &[(&[&str], &str, &str, &str)] = &[
     (&["bake", "volume"], "--spp", "0", "1..=1048576"),
     (&["bake", "volume"], "--max-depth", "2000", "0..=1024"),
     (&["bake", "volume"], "--light", "direct", "possible values"),
+    (&["bake", "volume"], "--pattern", "sobel", "possible values"),
     (&["bake", "volume"], "--seed", "-3", "invalid digit"),
     (&["bake", "volume"], "--threads", "0", "1..=1024"),
 ];

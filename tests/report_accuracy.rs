@@ -1,5 +1,5 @@
 //! `kelvin report accuracy --quick` end to end: the files are written and the numbers are sane
-//! (relative MSE falls as 1/spp for an unbiased estimator; the reference has no error against
+//! (relative MSE falls at least as 1/spp for an unbiased estimator; the reference has no error against
 //! itself; RGB rendering under F11 is off the spectral answer by more than noise).
 
 mod common;
@@ -39,9 +39,11 @@ fn quick_report_is_written_and_its_numbers_are_sane() {
         if let Some((mean, max)) = s.de00 {
             assert_eq!((mean, max), (0.0, 0.0), "{name}: reference dE00 vs itself");
         }
-        // MSE ~ 1/spp on the ladder (1 ... 32 spp against a 512-spp reference).
+        // MSE falls at least as 1/spp on the ladder (1 ... 32 spp against a 512-spp reference), and
+        // faster where the default Sobol pattern stratifies smooth light (spp^-1.5 is its rate for
+        // smooth integrands; the ladder's few points and the reference's own noise flatten it).
         eprintln!("{name}: slope {:.3}", r.spp_slope);
-        assert!((-1.3..=-0.7).contains(&r.spp_slope), "{name}: log MSE / log spp slope {}", r.spp_slope);
+        assert!((-2.0..=-0.7).contains(&r.spp_slope), "{name}: log MSE / log spp slope {}", r.spp_slope);
         for row in &r.rows {
             assert!(row.seconds > 0.0 && row.rel_mse.is_finite() && row.rel_mse > 0.0, "{name}: {row:?}");
         }

@@ -12,6 +12,7 @@ use kelvin::light::{DistantLight, GoniometricLight, PointLight, SpotLight, SunSk
 use kelvin::render::camera::Camera;
 use kelvin::render::job::{IntegratorChoice, JobError, LoadedJob, RenderJob};
 use kelvin::render::tiles::Crop;
+use kelvin::rng::Pattern;
 use kelvin::scene::animate::{GltfAnimations, GltfNode, pose_gltf};
 use kelvin::scene::gltf::LightKind;
 use numpy::PyArray1;
@@ -76,7 +77,7 @@ impl Scene {
     /// Renders with every option of `kelvin render` but the scene's own; returns the linear image
     /// (flat, rows top to bottom), its width and height, the warnings and the statistics.
     #[pyo3(signature = (size, spp, time, integrator, max_depth, roulette_depth, light_sampler, candidates,
-        neighbours, radius, biased_reuse, color, all_lights, mis, seed, threads, environment_at, crop))]
+        neighbours, radius, biased_reuse, color, all_lights, mis, seed, pattern, threads, environment_at, crop))]
     #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &mut self,
@@ -96,6 +97,7 @@ impl Scene {
         all_lights: bool,
         mis: bool,
         seed: u64,
+        pattern: &str,
         threads: Option<usize>,
         environment_at: Option<[f32; 3]>,
         crop: Option<(u32, u32, u32, u32)>,
@@ -121,6 +123,7 @@ impl Scene {
             all_lights,
             mis,
             seed,
+            pattern: choice("pattern", pattern, &[("sobol", Pattern::Sobol), ("independent", Pattern::Independent)])?,
             environment_at: vec3("environment_at", environment_at)?,
             crop: crop.map(|(x0, y0, x1, y1)| Crop { x0, y0, x1, y1 }),
             ..self.base.clone()

@@ -24,6 +24,7 @@ def cli_render(kelvin_bin, tmp_path, args):
     [
         (dict(integrator="direct"), ["--integrator", "direct"]),
         (dict(max_depth=3, seed=5), ["--max-depth", "3", "--seed", "5"]),
+        (dict(pattern="independent"), ["--pattern", "independent"]),
         (dict(color="spectral", light_sampler="power", mis=False), ["--color", "spectral", "--light-sampler", "power", "--no-mis"]),
         (dict(light_sampler="ris", candidates=4, integrator="direct"), ["--light-sampler", "ris", "--candidates", "4", "--integrator", "direct"]),
     ],

@@ -363,11 +363,11 @@ impl LightmapPlan {
         rayon::scope(|_| {
             let direct = opts.light == BakedLight::All;
             let mut tracer = SurfaceTracer::new(world, schedule, opts.depth, direct, opts.leak_distance);
-            let seed = tracer.seed();
+            let (seed, pattern) = (tracer.seed(), tracer.pattern());
             let place = |t: u64, s: u32| {
                 let map = self.first.partition_point(|&f| f <= t) - 1;
                 let k = (t - self.first[map]) as usize;
-                let mut rng = SampleStream::new(seed, t as u32, s).at_dimension(0);
+                let mut rng = SampleStream::new(pattern, seed, t as u32, s).at_dimension(0);
                 let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
                 self.coverages[map].point(&self.targets[map].surfaces, k, u, t as u32, s)
             };

@@ -16,6 +16,7 @@ use kelvin::bake::{
 use kelvin::render::film_io::write_file;
 use kelvin::render::job::{self, LoadedJob, RenderJob};
 use kelvin::render::path::PathDepth;
+use kelvin::rng::Pattern;
 use serde_json::json;
 
 use super::render::LightingArgs;
@@ -56,6 +57,9 @@ struct CommonArgs {
     /// Seed of the random numbers.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Random numbers of the paths: Owen-scrambled Sobol (stratified) or independent.
+    #[arg(long, value_enum, default_value = "sobol")]
+    pattern: Pattern,
     /// Worker threads (default: all cores). The bake is bit-identical for any count.
     #[arg(long, value_parser = values::threads())]
     threads: Option<usize>,
@@ -170,7 +174,12 @@ impl CommonArgs {
         if let Some(t) = self.threads {
             rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
         }
-        let job = RenderJob { scene: Some(scene.to_path_buf()), seed: self.seed, ..RenderJob::default() };
+        let job = RenderJob {
+            scene: Some(scene.to_path_buf()),
+            seed: self.seed,
+            pattern: self.pattern,
+            ..RenderJob::default()
+        };
         let loaded = self.lighting.apply(job).load()?;
         for w in &loaded.warnings {
             eprintln!("warning: {w}");
@@ -201,6 +210,7 @@ impl CommonArgs {
                 "max_depth": self.max_depth,
                 "light": format!("{:?}", self.light),
                 "seed": self.seed,
+                "pattern": format!("{:?}", self.pattern),
                 "env_intensity": self.lighting.env_intensity,
                 "sky": self.lighting.sky,
                 "sky_intensity": self.lighting.sky_intensity,

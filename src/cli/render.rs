@@ -1,7 +1,7 @@
 //! `kelvin render [SCENE] [-o out.exr] [--spp N] [--time SECONDS] [--size WxH] [--env map [--env-intensity X]]
 //! [--sky LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY] [--sky-intensity X]] [--integrator path|direct] [--max-depth N]
 //! [--roulette-depth N] [--light-sampler uniform|power|bvh|ris|restir [--candidates M]
-//! [--neighbours K] [--radius PX] [--biased-reuse]] [--color rgb|spectral] [--seed S]
+//! [--neighbours K] [--radius PX] [--biased-reuse]] [--color rgb|spectral] [--seed S] [--pattern sobol|independent]
 //! [--threads T] [--report] [--crop X0,Y0,X1,Y1] [--frames 0..47|1-100x2|1,5,10-20 [--fps F] [--animation NAME|INDEX]]`.
 
 use std::path::{Path, PathBuf};
@@ -14,6 +14,7 @@ use kelvin::render::job::{self, IntegratorChoice, LoadedJob, RenderJob, SamplerC
 use kelvin::render::path::PathDepth;
 use kelvin::render::renderer::{RenderOptions, RenderStats, render_with};
 use kelvin::render::tiles::Crop;
+use kelvin::rng::Pattern;
 use kelvin::scene::animate::{GltfAnimations, pose_gltf};
 use kelvin::shading::ColorMode;
 
@@ -77,6 +78,10 @@ pub struct RenderArgs {
     /// Seed of the random numbers.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Random numbers of the samples: Owen-scrambled Sobol (stratified: smooth light converges
+    /// faster than 1/spp) or independent.
+    #[arg(long, value_enum, default_value = "sobol")]
+    pattern: Pattern,
     /// Worker threads (default: all cores). Output is bit-identical for any count.
     #[arg(long, value_parser = values::threads())]
     threads: Option<usize>,
@@ -178,6 +183,7 @@ impl RenderArgs {
             all_lights: self.all_lights,
             mis: !self.no_mis,
             seed: self.seed,
+            pattern: self.pattern,
             environment_at: self.environment_at,
             crop: self.crop,
             ..RenderJob::default()

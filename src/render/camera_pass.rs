@@ -9,7 +9,7 @@ use super::bsdf::bent_shading_normal;
 use super::camera::CameraModel;
 use crate::geometry::{GeometryId, Hit, HitSink, RAY_CHUNK, SceneBvh};
 use crate::lanes::LANES;
-use crate::rng::SampleStream;
+use crate::rng::{Pattern, SampleStream};
 use crate::shading::{ImageLayout, ShadingBatch};
 
 /// What shading needs of a camera sample's surface besides its `ShadingBatch` slot.
@@ -94,6 +94,7 @@ pub(super) struct SampleRange {
     pub(super) full_width: u32,
     pub(super) spp: u32,
     pub(super) seed: u64,
+    pub(super) pattern: Pattern,
     /// Samples of each pixel that earlier passes took.
     pub(super) first_sample: u32,
 }
@@ -173,7 +174,7 @@ impl BatchChunk<'_> {
 }
 
 /// Traces the camera rays of `range` and writes every slot of `batch` (resized to `range.len`,
-/// wavelengths left empty, geometry filled) and of `columns`. Random numbers (dimensions 0 and 1
+/// wavelengths left empty, geometry filled) and of `columns`. Random numbers (dimensions 1 and 2
 /// of each sample's stream) and rays are computed in lanes, hits in packets of `LANES` rays.
 pub(super) fn trace_camera_rays(
     batch: &mut ShadingBatch,
@@ -274,7 +275,7 @@ fn for_each_chunk(
 /// [`trace_camera_rays`] for one chunk whose first sample has index `first`.
 #[inline(always)]
 fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &CameraModel, range: SampleRange) {
-    let SampleRange { region, full_width, spp, seed, .. } = range;
+    let SampleRange { region, full_width, spp, seed, pattern, .. } = range;
     // Counters walk the pixels (in full-image coordinates) and samples: one division per chunk,
     // not per sample.
     let (tile_pixel, mut next_sample) = ((first / spp as usize) as u32, (first % spp as usize) as u32);
@@ -328,10 +329,11 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
             chunk.sample[b..end].copy_from_slice(&sample[..end - b]);
         }
         // (Reading `pixel` back to find it is one pixel stalled on its stores.)
-        let [u, v] = if one_pixel {
-            SampleStream::pixel_lanes::<2>(seed, first_pixel, &sample)
+        // The pixel offset is the 2D draw of the stream's first set (dimensions 1, 2).
+        let [_, u, v] = if one_pixel {
+            SampleStream::pixel_lanes::<3>(pattern, seed, first_pixel, &sample)
         } else {
-            SampleStream::lanes::<2>(seed, &pixel, &sample)
+            SampleStream::lanes::<3>(pattern, seed, &pixel, &sample)
         };
         let dirs = camera.dirs_lanes([&x, &y], &u, &v);
         let mut writer = SlotWriter { chunk: &mut *chunk, b, n: end - b, dirs: &dirs };

@@ -15,6 +15,7 @@ use super::path::PathDepth;
 use super::renderer::{Integrator, RenderOptions, RenderStats, Strategy, render_until};
 use super::tiles::Crop;
 use crate::light::SunSkyLight;
+use crate::rng::Pattern;
 use crate::shading::{ColorMode, LightSamplerKind, LightSelection, LightUpdates, Restir, ReuseWeights, Settings};
 use crate::systems::LightingPlugin;
 
@@ -121,6 +122,8 @@ pub struct RenderJob {
     pub mis: bool,
     /// Seed of the random numbers.
     pub seed: u64,
+    /// Which random numbers samples draw.
+    pub pattern: Pattern,
     /// Render a lat-long map seen from this point instead of through the scene's camera.
     pub environment_at: Option<Vec3>,
     /// Render only this region of the image, bit for bit as in the full render.
@@ -150,6 +153,7 @@ impl Default for RenderJob {
             all_lights: false,
             mis: true,
             seed: 0,
+            pattern: Pattern::Sobol,
             environment_at: None,
             crop: None,
         }
@@ -246,6 +250,7 @@ impl RenderJob {
             },
             selection: self.selection(),
             seed: self.seed,
+            pattern: self.pattern,
             // A frame's bytes must not depend on the frames rendered before it in one process.
             light_updates: LightUpdates::Rebuild,
             ..Default::default()

@@ -298,20 +298,22 @@ fn render_on_pool(
         let mut first = 0usize;
         while first < total {
             let len = BATCH_SAMPLES.min(total - first);
-            let range = SampleRange { first, len, region, full_width: opts.width, spp: opts.spp, seed, first_sample };
+            let pattern = settings.pattern;
+            let range =
+                SampleRange { first, len, region, full_width: opts.width, spp: opts.spp, seed, pattern, first_sample };
             let camera_start = std::time::Instant::now();
             // Every camera sample takes a slot of the batch (one with no point if its ray escaped).
             world.resource_scope(|world, mut batch: Mut<ShadingBatch>| {
                 let bvh = world.resource::<SceneBvh>();
                 trace_camera_rays(&mut batch, &mut columns, bvh, &camera, range);
                 apply_normal_maps(&mut batch, &columns, bvh, &materials);
-                // Spectral mode: the wavelengths of each sample (dimension 2 of its stream).
+                // Spectral mode: the wavelengths of each sample (dimension 0 of its stream).
                 if spectral {
                     let batch = &mut *batch;
                     let lambda =
                         batch.pixel.par_iter().zip(&batch.sample).with_min_len(RAY_CHUNK).map(|(&pixel, &sample)| {
                             SampledWavelengths::sample_visible(
-                                SampleStream::new(seed, pixel, sample).at_dimension(2).next_f32(),
+                                SampleStream::new(pattern, seed, pixel, sample).at_dimension(0).next_f32(),
                             )
                         });
                     batch.wavelengths.par_extend(lambda);

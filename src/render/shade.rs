@@ -13,7 +13,7 @@ use super::renderer::{Strategy, to_rgb};
 use crate::geometry::{Hit, SceneBvh, ShadowOffset, SurfacePoint};
 use crate::light::{ColorQuery, LightId, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
-use crate::rng::SampleStream;
+use crate::rng::{Pattern, SampleStream};
 use crate::sampling::Frame;
 use crate::shading::{DirectLighting, LightSelection, Settings, ShadingBatch};
 use crate::spectrum::SampledSpectrum;
@@ -62,8 +62,9 @@ pub(super) struct ShadeContext<'a> {
     materials: &'a [Material],
     /// Each material's [`Material::uniform_rgb_bsdf`].
     pub(super) uniform_bsdfs: &'a [Option<Bsdf>],
-    /// Seed of the renderer's own streams.
+    /// Seed and pattern of the renderer's own streams.
     pub(super) seed: u64,
+    pub(super) pattern: Pattern,
     pub(super) strategy: Strategy,
     /// How BSDF rays leave the surface (as shadow rays do).
     pub(super) offset: ShadowOffset,
@@ -98,6 +99,7 @@ impl<'a> ShadeContext<'a> {
             materials: &materials.materials,
             uniform_bsdfs: &materials.uniform_bsdfs,
             seed,
+            pattern: settings.pattern,
             // A resampled light sample's density is not `pmf * pdf_li` (see `LightSelection`).
             strategy: if settings.selection.is_resampled() { Strategy::LightOnly } else { strategy },
             offset: settings.shadow_offset,
@@ -197,7 +199,8 @@ impl<'a> ShadeContext<'a> {
     /// The BSDF sample at sample `j`'s surface from the renderer's stream at dimension `dim`
     /// (lobe, then direction), with the ray it leaves along.
     fn sample_bsdf(&self, j: usize, bsdf: &Bsdf, dim: u32) -> Option<(BsdfSample, crate::geometry::Ray)> {
-        let mut rng = SampleStream::new(self.seed, self.batch.pixel[j], self.batch.sample[j]).at_dimension(dim);
+        let mut rng =
+            SampleStream::new(self.pattern, self.seed, self.batch.pixel[j], self.batch.sample[j]).at_dimension(dim);
         let bs = bsdf.sample(-self.columns.dir(j), rng.next_f32(), rng.next_2d())?;
         let from =
             SurfacePoint { p: self.batch.position[j], p_error: self.batch.position_error[j], n: self.batch.normal[j] };
@@ -317,7 +320,7 @@ impl ShadeContext<'_> {
             // pbrt-v4's roulette: continue with probability max(beta) when that is below 1.
             let keep = next_beta.0.iter().fold(0.0f32, |m, &c| m.max(c));
             if keep < 1.0 {
-                let u = SampleStream::new(self.seed, self.batch.pixel[j], self.batch.sample[j])
+                let u = SampleStream::new(self.pattern, self.seed, self.batch.pixel[j], self.batch.sample[j])
                     .at_dimension(dim + 3)
                     .next_f32();
                 if u >= keep {

@@ -47,6 +47,7 @@ pub(crate) struct SurfaceTracer {
     rgb: Vec<Vec3>,
     job: (PathDepth, Start),
     seed: u64,
+    pattern: crate::rng::Pattern,
     /// Counts and times, summed over the batches (with the first update's).
     pub(crate) stats: RenderStats,
 }
@@ -91,6 +92,7 @@ impl SurfaceTracer {
             rgb: Vec::new(),
             job: (depth, Start::Surfaces { direct, leak_distance }),
             seed: world.resource::<Settings>().seed ^ RENDER_SALT,
+            pattern: world.resource::<Settings>().pattern,
             stats,
         }
     }
@@ -99,6 +101,11 @@ impl SurfaceTracer {
     /// free for the caller (placing the point), as the camera's are.
     pub(crate) fn seed(&self) -> u64 {
         self.seed
+    }
+
+    /// Pattern of the tracer's random streams (the settings').
+    pub(crate) fn pattern(&self) -> crate::rng::Pattern {
+        self.pattern
     }
 
     /// Traces one path from each of `points` (at most [`Self::BATCH`] of them, or the light

@@ -113,7 +113,7 @@ impl Sampling<'_> {
         candidates: u32,
     ) -> Reservoir {
         let m = candidates.max(1);
-        let rng = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream);
+        let rng = SampleStream::new(self.settings.light_pattern(), self.settings.seed, self.batch.pixel[i], stream);
         let mut reservoir = Reservoir::EMPTY;
         for j in 0..m {
             let u = rng.at_dimension(3 * j).next_f32();
@@ -158,8 +158,9 @@ impl Sampling<'_> {
     ) -> [Reservoir; LANES] {
         let m = candidates.max(1);
         let block = self.block(first, e, n);
-        let rng: [SampleStream; LANES] =
-            std::array::from_fn(|l| SampleStream::new(self.settings.seed, block.pixel[l], block.stream[l]));
+        let rng: [SampleStream; LANES] = std::array::from_fn(|l| {
+            SampleStream::new(self.settings.light_pattern(), self.settings.seed, block.pixel[l], block.stream[l])
+        });
         let ctx: [LightSampleContext; LANES] = std::array::from_fn(|l| self.context(block.point[l]));
         let mut reservoirs = [Reservoir::EMPTY; LANES];
         for j in 0..m {

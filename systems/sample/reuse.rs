@@ -198,7 +198,7 @@ impl Sampling<'_> {
             && let Some((ls, _, flags)) = self.evaluate_at(i, &ctx, (light, 1.0), prev.u)
         {
             let t = target(&ctx, &ls);
-            let r = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream)
+            let r = SampleStream::new(self.settings.light_pattern(), self.settings.seed, self.batch.pixel[i], stream)
                 .at_dimension(4 * m0 as u32)
                 .next_f32();
             c.offer_weighted(Kept { light, u: prev.u, ls, flags, source: 1 }, t, t * prev.w * m_prev, r);
@@ -216,7 +216,7 @@ impl Sampling<'_> {
         if !ctx.p.is_finite() {
             return (own, 0);
         }
-        let rng = SampleStream::new(self.settings.seed, self.batch.pixel[i], stream);
+        let rng = SampleStream::new(self.settings.light_pattern(), self.settings.seed, self.batch.pixel[i], stream);
         let k = (restir.spatial as usize).min(MAX_NEIGHBOURS);
         // Dimensions after RIS's 4M and temporal reuse's one.
         let base = 4 * restir.candidates.max(1) + 2;

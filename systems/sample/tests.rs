@@ -92,12 +92,15 @@ fn lane_path_matches_entry_by_entry() {
             batch.clear();
             // The hard cases sit in whole blocks of 16 in both orders.
             let mut rng = SplitMix64::new(3);
-            for i in 3..101 {
+            for i in 3..201 {
                 if i == 40 {
-                    batch.push(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, 0, 0);
+                    // At the light, in 4 samples: the power sampler picks that light in some.
+                    for sample in 0..4 {
+                        batch.push(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, 0, sample);
+                    }
                     batch.push(Vec3::new(0.0, 2.0 + 1e-30, 0.0), Vec3::Y, 1, 0);
                     batch.push(Vec3::new(1e30, 0.0, 0.0), Vec3::Y, 2, 0);
-                    batch.push(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y, 101, 0);
+                    batch.push(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y, 201, 0);
                 }
                 let p = Vec3::new(rng.f32() * 8.0 - 4.0, rng.f32() * 2.0, rng.f32() * 8.0 - 4.0);
                 batch.push(p, Vec3::Y, i, i % 5);

@@ -13,7 +13,7 @@ use kelvin::shading::NO_PREVIOUS;
 /// returns it.
 #[test]
 fn temporal_reuse_follows_moving_lights_and_forgets_removed_ones() {
-    let (mut world, mut schedule) = world_with(Settings::default());
+    let (mut world, mut schedule) = world_with(independent());
     let scene = spawn_scaling_scene(&mut world, 10_000, 1);
     let points = scene.ground_points(64, 3);
     let restir = LightSelection::Restir(Restir {

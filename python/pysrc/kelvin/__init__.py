@@ -82,6 +82,7 @@ class Scene:
         all_lights: bool = False,
         mis: bool = True,
         seed: int = 0,
+        pattern: str = "sobol",
         threads: Optional[int] = None,
         environment_at: Optional[Sequence[float]] = None,
         crop: Optional[Tuple[int, int, int, int]] = None,
@@ -93,7 +94,7 @@ class Scene:
         """
         pixels, width, height, said, info = self._native.render(
             tuple(size), spp, time, integrator, max_depth, roulette_depth, light_sampler, candidates, neighbours,
-            radius, biased_reuse, color, all_lights, mis, seed, threads,
+            radius, biased_reuse, color, all_lights, mis, seed, pattern, threads,
             None if environment_at is None else tuple(environment_at), None if crop is None else tuple(crop))
         _warn(said)
         if stats is not None:
@@ -158,6 +159,7 @@ def render(
     all_lights: bool = False,
     mis: bool = True,
     seed: int = 0,
+    pattern: str = "sobol",
     threads: Optional[int] = None,
     environment_at: Optional[Sequence[float]] = None,
     crop: Optional[Tuple[int, int, int, int]] = None,
@@ -171,7 +173,7 @@ def render(
     return loaded.render(size=size, spp=spp, time=time, integrator=integrator, max_depth=max_depth,
                          roulette_depth=roulette_depth, light_sampler=light_sampler, candidates=candidates,
                          neighbours=neighbours, radius=radius, biased_reuse=biased_reuse, color=color,
-                         all_lights=all_lights, mis=mis, seed=seed, threads=threads,
+                         all_lights=all_lights, mis=mis, seed=seed, pattern=pattern, threads=threads,
                          environment_at=environment_at, crop=crop, stats=stats)
 
 

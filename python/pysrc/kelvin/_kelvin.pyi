@@ -44,7 +44,8 @@ class Scene:
              sky_intensity: float) -> Tuple["Scene", list[str]]: ...
     def render(self, size: Tuple[int, int], spp: int, time: Optional[float], integrator: str, max_depth: int,
                roulette_depth: int, light_sampler: str, candidates: int, neighbours: int, radius: int,
-               biased_reuse: bool, color: str, all_lights: bool, mis: bool, seed: int, threads: Optional[int],
+               biased_reuse: bool, color: str, all_lights: bool, mis: bool, seed: int, pattern: str,
+               threads: Optional[int],
                environment_at: Optional[Tuple[float, float, float]], crop: Optional[Tuple[int, int, int, int]]
                ) -> Tuple[npt.NDArray[np.float32], int, int, list[str], dict]: ...
     def pose(self, animation: Union[int, str], t: float) -> dict: ...

@@ -171,7 +171,8 @@ pub struct SceneReport {
     /// The main reference (in the baseline's colour mode), then the spectral one when the colour
     /// knob needs it.
     pub references: Vec<Reference>,
-    /// Slope of log relative MSE against log spp on the spp ladder (about -1 when unbiased).
+    /// Slope of log relative MSE against log spp on the spp ladder (about -1 for an unbiased
+    /// estimator with independent numbers, steeper where the Sobol pattern stratifies smooth light).
     pub spp_slope: f64,
     /// Files written: CSV, Markdown, plot.
     pub files: Vec<PathBuf>,
