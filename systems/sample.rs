@@ -286,10 +286,12 @@ impl Sampling<'_> {
                 (Some((self.all_ids[j], 1.0)), 1 + 2 * j as u32)
             }
             LightSelection::OneSampled => {
-                let u =
-                    SampleStream::new(self.settings.light_pattern(), self.settings.seed, self.batch.pixel[i], stream)
-                        .next_f32();
-                (self.sampler.sample(&ctx, u), 1)
+                // The choice at dimension 0, the light's u at 1, 2: one set of the stream.
+                let mut rng =
+                    SampleStream::new(self.settings.light_pattern(), self.settings.seed, self.batch.pixel[i], stream);
+                let chosen = self.sampler.sample(&ctx, rng.next_f32());
+                let sampled = chosen.and_then(|c| self.evaluate_at(i, &ctx, c, self.unless_delta(c.0, rng.next_2d())));
+                return self.write(cols, e, chosen.map_or(NO_LIGHT, |(id, _)| id), sampled);
             }
             LightSelection::Resampled { candidates } => {
                 let (light, sampled) = self.resampled(i, stream, &ctx, candidates);
@@ -329,6 +331,12 @@ impl Sampling<'_> {
                 .at_dimension(dim)
                 .next_2d()
         }
+    }
+
+    /// `u` for light `id`'s Sample_Li, already drawn: zero for lights at a point, as [`Self::light_u`].
+    #[inline]
+    fn unless_delta(&self, id: LightId, u: Vec2) -> Vec2 {
+        if self.table.flags(id).contains(LightFlags::DELTA_POSITION) { Vec2::ZERO } else { u }
     }
 
     /// Sample_Li of light `id` (chosen with `pmf`) at `u` from `ctx`, in batch point `i`'s colour
@@ -456,7 +464,8 @@ impl Sampling<'_> {
             return self.resampled_block(first, e, n, cols, candidates);
         }
         let Block { point, pixel, stream, p, normal } = self.block(first, e, n);
-        let [u] = SampleStream::lanes::<1>(self.settings.light_pattern(), self.settings.seed, &pixel, &stream);
+        // The choice at dimension 0, the light's u at 1, 2 (as `entry`).
+        let [u, u1, u2] = SampleStream::lanes::<3>(self.settings.light_pattern(), self.settings.seed, &pixel, &stream);
         // The choices as plain lane arrays: arrays of `Option<(LightId, f32)>` cost store-to-load
         // forwarding stalls on every read.
         let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
@@ -483,8 +492,10 @@ impl Sampling<'_> {
             traced += match (&lit, chosen) {
                 (Some(lit), Some(c)) if c.0.kind == LightKind::Point => self.write_point(cols, e + l, c, lit, l),
                 _ => {
-                    let sampled =
-                        chosen.and_then(|c| self.evaluate(point[l], stream[l], 1, &self.context(point[l]), c));
+                    let u = Vec2::new(u1[l], u2[l]);
+                    let sampled = chosen.and_then(|c| {
+                        self.evaluate_at(point[l], &self.context(point[l]), c, self.unless_delta(c.0, u))
+                    });
                     self.write(cols, e + l, light[l], sampled)
                 }
             } as usize;

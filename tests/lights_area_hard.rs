@@ -213,9 +213,13 @@ fn transforms_place_shapes_and_mirrors_keep_the_emitting_side() {
 fn bad_input_gives_clear_errors() {
     let l = light();
     let t = Transform::IDENTITY;
-    assert!(matches!(l.resolve_sphere(-1.0, &t), Err(LightError::BadAmount { field: "radius", .. })));
-    assert!(matches!(l.resolve_disk(f32::NAN, &t), Err(LightError::BadAmount { field: "radius", .. })));
-    assert!(matches!(l.resolve_rectangle(1.0, 0.0, &t), Err(LightError::BadAmount { field: "height", .. })));
+    assert!(matches!(l.resolve_sphere(-1.0, &t), Err(LightError::BadSize { field: "radius", .. })));
+    assert!(matches!(l.resolve_disk(f32::NAN, &t), Err(LightError::BadSize { field: "radius", .. })));
+    assert!(matches!(l.resolve_rectangle(1.0, 0.0, &t), Err(LightError::BadSize { field: "height", .. })));
+    // A good radius that the transform scales to nothing: the message says so (not "1 must be >= 0").
+    let flat = Transform { scale: Vec3::ZERO, ..Transform::IDENTITY };
+    let e = l.resolve_sphere(1.0, &flat).unwrap_err().to_string();
+    assert_eq!(e, "AreaLight: radius = 1 (scaled by the transform: 0) must be finite and > 0");
     let cd = AreaLight { amount: Amount::Candela(10.0), ..Default::default() };
     assert!(matches!(cd.resolve_sphere(1.0, &t), Err(LightError::WrongUnit { given: "cd", .. })));
     let neg = AreaLight { amount: Amount::Nits(-1.0), ..Default::default() };

@@ -55,7 +55,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(REPO / "scripts"))
 from make_lambertian_copy import lambertian, read_gltf, write_glb  # noqa: E402
 
-KELVIN_LINE = re.compile(r"baked (\d+) lightmaps of (\d+)x\d+ at (\d+) spp in ([\d.]+) s")
+KELVIN_LINE = re.compile(r"baked \d+ lightmaps \(.*?\) at \d+ spp in (?P<seconds>[\d.]+) s")
 
 
 def run(cmd):
@@ -88,7 +88,7 @@ def kelvin_bake(a, scene, depth, spp, seed, out):
     if not m:
         raise SystemExit("kelvin: no 'baked ...' line in its output")
     index = json.loads((out / "lightmaps.json").read_text())
-    r = {"seconds": float(m.group(4)), "wall": wall, "cpu": cpu, "load_before": load, "spp": spp, "seed": seed,
+    r = {"seconds": float(m.group("seconds")), "wall": wall, "cpu": cpu, "load_before": load, "spp": spp, "seed": seed,
          "files": {v["mesh"]: v["exr"] for v in index["lightmaps"].values()}}
     done.write_text(json.dumps(r))
     return r

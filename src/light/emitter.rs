@@ -13,8 +13,7 @@ const RGB_BASIS_NM: (f64, f64) = (380.0, 780.0);
 /// Errors in a light's description; each names the light and the field.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum LightError {
-    /// An amount or a size is negative, NaN or infinite (an area light's size also when it is 0 or
-    /// overflows once scaled by its transform).
+    /// An amount or a point light's radius is negative, NaN or infinite.
     #[error("{light}: {field} = {value} must be finite and >= 0")]
     BadAmount {
         /// The light's component type, such as `"PointLight"`.
@@ -23,6 +22,18 @@ pub enum LightError {
         field: &'static str,
         /// The number given.
         value: f32,
+    },
+    /// An area light's size is not positive and finite, as given or once scaled by its transform.
+    #[error("{light}: {field} = {value} (scaled by the transform: {scaled}) must be finite and > 0")]
+    BadSize {
+        /// The light's component type, such as `"AreaLight"`.
+        light: &'static str,
+        /// The field that holds the size.
+        field: &'static str,
+        /// The size given.
+        value: f32,
+        /// The size in world space.
+        scaled: f32,
     },
     /// An [`Amount`] measures a quantity this light does not accept (say, lux for a point light).
     #[error("{light}: {field} is given in {given}, expected {expected}")]
@@ -207,7 +218,7 @@ impl Emitter {
 
     /// Luminance-like weight of the emitter (photometric Y), for importance.
     pub fn luminous(&self) -> f32 {
-        self.rgb.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+        self.rgb.dot(crate::scene::image::LUMINANCE_WEIGHTS)
     }
 }
 

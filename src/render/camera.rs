@@ -54,12 +54,14 @@ impl PinholeCamera {
     }
 
     /// A camera that frames the sphere (`center`, `radius`) from a direction above and in front.
+    /// The sphere fits the narrower of the two fields of view (the horizontal one in a portrait image).
     pub fn framing(center: Vec3, radius: f32, width: u32, height: u32) -> (Camera, Transform) {
         let camera = Camera::default();
-        let dist = radius.max(1e-3) / (0.5 * camera.yfov).sin() * 1.1;
+        let half_y = 0.5 * camera.yfov;
+        let half_x = (half_y.tan() * width.max(1) as f32 / height.max(1) as f32).atan();
+        let dist = radius.max(1e-3) / half_y.min(half_x).sin() * 1.1;
         let dir = Vec3::new(0.0, 0.35, 1.0).normalize();
         let transform = Transform::from_translation(center + dir * dist).looking_to(-dir, Vec3::Y);
-        let _ = (width, height);
         (camera, transform)
     }
 
@@ -159,6 +161,26 @@ impl CameraModel {
 mod tests {
     use super::*;
     use crate::rng::SplitMix64;
+
+    /// The hard case is a portrait image, whose horizontal field of view is the narrower: the
+    /// framed sphere fits between the image's left and right edges as between its top and bottom.
+    #[test]
+    fn the_framing_camera_fits_the_sphere_in_either_orientation() {
+        let center = Vec3::new(1.0, -2.0, 0.5);
+        for (w, h) in [(256, 256), (512, 128), (64, 512)] {
+            let (camera, t) = PinholeCamera::framing(center, 2.0, w, h);
+            let pinhole = PinholeCamera::new(&camera, &t, w, h);
+            let to_center = center - t.translation;
+            let needed = (2.0 / to_center.length()).asin();
+            // Rays through the middles of the four edges.
+            for (x, y, offset) in
+                [(0, h / 2, Vec2::ZERO), (w - 1, h / 2, Vec2::X), (w / 2, 0, Vec2::ZERO), (w / 2, h - 1, Vec2::Y)]
+            {
+                let edge = pinhole.ray(x, y, offset).dir.angle_between(to_center);
+                assert!(edge > needed, "{w}x{h}, edge at ({x}, {y}): {edge} rad from the centre, the sphere {needed}");
+            }
+        }
+    }
 
     #[test]
     fn lane_rays_match_single_rays() {

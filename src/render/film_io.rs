@@ -89,10 +89,11 @@ pub enum ImageIoError {
     },
 }
 
-/// Exposure (stops) that maps the log-average luminance to 18% grey.
+/// Exposure (stops) that maps the log-average luminance to 18% grey, over the pixels with a finite,
+/// positive luminance (an infinite or NaN pixel would set it to -inf or NaN).
 pub fn auto_exposure(rgb: &[Vec3]) -> f32 {
     let ys: Vec<f64> =
-        rgb.iter().map(|c| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64).filter(|y| *y > 0.0).collect();
+        rgb.iter().map(|c| c.dot(LUMINANCE_WEIGHTS) as f64).filter(|y| *y > 0.0 && y.is_finite()).collect();
     if ys.is_empty() {
         return 0.0;
     }
@@ -411,5 +412,20 @@ mod tests {
         assert_eq!(tone_map_srgb8(Vec3::ONE, 1.0), [188, 188, 188]);
         assert_eq!(tone_map_srgb8(Vec3::splat(f32::INFINITY), 1.0), [255, 255, 255]);
         assert_eq!(tone_map_srgb8(Vec3::new(-1.0, 0.0, 0.0), 1.0), [0, 0, 0]);
+    }
+
+    /// A firefly of infinite or NaN radiance does not take the exposure to -inf (a black PNG):
+    /// the other pixels set it, as if it were absent.
+    #[test]
+    fn auto_exposure_skips_non_finite_pixels() {
+        let grey = vec![Vec3::splat(0.045); 8];
+        let stops = auto_exposure(&grey);
+        assert!((stops - 2.0).abs() < 1e-4, "{stops}");
+        for bad in [f32::INFINITY, f32::NAN] {
+            let mut image = grey.clone();
+            image[3] = Vec3::splat(bad);
+            assert_eq!(auto_exposure(&image), stops, "{bad}");
+        }
+        assert_eq!(auto_exposure(&[Vec3::splat(f32::INFINITY)]), 0.0);
     }
 }

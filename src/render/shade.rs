@@ -196,11 +196,14 @@ impl<'a> ShadeContext<'a> {
         LightSampleContext { p: self.batch.position[j], n: self.batch.normal[j], ns: self.batch.shading_normal[j] }
     }
 
-    /// The BSDF sample at sample `j`'s surface from the renderer's stream at dimension `dim`
-    /// (lobe, then direction), with the ray it leaves along.
-    fn sample_bsdf(&self, j: usize, bsdf: &Bsdf, dim: u32) -> Option<(BsdfSample, crate::geometry::Ray)> {
-        let mut rng =
-            SampleStream::new(self.pattern, self.seed, self.batch.pixel[j], self.batch.sample[j]).at_dimension(dim);
+    /// Sample `j`'s renderer stream at dimension `dim`.
+    fn stream(&self, j: usize, dim: u32) -> SampleStream {
+        SampleStream::new(self.pattern, self.seed, self.batch.pixel[j], self.batch.sample[j]).at_dimension(dim)
+    }
+
+    /// The BSDF sample at sample `j`'s surface drawn from `rng` (lobe, then direction), with the
+    /// ray it leaves along.
+    fn sample_bsdf(&self, j: usize, bsdf: &Bsdf, rng: &mut SampleStream) -> Option<(BsdfSample, crate::geometry::Ray)> {
         let bs = bsdf.sample(-self.columns.dir(j), rng.next_f32(), rng.next_2d())?;
         let from =
             SurfacePoint { p: self.batch.position[j], p_error: self.batch.position_error[j], n: self.batch.normal[j] };
@@ -246,7 +249,7 @@ impl<'a> ShadeContext<'a> {
         let (surface, bsdf) = self.surface_and_bsdf(j);
         let mut l = self.emitted_toward_viewer(j, &surface).add(self.light_samples(j, &bsdf));
         let mut traced = false;
-        if bsdf_sampling && let Some((bs, ray)) = self.sample_bsdf(j, &bsdf, BSDF_DIMENSION) {
+        if bsdf_sampling && let Some((bs, ray)) = self.sample_bsdf(j, &bsdf, &mut self.stream(j, BSDF_DIMENSION)) {
             traced = true;
             let found = self.found_by_bsdf_ray(
                 &self.context(j),
@@ -314,15 +317,15 @@ impl ShadeContext<'_> {
         }
         let radiance = beta.mul(l);
         let dim = BSDF_DIMENSION + depth * BSDF_DIMENSIONS;
-        let Some((bs, ray)) = self.sample_bsdf(j, &bsdf, dim) else { return Bounce { radiance, next: None } };
+        // Lobe, direction and roulette: one set of the stream.
+        let mut rng = self.stream(j, dim);
+        let Some((bs, ray)) = self.sample_bsdf(j, &bsdf, &mut rng) else { return Bounce { radiance, next: None } };
         let mut next_beta = beta.mul(bs.f).scale(bs.wi.dot(bsdf.frame.z).abs() / bs.pdf);
         if rules.roulette && !rules.last {
             // pbrt-v4's roulette: continue with probability max(beta) when that is below 1.
             let keep = next_beta.0.iter().fold(0.0f32, |m, &c| m.max(c));
             if keep < 1.0 {
-                let u = SampleStream::new(self.pattern, self.seed, self.batch.pixel[j], self.batch.sample[j])
-                    .at_dimension(dim + 3)
-                    .next_f32();
+                let u = rng.next_f32();
                 if u >= keep {
                     return Bounce { radiance, next: None };
                 }

@@ -135,13 +135,18 @@ fn fastest(v: Vec<f64>) -> f64 {
     v.into_iter().reduce(f64::min).unwrap_or(0.0)
 }
 
-/// Unshadowed photometric irradiance (lx) at `ctx` from light `id`: Sample_Li's Y times the
-/// receiver cosine (exact for delta lights).
+/// Unshadowed photometric irradiance (lx) at `ctx` from light `id`: Sample_Li's luminance Y times
+/// the receiver cosine (exact for delta lights).
 #[inline]
 pub fn irradiance(table: &LightTable, id: LightId, ctx: &LightSampleContext) -> f64 {
     table
         .sample_li(id, ctx, glam::Vec2::splat(0.5), ColorQuery::Rgb)
-        .map_or(0.0, |ls| (ls.radiance.0[1] * ls.wi.dot(ctx.n).max(0.0)) as f64)
+        .map_or(0.0, |ls| (luminance(&ls.radiance) * ls.wi.dot(ctx.n).max(0.0)) as f64)
+}
+
+/// Luminance Y of an RGB query's radiance (its channels are linear sRGB).
+fn luminance(radiance: &crate::spectrum::SampledSpectrum) -> f32 {
+    glam::Vec3::from_slice(&radiance.0[..3]).dot(crate::scene::image::LUMINANCE_WEIGHTS)
 }
 
 /// A scene synced through the ECS: its light table (change flags cleared) and scene BVH.
@@ -237,7 +242,7 @@ fn time_and_measure(
                 let ray = SurfacePoint::from_point(ctx.p, ctx.n).spawn_ray_to_point(ls.p_light);
                 std::hint::black_box(bvh.occluded(&ray));
             }
-            sum += (ls.radiance.0[1] * ls.wi.dot(ctx.n).max(0.0)) as f64 / pmf as f64;
+            sum += (luminance(&ls.radiance) * ls.wi.dot(ctx.n).max(0.0)) as f64 / pmf as f64;
         }
         estimates.push(sum / samples as f64);
     }

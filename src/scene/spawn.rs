@@ -70,7 +70,7 @@ pub struct SpawnedPrimitive {
 
 /// Rec. 709 luminance of linear RGB.
 fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+    c.dot(crate::scene::image::LUMINANCE_WEIGHTS)
 }
 
 /// A colour as an RGB-derived spectrum (white (1,1,1) is D65) and its luminance.

@@ -113,14 +113,18 @@ impl Sampling<'_> {
         candidates: u32,
     ) -> Reservoir {
         let m = candidates.max(1);
-        let rng = SampleStream::new(self.settings.light_pattern(), self.settings.seed, self.batch.pixel[i], stream);
+        // One stream for the candidates (dimensions 3j..3j + 3), one for the reservoir's choices
+        // (3m + j): each keeps the set of 4 it last drew.
+        let mut rng = SampleStream::new(self.settings.light_pattern(), self.settings.seed, self.batch.pixel[i], stream);
+        let mut keep = rng;
         let mut reservoir = Reservoir::EMPTY;
         for j in 0..m {
-            let u = rng.at_dimension(3 * j).next_f32();
-            let Some(chosen) = self.sampler.sample(ctx, u) else { continue };
-            let u = self.light_u(i, stream, 3 * j + 1, chosen.0);
+            rng = rng.at_dimension(3 * j);
+            let Some(chosen) = self.sampler.sample(ctx, rng.next_f32()) else { continue };
+            let u = self.unless_delta(chosen.0, rng.next_2d());
             let Some(sampled) = self.evaluate_at(i, ctx, chosen, u) else { continue };
-            reservoir.offer(ctx, chosen.0, u, sampled, rng.at_dimension(3 * m + j).next_f32());
+            keep = keep.at_dimension(3 * m + j);
+            reservoir.offer(ctx, chosen.0, u, sampled, keep.next_f32());
         }
         reservoir
     }
@@ -158,13 +162,19 @@ impl Sampling<'_> {
     ) -> [Reservoir; LANES] {
         let m = candidates.max(1);
         let block = self.block(first, e, n);
-        let rng: [SampleStream; LANES] = std::array::from_fn(|l| {
+        // Per lane, one stream for the candidates (dimensions 3j..3j + 3) and one for the
+        // reservoir's choices (3m + j): each keeps the set of 4 it last drew.
+        let mut rng: [SampleStream; LANES] = std::array::from_fn(|l| {
             SampleStream::new(self.settings.light_pattern(), self.settings.seed, block.pixel[l], block.stream[l])
         });
+        let mut keep = rng;
         let ctx: [LightSampleContext; LANES] = std::array::from_fn(|l| self.context(block.point[l]));
         let mut reservoirs = [Reservoir::EMPTY; LANES];
         for j in 0..m {
-            let u: [f32; LANES] = std::array::from_fn(|l| rng[l].at_dimension(3 * j).next_f32());
+            for r in &mut rng {
+                *r = r.at_dimension(3 * j);
+            }
+            let u: [f32; LANES] = std::array::from_fn(|l| rng[l].next_f32());
             let choices = self.sampler.sample_lanes(&block.p, &block.normal, &u, (1u32 << n) - 1);
             let (mut rows, mut points) = ([0u32; LANES], 0);
             for l in 0..n {
@@ -183,12 +193,13 @@ impl Sampling<'_> {
                         (lit.li_sample(l).map(|ls| (ls, chosen.1, LightKind::Point.flags())), Vec2::ZERO)
                     }
                     _ => {
-                        let u = self.light_u(block.point[l], block.stream[l], 3 * j + 1, chosen.0);
+                        let u = self.unless_delta(chosen.0, rng[l].next_2d());
                         (self.evaluate_at(block.point[l], &ctx[l], chosen, u), u)
                     }
                 };
                 if let Some(sampled) = sampled {
-                    reservoirs[l].offer(&ctx[l], chosen.0, u, sampled, rng[l].at_dimension(3 * m + j).next_f32());
+                    keep[l] = keep[l].at_dimension(3 * m + j);
+                    reservoirs[l].offer(&ctx[l], chosen.0, u, sampled, keep[l].next_f32());
                 }
             }
         }

@@ -27,9 +27,6 @@ pub use shapes::{
 /// Default luminance of an area light: 1000 nit, a bright diffuse panel or a frosted bulb surface.
 pub const DEFAULT_AREA_NITS: f32 = 1000.0;
 
-/// Rec. 709 luminance weights of linear sRGB.
-const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
-
 /// An emitting surface on its entity's shape or mesh.
 #[derive(Component, Clone, Debug, PartialEq)]
 pub struct AreaLight {
@@ -105,7 +102,7 @@ impl LightTexture {
         if let Some(i) = texels.iter().position(|t| !t.is_finite() || t.min_element() < 0.0) {
             return Err(invalid(format!("texture texel {i} = {} must be finite and >= 0", texels[i])));
         }
-        let sum: f64 = texels.iter().map(|t| t.dot(LUMINANCE) as f64).sum();
+        let sum: f64 = texels.iter().map(|t| t.dot(crate::scene::image::LUMINANCE_WEIGHTS) as f64).sum();
         let mean_luminance = (sum / texels.len() as f64) as f32;
         Ok(Self { width, height, texels, mean_luminance })
     }
@@ -158,8 +155,8 @@ pub struct ResolvedMesh {
     pub skipped_degenerate: usize,
 }
 
-fn bad_size(field: &'static str, value: f32) -> LightError {
-    LightError::BadAmount { light: "AreaLight", field, value }
+fn bad_size(field: &'static str, value: f32, scaled: f32) -> LightError {
+    LightError::BadSize { light: "AreaLight", field, value, scaled }
 }
 
 fn check_transform(t: &Transform) -> Result<(), LightError> {
@@ -226,7 +223,7 @@ impl AreaLight {
         check_shape_transform(transform, "sphere", transform.shear.abs().max_element())?;
         let r = radius * transform.scale.abs().max_element();
         if !(radius > 0.0 && r > 0.0 && r.is_finite()) {
-            return Err(bad_size("radius", radius));
+            return Err(bad_size("radius", radius, r));
         }
         let shape = AreaShape::Sphere { center: transform.translation, radius: r };
         Ok(self.resolved(shape, self.radiance_emitter(shape.area())?))
@@ -238,7 +235,7 @@ impl AreaLight {
         check_shape_transform(transform, "disk", transform.shear.x)?;
         let r = radius * transform.scale.x.abs().max(transform.scale.y.abs());
         if !(radius > 0.0 && r > 0.0 && r.is_finite()) {
-            return Err(bad_size("radius", radius));
+            return Err(bad_size("radius", radius, r));
         }
         // Normals transform by the inverse transpose: the emitting side follows sign(scale.z).
         let normal = (transform.rotation * Vec3::Z * transform.scale.z.signum()).normalize();
@@ -255,10 +252,10 @@ impl AreaLight {
     ) -> Result<ResolvedArea, LightError> {
         check_shape_transform(transform, "rectangle", transform.shear.x)?;
         if !(width > 0.0 && width.is_finite()) {
-            return Err(bad_size("width", width));
+            return Err(bad_size("width", width, width));
         }
         if !(height > 0.0 && height.is_finite()) {
-            return Err(bad_size("height", height));
+            return Err(bad_size("height", height, height));
         }
         let mut corner = transform.transform_point(Vec3::new(-0.5 * width, -0.5 * height, 0.0));
         let mut ex = transform.transform_vector(Vec3::X * width);

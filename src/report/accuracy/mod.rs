@@ -220,7 +220,7 @@ pub fn report_scene(
     };
     let mut self_check =
         sweep::measure(Knob::Spp, "reference itself".into(), &itself, main, Against::Main, scene, &budget);
-    self_check.samples_per_s = (w * h * main.spp) as f64 / main.seconds.max(1e-9);
+    self_check.samples_per_s = w as f64 * h as f64 * main.spp as f64 / main.seconds.max(1e-9);
     let ladder: Vec<(f64, f64)> =
         rows.iter().filter(|r| r.knob == Knob::Spp).map(|r| (r.config.spp as f64, r.rel_mse)).collect();
     let mut report = SceneReport {

@@ -230,7 +230,13 @@ impl SceneAnimations {
             let v = c.keys.sample(t, c.target);
             match c.target {
                 Target::Translation => *translation = v.truncate(),
-                Target::Rotation => *rotation = Quat::from_vec4(v).normalize(),
+                // A cubic spline between keys of opposite sign can pass through zero: that
+                // instant keeps the rest rotation rather than a NaN one.
+                Target::Rotation => {
+                    if let Some(q) = v.try_normalize() {
+                        *rotation = Quat::from_vec4(q);
+                    }
+                }
                 Target::Scale => *scale = v.truncate(),
             }
         }
@@ -326,6 +332,29 @@ mod tests {
         }
         assert_eq!(step.sample(9.0, Target::Scale).x, 5.0);
         assert_eq!(linear.sample(4.0, Target::Scale).x, 5.0);
+    }
+
+    /// The hard case: a cubic spline from q to -q with zero tangents is the zero quaternion half way;
+    /// the pose keeps the rest rotation there (finite), and follows the keys elsewhere.
+    #[test]
+    fn a_rotation_spline_through_zero_poses_the_rest_rotation() {
+        let q = Quat::from_rotation_y(0.7);
+        let values = [Vec4::ZERO, Vec4::from(q), Vec4::ZERO, Vec4::ZERO, -Vec4::from(q), Vec4::ZERO];
+        let keys = Keyframes::new(vec![0.0, 2.0], values.to_vec(), Interpolation::CubicSpline).unwrap();
+        assert_eq!(keys.sample(1.0, Target::Rotation), Vec4::ZERO);
+        let rest = Quat::from_rotation_x(0.2);
+        let scene = SceneAnimations {
+            rest: vec![LocalTransform::Trs { translation: Vec3::ZERO, rotation: rest, scale: Vec3::ONE }],
+            parent: vec![None],
+            order: vec![0],
+            clips: vec![AnimationClip {
+                name: None,
+                channels: vec![Channel { node: 0, target: Target::Rotation, keys }],
+            }],
+        };
+        let half_way = scene.pose(0, 1.0)[0];
+        assert!(half_way.abs_diff_eq(Affine3A::from_quat(rest), 1e-6), "{half_way:?}");
+        assert!(scene.pose(0, 0.0)[0].abs_diff_eq(Affine3A::from_quat(q), 1e-6));
     }
 
     /// Hermite basis at s = 1/2 is (1/2, 1/8, 1/2, -1/8): with values 0 and 2 over a span of 2,
