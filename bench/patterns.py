@@ -4,12 +4,15 @@ per scene, the noise and the time of `kelvin render` at equal spp under `--patte
 independent`, and the efficiency (time to equal noise) that follows.
 
     /tmp/mitsuba-venv/bin/python bench/patterns.py [--kelvin target/release/kelvin] [--size 128x128] [--spp 16]
-        [--integrator path] [--scenes a,b] [--out-dir /tmp/peers/patterns] [--json-out FILE]
+        [--integrator path] [--seeds 8] [--scenes a,b] [--out-dir /tmp/peers/patterns] [--json-out FILE]
 
-Per scene and pattern: two renders at N spp (seeds 0 and 1). Noise = sum((a - b)^2) / 2 / sum(r^2) over the
-finite pixels, with r the mean of the four renders (relative MSE of one render, measured between two seeds, so
-no reference is needed and none of its noise enters). Time = the best of the two renders' own "rendered ... in
-T s" (the scene load excluded). Efficiency = (noise_ind t_ind) / (noise_sobol t_sobol): how much sooner Sobol
+Per scene and pattern: --seeds K renders at N spp (seeds 0..K, K even). Noise = the mean over the pairs of seeds
+(0, 1), (2, 3), ... of sum((a - b)^2) / 2 / sum(r^2) over the finite pixels, with r the mean of every render
+(relative MSE of one render, measured between two seeds, so no reference is needed and none of its noise
+enters; paths through glossy surfaces make rare bright samples, so a pair alone varies by 2-4x on CornellBox:
+take 8 seeds or more there). The median over the pairs is shown too, which the rare bright samples move less. Time = the best of the
+renders' own "rendered ... in T s" (the scene load
+excluded). Efficiency = (noise_ind t_ind) / (noise_sobol t_sobol): how much sooner Sobol
 reaches equal noise. Also the mean ratio sobol / independent (both unbiased: 1 within noise). EXRs are read
 with Mitsuba's Bitmap (bench/mitsuba/compare_exr.py), hence the Mitsuba venv's python.
 """
@@ -62,6 +65,7 @@ def main():
     ap.add_argument("--size", default="128x128")
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--integrator", default="path")
+    ap.add_argument("--seeds", type=int, default=8)
     ap.add_argument("--scenes", default="")
     ap.add_argument("--out-dir", default="/tmp/peers/patterns")
     ap.add_argument("--json-out")
@@ -70,16 +74,17 @@ def main():
     out.mkdir(parents=True, exist_ok=True)
     wanted = set(filter(None, a.scenes.split(",")))
     rows = []
-    print(f"{a.integrator}, {a.size}, {a.spp} spp, two seeds per pattern")
-    print("| scene | noise Sobol | noise independent | noise ind / Sobol | time Sobol s | time ind s | time Sobol / ind | "
-          "efficiency | mean Sobol / ind |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    seeds = range(a.seeds - a.seeds % 2 or 2)
+    print(f"{a.integrator}, {a.size}, {a.spp} spp, {len(seeds)} seeds per pattern")
+    print("| scene | noise Sobol | noise independent | noise ind / Sobol | median pair ind / Sobol | time Sobol s | "
+          "time ind s | time Sobol / ind | efficiency | mean Sobol / ind |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for name, scene, extra in suite(a.kelvin):
         if wanted and name not in wanted:
             continue
         r = {}
         # Alternating patterns, so that a change of load hits both.
-        for seed in (0, 1):
+        for seed in seeds:
             for pattern in ("sobol", "independent"):
                 r[pattern, seed] = render(a, scene, extra, pattern, seed, out / f"{name}_{pattern}_{seed}.exr")
         images = [img for _, img in r.values()]
@@ -88,20 +93,25 @@ def main():
         norm = float((mean ** 2).sum())
         row = {"scene": name}
         for pattern in ("sobol", "independent"):
-            (t0, i0), (t1, i1) = r[pattern, 0], r[pattern, 1]
-            row[pattern] = {"noise": float(((i0[ok] - i1[ok]) ** 2).sum()) / 2 / norm, "seconds": min(t0, t1),
-                            "sum": float(i0[ok].sum() + i1[ok].sum())}
+            runs = [r[pattern, s] for s in seeds]
+            pairs = [float(((runs[k][1][ok] - runs[k + 1][1][ok]) ** 2).sum()) / 2 / norm for k in range(0, len(runs), 2)]
+            row[pattern] = {"noise": float(np.mean(pairs)), "median": float(np.median(pairs)),
+                            "seconds": min(t for t, _ in runs),
+                            "sum": float(sum(img[ok].sum() for _, img in runs))}
         s, i = row["sobol"], row["independent"]
         row["noise_ratio"] = i["noise"] / s["noise"]
+        row["median_ratio"] = i["median"] / s["median"]
         row["time_ratio"] = s["seconds"] / i["seconds"]
         row["efficiency"] = row["noise_ratio"] / row["time_ratio"]
         row["mean_ratio"] = s["sum"] / i["sum"]
         rows.append(row)
-        print(f"| {name} | {s['noise']:.3e} | {i['noise']:.3e} | {row['noise_ratio']:.2f} | {s['seconds']:.3f} | "
+        print(f"| {name} | {s['noise']:.3e} | {i['noise']:.3e} | {row['noise_ratio']:.2f} | {row['median_ratio']:.2f} | "
+              f"{s['seconds']:.3f} | "
               f"{i['seconds']:.3f} | {row['time_ratio']:.3f} | {row['efficiency']:.2f} | {row['mean_ratio']:.4f} |",
               flush=True)
     geo = lambda k: float(np.exp(np.mean([np.log(r[k]) for r in rows])))
-    print(f"geometric means: noise ind / Sobol {geo('noise_ratio'):.2f}, time Sobol / ind {geo('time_ratio'):.3f}, "
+    print(f"geometric means: noise ind / Sobol {geo('noise_ratio'):.2f} (median pair {geo('median_ratio'):.2f}), "
+          f"time Sobol / ind {geo('time_ratio'):.3f}, "
           f"efficiency {geo('efficiency'):.2f}")
     if a.json_out:
         Path(a.json_out).write_text(json.dumps({"args": vars(a), "rows": rows}, indent=1))

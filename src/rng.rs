@@ -70,8 +70,32 @@ fn pixel_key(seed: u64, pixel: u32) -> u64 {
 fn sobol_set(key: u64, sample: u32, set: u32) -> [f32; 4] {
     let which = ((set as u64) << 32) | (sample >> 16) as u64;
     let seed = (mix64(key ^ which.wrapping_mul(GOLDEN)) >> 32) as u32;
-    let sobol = sobol_burley::sample_4d(sample & 0xffff, 0, seed);
+    let sobol = sobol_4d(sample & 0xffff, seed);
     SET_ORDER.map(|d| sobol[d])
+}
+
+/// The first 4 Sobol dimensions of the crate as a function of the top 16 bits of a reversed index,
+/// a table per byte: Sobol points are linear over GF(2) in the index bits, so a byte's entry is the
+/// XOR of its bits' direction vectors.
+static SOBOL_BYTES: std::sync::LazyLock<[[[u32; 4]; 256]; 2]> = std::sync::LazyLock::new(|| {
+    std::array::from_fn(|half| {
+        std::array::from_fn(|b| sobol_burley::parts::sobol_int4_rev((b as u32) << (24 - 8 * half), 0).into())
+    })
+});
+
+/// `sobol_burley::sample_4d(index, 0, seed)` bit for bit, with two table lookups in place of the
+/// crate's loop over the index bits (a branch per set bit, half of 16 after the shuffle). The
+/// constants are the crate's (0.5.0), so that the test can hold it to the crate.
+#[inline(always)]
+fn sobol_4d(index: u32, seed: u32) -> [f32; 4] {
+    use sobol_burley::parts::{Int4, hash, hash_int4, owen_scramble_int4_rev, owen_scramble_rev};
+    let rev = owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a));
+    let bytes = &*SOBOL_BYTES;
+    let (hi, lo) = (bytes[0][(rev >> 24) as usize], bytes[1][((rev >> 16) & 0xff) as usize]);
+    let sobol = Int4::from([hi[0] ^ lo[0], hi[1] ^ lo[1], hi[2] ^ lo[2], hi[3] ^ lo[3]]);
+    let scramble = Int4::from([seed.wrapping_mul(0x9c8f_2d3b); 4])
+        ^ Int4::from([0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8]);
+    owen_scramble_int4_rev(sobol, hash_int4(scramble)).reverse_bits().to_f32_norm()
 }
 
 /// Independent: numbers `2 pair` and `2 pair + 1` of `sample` of the pixel with `key`.
@@ -262,6 +286,20 @@ mod tests {
                     let mut pair = SampleStream::new(pattern, seed, pixel[l], sample[l]).at_dimension(d);
                     assert_eq!(pair.next_2d(), glam::Vec2::new(lanes[d as usize][l], lanes[d as usize + 1][l]));
                 }
+            }
+        }
+    }
+
+    /// The table-driven Sobol set is the crate's `sample_4d`, bit for bit, over every index and
+    /// seeds from 0 to all ones.
+    #[test]
+    fn sobol_sets_are_the_crates() {
+        let mut rng = SplitMix64::new(11);
+        let seeds = [0, 1, u32::MAX].into_iter().chain((0..5).map(|_| rng.next_u64() as u32));
+        for seed in seeds {
+            for index in 0..1u32 << 16 {
+                let (mine, crate_) = (sobol_4d(index, seed), sobol_burley::sample_4d(index, 0, seed));
+                assert_eq!(mine.map(f32::to_bits), crate_.map(f32::to_bits), "index {index} seed {seed}");
             }
         }
     }
