@@ -83,8 +83,9 @@ def kill(pids, sig):
 class Cluster:
     """A head and a second node started with `ray start`, in a temporary folder of their own."""
 
-    def __init__(self, ray_bin, work):
-        self.ray, self.temp = ray_bin, os.path.join(work, "ray")
+    def __init__(self, ray_bin, work, workers=1):
+        """`workers` nodes beside the head (the first is "the second node"; the benchmark starts 0 to 2)."""
+        self.ray, self.temp, self.workers = ray_bin, os.path.join(work, "ray"), workers
         with socket.socket() as s:
             s.bind(("127.0.0.1", 0))
             self.port = s.getsockname()[1]
@@ -106,7 +107,9 @@ class Cluster:
         head = [self.ray, "start", "--head", "--port", str(self.port), "--include-dashboard=false", *common]
         self.second = [self.ray, "start", "--address", self.address, "--resources", json.dumps({SECOND_NODE: 1}),
                        *common]
-        for cmd, env in ((head, self.env), (self.second, dict(self.env, **{SECOND_NODE_ENV: "1"}))):
+        others = [self.second] + [[self.ray, "start", "--address", self.address, *common]] * (self.workers - 1)
+        nodes = [(head, self.env)] + [(cmd, dict(self.env, **{SECOND_NODE_ENV: "1"})) for cmd in others[:self.workers]]
+        for cmd, env in nodes:
             run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120)
             if run.returncode != 0:
                 raise AssertionError(f"{' '.join(cmd)} failed:\n{run.stdout}\n{run.stderr}")
