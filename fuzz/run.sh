@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Runs every fuzz target (or those named) for SECONDS each, one after another, seeding the corpora
-# first, and prints each run's executions and coverage (libFuzzer's final stats) for the README's table.
+# first, and prints each run's executions, coverage (libFuzzer's final stats) and CPU seconds for the README's
+# table. A target's dictionary, fuzz/dict/TARGET.dict, is passed when it exists.
 # Usage: fuzz/run.sh SECONDS [TARGET...]     (needs `cargo install cargo-fuzz`; stable Rust with RUSTC_BOOTSTRAP=1)
 set -euo pipefail
 seconds="${1:?usage: fuzz/run.sh SECONDS [TARGET...]}"
 shift
 fuzz_dir="$(cd "$(dirname "$0")" && pwd)"
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(gltf_import ies_parse env_map tile_exr bake_part)
+[ ${#targets[@]} -eq 0 ] && targets=(gltf_import ies_parse env_map tile_exr bake_part manifest)
 "$fuzz_dir/seed.sh" > /dev/null
 cd "$fuzz_dir"
 for t in "${targets[@]}"; do
@@ -15,10 +16,16 @@ for t in "${targets[@]}"; do
     mkdir -p "$fuzz_dir/artifacts"
     start=$(date +%s)
     status=0
-    RUSTC_BOOTSTRAP=1 cargo fuzz run "$t" -- -max_total_time="$seconds" -rss_limit_mb=4096 -print_final_stats=1 \
-        > "$log" 2>&1 || status=$?
+    dict=()
+    [ -f "$fuzz_dir/dict/$t.dict" ] && dict=(-dict="$fuzz_dir/dict/$t.dict")
+    # Built first, so that the CPU time below is the fuzzing's alone.
+    RUSTC_BOOTSTRAP=1 cargo fuzz build "$t" > "$log" 2>&1
+    /usr/bin/time -f "cpu_seconds: %U %S" -a -o "$log.time" \
+        env RUSTC_BOOTSTRAP=1 cargo fuzz run "$t" -- -max_total_time="$seconds" -rss_limit_mb=4096 \
+        -print_final_stats=1 "${dict[@]}" >> "$log" 2>&1 || status=$?
+    cpu=$(tail -1 "$log.time" | awk '{printf "%.0f", $2 + $3}')
     runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")
     edges=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*' || echo "?")
     crashes=$(ls "$fuzz_dir/artifacts/$t" 2>/dev/null | grep -c '^crash-' || true)
-    echo "$t: $(( $(date +%s) - start )) s, $runs executions, $edges edges, exit $status, $crashes crash files (log $log)"
+    echo "$t: $(( $(date +%s) - start )) s, $cpu CPU s, $runs executions, $edges edges, exit $status, $crashes crash files (log $log)"
 done

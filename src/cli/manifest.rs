@@ -146,9 +146,14 @@ fn parse_render_args(args: &[String], output: &Path) -> Result<RenderArgs, Strin
 /// Reads the manifest at `path`: an error if it is not a manifest at all; otherwise every job,
 /// with its own error if it has one.
 pub fn plan(path: &Path) -> Result<Vec<PlannedJob>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    plan_text(&text, path)
+}
+
+/// [`plan`] of a manifest's text, `path` naming it and its folder (the base of relative paths).
+pub fn plan_text(text: &str, path: &Path) -> Result<Vec<PlannedJob>, String> {
     let what = path.display();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{what}: cannot read: {e}"))?;
-    let manifest: Manifest = serde_json::from_str(&text).map_err(|e| format!("{what}: not a manifest: {e}"))?;
+    let manifest: Manifest = serde_json::from_str(text).map_err(|e| format!("{what}: not a manifest: {e}"))?;
     if let Some(v) = manifest.version.filter(|v| *v != VERSION) {
         return Err(format!("{what}: manifest version {v}; this kelvin reads version {VERSION}"));
     }

@@ -5,7 +5,7 @@ mod batch;
 mod bench;
 mod frames;
 mod ies;
-mod manifest;
+pub mod manifest; // pub for the manifest fuzz target, which includes this module
 mod merge;
 mod render;
 mod report;
