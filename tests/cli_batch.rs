@@ -215,6 +215,17 @@ fn batch_bakes_in_parts_byte_for_byte() {
     assert_eq!(plan["jobs"][0]["done"], true);
     let again = text(&kelvin(&["batch", &manifest]));
     assert!(again.contains("5 jobs: 0 rendered, 2 skipped, 3 failed"), "{again}");
+    // The plan names each input with its digest, for a farm to check every machine holds the same.
+    let digest = kelvin::provenance::file_sha256(&cornell).unwrap();
+    assert_eq!(plan["jobs"][0]["inputs"][cornell.to_str().unwrap()], digest.as_str());
+    // A finished bake is finished for its own settings only: the index records them.
+    let changed = std::fs::read_to_string(&manifest).unwrap().replace(r#""spp": 4"#, r#""spp": 5"#);
+    std::fs::write(&manifest, changed).unwrap();
+    let plan: serde_json::Value = serde_json::from_str(&text(&kelvin(&["batch", &manifest, "--plan"]))).unwrap();
+    for (k, what) in [(0, "/settings/command/spp is 5 against 4"), (1, "/settings/command/spp is 5 against 4")] {
+        assert_eq!(plan["jobs"][k]["done"], false, "{}", plan["jobs"][k]);
+        assert!(plan["jobs"][k]["stale"].as_str().unwrap().contains(what), "{}", plan["jobs"][k]);
+    }
 }
 
 /// `--plan` finds what it can before any work: two jobs writing one output (both named), an

@@ -158,12 +158,38 @@ impl BakeArgs {
         }
     }
 
-    /// The bake is finished: its index file (lightmaps.json, or the volume's .json) exists, which is
-    /// written last.
-    pub(super) fn finished(&self) -> bool {
-        match &self.command {
-            BakeCommand::Lightmaps(a) => a.output.join(bake::LIGHTMAPS_JSON).is_file(),
-            BakeCommand::Volume(a) => a.output.is_file() && a.output.with_extension("json").is_file(),
+    /// The files the bake reads by name (scene, environment map).
+    pub(super) fn input_files(&self) -> Vec<&Path> {
+        let (scene, common) = match &self.command {
+            BakeCommand::Lightmaps(a) => (&a.scene, &a.common),
+            BakeCommand::Volume(a) => (&a.scene, &a.common),
+        };
+        std::iter::once(scene).chain(&common.lighting.env).map(PathBuf::as_path).collect()
+    }
+
+    /// Whether the bake is finished: its index file (lightmaps.json, or the volume's .json), which is
+    /// written last, exists and records this bake's provenance (scene, options, kelvin's version).
+    /// Otherwise, for an existing index, why it is not this bake's.
+    pub(super) fn finished(&self) -> (bool, Option<String>) {
+        let index = index_path(&self.command);
+        if !index.is_file() {
+            return (false, None);
+        }
+        let recorded = std::fs::read(&index)
+            .map_err(|e| e.to_string())
+            .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).map_err(|e| e.to_string()));
+        let recorded = match recorded {
+            Ok(json) => json.get("provenance").cloned().unwrap_or_default(),
+            Err(e) => return (false, Some(format!("{} does not read back: {e}", index.display()))),
+        };
+        let wanted = match &self.command {
+            BakeCommand::Lightmaps(a) => a.provenance(),
+            BakeCommand::Volume(a) => a.provenance(),
+        };
+        match wanted.map(|w| check_provenance(&w, &recorded)) {
+            Ok(Ok(())) => (true, None),
+            Ok(Err(field)) => (false, Some(format!("{} records another bake: {field}", index.display()))),
+            Err(e) => (false, Some(e.to_string())),
         }
     }
 }
@@ -267,6 +293,65 @@ fn read_parts(folder: &Path, provenance: &serde_json::Value) -> Result<Vec<BakeP
     Ok(parts)
 }
 
+/// The file a finished bake writes last: lightmaps.json, or the volume's .json.
+fn index_path(command: &BakeCommand) -> PathBuf {
+    match command {
+        BakeCommand::Lightmaps(a) => a.output.join(bake::LIGHTMAPS_JSON),
+        BakeCommand::Volume(a) => a.output.with_extension("json"),
+    }
+}
+
+/// Adds `provenance` to the index file `index` the library wrote (rewritten under a temporary name
+/// and renamed, so a stop in between leaves an index without it: not finished, baked again).
+fn record_provenance(index: &Path, provenance: serde_json::Value) -> Result<(), CliError> {
+    let what = index.display().to_string();
+    let mut json: serde_json::Value = serde_json::from_slice(&std::fs::read(index).map_err(|e| format!("{what}: {e}"))?)?;
+    json["provenance"] = provenance;
+    let text = serde_json::to_string_pretty(&json)? + "\n";
+    write_file(index, &what, text.as_bytes())?;
+    Ok(())
+}
+
+impl VolumeArgs {
+    /// What the volume's parts and index record about how it was made.
+    fn provenance(&self) -> Result<serde_json::Value, CliError> {
+        let settings = json!({
+            "volume": self.resolution.to_array(),
+            "bounds": self.bounds.map(|(lo, hi)| [lo.to_array(), hi.to_array()]),
+            "node": self.node,
+            "spp": self.spp,
+        });
+        self.common.provenance(&self.scene, settings)
+    }
+}
+
+impl LightmapArgs {
+    /// What the lightmaps' parts and index record about how they were made.
+    fn provenance(&self) -> Result<serde_json::Value, CliError> {
+        let opts = self.options();
+        let settings = json!({
+            "lightmaps": opts.size,
+            "texels_per_unit": opts.texels_per_unit,
+            "spp": opts.spp,
+            "margin": opts.margin,
+        });
+        self.common.provenance(&self.scene, settings)
+    }
+
+    fn options(&self) -> LightmapOptions {
+        let common = &self.common;
+        LightmapOptions {
+            size: self.size.unwrap_or(if self.texels_per_unit.is_some() { *bake::SIZE.end() } else { 256 }),
+            texels_per_unit: self.texels_per_unit,
+            spp: self.spp,
+            depth: common.depth(),
+            light: common.light,
+            time: common.time,
+            ..LightmapOptions::default()
+        }
+    }
+}
+
 fn volume(args: VolumeArgs) -> Result<(), CliError> {
     if args.output.extension().is_none_or(|e| !e.eq_ignore_ascii_case("ktx2")) {
         return Err(format!("{}: the volume is written as .ktx2", args.output.display()).into());
@@ -285,15 +370,10 @@ fn volume(args: VolumeArgs) -> Result<(), CliError> {
         bounds,
         time: common.time,
     };
-    let settings = json!({
-        "volume": args.resolution.to_array(),
-        "bounds": bounds.map(|(lo, hi)| [lo.to_array(), hi.to_array()]),
-        "spp": args.spp,
-    });
+    let provenance = args.provenance()?;
     let folder = args.output.with_extension("parts");
     let scene = args.scene.display();
     let volume = if common.merge {
-        let provenance = common.provenance(&args.scene, settings)?;
         let parts = read_parts(&folder, &provenance)?;
         merge_volume(&mut loaded, &opts, parts).map_err(|e| format!("{}: {e}", folder.display()))?
     } else {
@@ -303,7 +383,7 @@ fn volume(args: VolumeArgs) -> Result<(), CliError> {
             let baked = bake_volume_part(&mut loaded, &opts, part, progress);
             bar.finish_and_clear();
             let baked = baked.map_err(|e| format!("{scene}: {e}"))?;
-            return write_part(&folder, baked, common.provenance(&args.scene, settings)?);
+            return write_part(&folder, baked, provenance);
         }
         let baked = bake_volume(&mut loaded, &opts, progress);
         bar.finish_and_clear();
@@ -313,6 +393,7 @@ fn volume(args: VolumeArgs) -> Result<(), CliError> {
         eprintln!("warning: {w}");
     }
     let written = write_volume(&args.output, &volume)?;
+    record_provenance(&args.output.with_extension("json"), provenance)?;
     let r = volume.resolution;
     println!(
         "baked a {}x{}x{} volume at {} spp in {:.3} s ({} voxels inside geometry, filled); Transform: translation {}, scale {}",
@@ -336,26 +417,12 @@ fn volume(args: VolumeArgs) -> Result<(), CliError> {
 
 fn lightmaps(args: LightmapArgs) -> Result<(), CliError> {
     let common = &args.common;
-    let opts = LightmapOptions {
-        size: args.size.unwrap_or(if args.texels_per_unit.is_some() { *bake::SIZE.end() } else { 256 }),
-        texels_per_unit: args.texels_per_unit,
-        spp: args.spp,
-        depth: common.depth(),
-        light: common.light,
-        time: common.time,
-        ..LightmapOptions::default()
-    };
-    let settings = json!({
-        "lightmaps": opts.size,
-        "texels_per_unit": opts.texels_per_unit,
-        "spp": opts.spp,
-        "margin": opts.margin,
-    });
+    let opts = args.options();
+    let provenance = args.provenance()?;
     let mut loaded = common.load(&args.scene)?;
     let folder = args.output.join("parts");
     let scene = args.scene.display();
     let report = if common.merge {
-        let provenance = common.provenance(&args.scene, settings)?;
         let parts = read_parts(&folder, &provenance)?;
         merge_lightmaps(&mut loaded, &opts, parts).map_err(|e| format!("{}: {e}", folder.display()))?
     } else {
@@ -365,7 +432,7 @@ fn lightmaps(args: LightmapArgs) -> Result<(), CliError> {
             let baked = bake_lightmaps_part(&mut loaded, &opts, part, progress);
             bar.finish_and_clear();
             let baked = baked.map_err(|e| format!("{scene}: {e}"))?;
-            return write_part(&folder, baked, common.provenance(&args.scene, settings)?);
+            return write_part(&folder, baked, provenance);
         }
         let baked = bake_lightmaps(&mut loaded, &opts, progress);
         bar.finish_and_clear();
@@ -378,6 +445,7 @@ fn lightmaps(args: LightmapArgs) -> Result<(), CliError> {
         eprintln!("warning: {w}");
     }
     let written = write_lightmaps(&args.output, &report, &opts)?;
+    record_provenance(&args.output.join(bake::LIGHTMAPS_JSON), provenance)?;
     let stats = &report.stats;
     let sides: Vec<String> = report.lightmaps.iter().map(|m| format!("{} {}", m.name, m.size)).collect();
     println!(

@@ -16,6 +16,7 @@
 //! `frames` is planned as one job per frame (`--frames K`, the output's '#' run numbered), so
 //! that frames, like tiles, can be spread, skipped when finished and retried one by one.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::Parser;
@@ -112,6 +113,9 @@ pub struct PlannedJob {
     pub stale: Option<String>,
     /// Why the job cannot be split into tiles (ReSTIR's reuse): a driver renders it whole.
     pub untileable: Option<String>,
+    /// Every file the job reads by name (scene, environment map) and its `sha256:` digest when planned:
+    /// a driver checks that each machine holds the same before running the job there.
+    pub inputs: BTreeMap<PathBuf, String>,
     /// The PNG preview's exposure in stops (None: automatic): what `kelvin merge` needs to write the
     /// preview `kelvin render` would.
     pub exposure: Option<f32>,
@@ -238,6 +242,7 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -
         done: false,
         stale: None,
         untileable: None,
+        inputs: BTreeMap::new(),
         exposure: None,
         error: None,
     };
@@ -250,8 +255,12 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -
         planned.command = "bake";
         match super::bake_jobs::resolve(&job, base, &planned.output) {
             Ok(bake) => {
-                planned.done = bake.parsed.finished();
+                (planned.done, planned.stale) = bake.parsed.finished();
                 planned.parts_dir = Some(bake.parsed.output().1);
+                match digests(&bake.parsed.input_files()) {
+                    Ok(inputs) => planned.inputs = inputs,
+                    Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
+                }
                 (planned.args, planned.parts) = (bake.args, bake.parts);
             }
             Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
@@ -289,10 +298,20 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -
             (planned.width, planned.height) = parsed.size();
             planned.untileable = planned.untileable.or(parsed.tiling_refusal());
             (planned.args, planned.exposure) = (args, parsed.exposure());
+            match digests(&parsed.input_files()) {
+                Ok(inputs) => planned.inputs = inputs,
+                Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
+            }
         }
         Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
     }
     planned
+}
+
+/// Each file's `sha256:` digest.
+fn digests(files: &[&Path]) -> Result<BTreeMap<PathBuf, String>, String> {
+    let digest = |f: &&Path| kelvin::provenance::file_sha256(f).map_err(|e| format!("{}: {e}", f.display()));
+    files.iter().map(|f| Ok((f.to_path_buf(), digest(f)?))).collect()
 }
 
 /// Whether `output` is a finished render of `args` (frame `frame`): it reads back and records

@@ -222,6 +222,12 @@ impl RenderArgs {
         Ok(p)
     }
 
+    /// The files the render reads by name (scene, environment map): what each machine of a farm must
+    /// hold with the same contents.
+    pub(super) fn input_files(&self) -> Vec<&Path> {
+        self.scene.iter().chain(&self.lighting.env).map(PathBuf::as_path).collect()
+    }
+
     /// Why this render cannot be split into tiles that merge into it (None: it can).
     pub(super) fn tiling_refusal(&self) -> Option<String> {
         let job = self.job();
