@@ -22,7 +22,9 @@ import sys
 import tempfile
 import time
 
-from test_cluster import HERE, Cluster, check
+from local_cluster import Cluster, check
+
+HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def children_cpu():

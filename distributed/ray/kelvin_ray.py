@@ -30,28 +30,31 @@ the merge refuses the staged tiles (made by another build or for other settings)
 reported failed, so that a rerun renders it fresh.
 
 The exit code is 0 only if every job succeeded or was already finished. The kelvin binary and the scenes must be
-at the same paths on every node (as in one container image); tiles travel through Ray, not a shared disk.
+at the same paths on every node (as in one container image); tiles travel through Ray, not a shared disk. Each task
+checks first that its node's binary is the driver's and its scene and environment map are the ones planned (their
+SHA-256, from the plan's `inputs`): a node that differs, or lacks one, is a node failure, retried elsewhere.
 Without --address a local Ray cluster is started for the run.
 """
 
 import argparse
-import ctypes
-import io
 import json
 import math
 import os
-import resource
 import shutil
-import signal
 import subprocess
 import sys
 import tarfile
-import tempfile
 import time
 from dataclasses import dataclass, field
 
 import ray
 from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+import kelvin_tasks
+from kelvin_tasks import TaskFault, TileFailed, Whereabouts, bake_part, digest, render_chunk, render_tile
+
+# The tasks' code travels with them, so nodes need not have this folder on their path.
+ray.cloudpickle.register_pickle_by_value(kelvin_tasks)
 
 # How long one ray.wait may block: completions are handled in batches this often at most.
 WAIT_SECONDS = 0.5
@@ -73,145 +76,6 @@ def tile_grid(width, height, tiles):
     xs = [i * width // cols for i in range(cols + 1)]
     ys = [j * height // rows for j in range(rows + 1)]
     return [(xs[i], ys[j], xs[i + 1], ys[j + 1]) for j in range(rows) for i in range(cols)]
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# Tasks (run on the workers)
-
-
-class TileFailed(Exception):
-    """kelvin itself refused or failed a tile: retrying would fail the same way, anywhere."""
-
-
-class TaskFault(Exception):
-    """The tile failed for a reason of its node, not of the job (kelvin killed, timed out or not executable):
-    worth retrying elsewhere. Carries the node so that the driver can avoid it."""
-
-    def __init__(self, node, message):
-        super().__init__(node, message)
-        self.node, self.message = node, message
-
-    def __str__(self):
-        return self.message
-
-
-@ray.remote(num_cpus=0)
-class Whereabouts:
-    """Which node each task attempt started on. A task whose worker or node dies cannot say where it ran, and
-    Ray's errors for it (WorkerCrashedError, NodeDiedError) do not name the node; the driver asks here."""
-
-    def __init__(self):
-        self.nodes = {}
-
-    def started(self, attempt, node):
-        self.nodes[attempt] = node
-
-    def node_of(self, attempt):
-        return self.nodes.get(attempt)
-
-
-def die_with_parent():
-    """Runs in the kelvin child before exec: the kernel kills kelvin when its worker dies, so that a killed
-    worker (or node) does not leave an orphan render eating a CPU that its retry needs."""
-    PR_SET_PDEATHSIG = 1
-    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
-
-
-def run_kelvin(cmd, what, timeout, node):
-    """Runs one kelvin command; raises TaskFault for failures of the node and TileFailed for kelvin's own."""
-    preexec = die_with_parent if sys.platform.startswith("linux") else None
-    try:
-        run = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, preexec_fn=preexec)
-    except subprocess.TimeoutExpired:
-        raise TaskFault(node, f"{what}: kelvin took over {timeout} s")
-    except OSError as e:
-        raise TaskFault(node, f"{what}: cannot run {cmd[0]}: {e}")
-    lines = [l for l in run.stderr.splitlines() if l.strip()]
-    last = lines[-1] if lines else "no message"
-    if run.returncode < 0:
-        raise TaskFault(node, f"{what}: kelvin was killed by {signal.Signals(-run.returncode).name}")
-    if run.returncode in (126, 127):
-        raise TaskFault(node, f"{what}: {cmd[0]} could not be executed (exit code {run.returncode}): {last}")
-    if run.returncode != 0:
-        # kelvin's own errors (1, 2) and panics (101) repeat on any node: kelvin is deterministic.
-        raise TileFailed(f"{what}: {last}")
-
-
-def report_start(tracker, attempt):
-    """Tells the tracker where this attempt runs (waiting for it, so a kill right after cannot lose it). Only a
-    hint for choosing a retry's node: a tracker that cannot be reached does not fail the tile."""
-    node = ray.get_runtime_context().get_node_id()
-    try:
-        ray.get(tracker.started.remote(attempt, node), timeout=60)
-    except ray.exceptions.RayError:
-        pass
-    return node
-
-
-@ray.remote
-def render_tile(kelvin, args, crop, threads, timeout, tracker, attempt):
-    """Runs `kelvin render ARGS --crop ...` in a temporary folder; returns (EXR bytes, node, seconds,
-    kelvin's CPU seconds)."""
-    start, cpu = time.monotonic(), cpu_seconds()
-    node = report_start(tracker, attempt)
-    crop_arg = ",".join(map(str, crop))
-    try:
-        with tempfile.TemporaryDirectory(prefix="kelvin-tile-") as tmp:
-            out = os.path.join(tmp, "tile.exr")
-            cmd = [kelvin, "render", *args, "--crop", crop_arg, "--threads", str(threads), "-o", out]
-            run_kelvin(cmd, f"tile {crop_arg}", timeout, node)
-            with open(out, "rb") as f:
-                return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
-    except OSError as e:  # the node's temporary disk, not the job
-        raise TaskFault(node, f"tile {crop_arg}: {e}")
-
-
-@ray.remote
-def bake_part(kelvin, args, part, parts, threads, timeout, tracker, attempt):
-    """Runs `kelvin bake ARGS --part PART/PARTS` in a temporary folder; returns (part file bytes, node,
-    seconds, kelvin's CPU seconds)."""
-    start, cpu = time.monotonic(), cpu_seconds()
-    node = report_start(tracker, attempt)
-    what = f"part {part}/{parts}"
-    try:
-        with tempfile.TemporaryDirectory(prefix="kelvin-bake-") as tmp:
-            # A volume is written as .ktx2 (its parts beside it), lightmaps into a folder.
-            out = os.path.join(tmp, "out.ktx2" if args[0] == "volume" else "out")
-            cmd = [kelvin, "bake", *args, "--part", f"{part}/{parts}", "--threads", str(threads), "-o", out]
-            run_kelvin(cmd, what, timeout, node)
-            found = [os.path.join(d, f) for d, _, fs in os.walk(tmp) for f in fs if f.endswith(".kbake")]
-            if len(found) != 1:
-                raise TileFailed(f"{what}: kelvin bake wrote {len(found)} part files")
-            with open(found[0], "rb") as f:
-                return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
-    except OSError as e:
-        raise TaskFault(node, f"{what}: {e}")
-
-
-@ray.remote
-def render_chunk(kelvin, args, pattern, threads, timeout, tracker, attempt):
-    """Runs `kelvin render ARGS` for a chunk of frames (whole frames, one process) in a temporary folder; returns
-    (a tar of every file it wrote, named as the job's output pattern numbers them, node, seconds, CPU seconds)."""
-    start, cpu = time.monotonic(), cpu_seconds()
-    node = report_start(tracker, attempt)
-    what = f"frames {args[args.index('--frames') + 1]}"
-    try:
-        with tempfile.TemporaryDirectory(prefix="kelvin-chunk-") as tmp:
-            cmd = [kelvin, "render", *args, "--threads", str(threads), "-o", os.path.join(tmp, pattern)]
-            run_kelvin(cmd, what, timeout, node)
-            packed = io.BytesIO()
-            with tarfile.open(fileobj=packed, mode="w") as tar:
-                for name in sorted(os.listdir(tmp)):
-                    tar.add(os.path.join(tmp, name), arcname=name)
-            return packed.getvalue(), node, time.monotonic() - start, cpu_seconds() - cpu
-    except OSError as e:
-        raise TaskFault(node, f"{what}: {e}")
-
-
-def cpu_seconds():
-    """User and system CPU seconds of this process's finished children (a worker runs one task at a time)."""
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -369,6 +233,7 @@ class Farm:
 
     def __init__(self, kelvin, jobs, opts):
         self.kelvin, self.opts = kelvin, opts
+        self.build = digest(kelvin)
         self.jobs = [Job(i, entry) for i, entry in enumerate(jobs)]
         self.pending = {}  # object ref -> (piece, pinned node or None, attempt id)
         self.pinned = {}  # node -> tasks pinned there in flight, to spread retries
@@ -418,16 +283,18 @@ class Farm:
         attempt = f"{piece.job}/{piece.index}/{piece.retries}"
         strategy = NodeAffinitySchedulingStrategy(node, soft=False) if node else "DEFAULT"
         o = self.opts
+        # The binary this driver planned with, and the job's scene and environment map, each with its digest.
+        inputs = {self.kelvin: self.build, **job.entry.get("inputs", {})}
         if job.bake:
             task = bake_part.options(num_cpus=o.threads, max_retries=0, scheduling_strategy=strategy)
-            ref = task.remote(self.kelvin, job.entry["args"], *piece.spec, o.threads, o.task_timeout, self.tracker, attempt)
+            ref = task.remote(self.kelvin, inputs, job.entry["args"], *piece.spec, o.threads, o.task_timeout, self.tracker, attempt)
         elif job.chunk:
             task = render_chunk.options(num_cpus=o.threads, max_retries=0, scheduling_strategy=strategy)
             pattern = os.path.basename(job.entry["output"])
-            ref = task.remote(self.kelvin, job.entry["args"], pattern, o.threads, o.task_timeout, self.tracker, attempt)
+            ref = task.remote(self.kelvin, inputs, job.entry["args"], pattern, o.threads, o.task_timeout, self.tracker, attempt)
         else:
             task = render_tile.options(num_cpus=o.threads, max_retries=0, scheduling_strategy=strategy)
-            ref = task.remote(self.kelvin, job.entry["args"], piece.spec, o.threads, o.task_timeout, self.tracker, attempt)
+            ref = task.remote(self.kelvin, inputs, job.entry["args"], piece.spec, o.threads, o.task_timeout, self.tracker, attempt)
         self.pending[ref] = (piece, node, attempt)
         if node:
             self.pinned[node] = self.pinned.get(node, 0) + 1
@@ -485,7 +352,8 @@ class Farm:
         if node:
             piece.failed_on.add(node)
         if piece.retries >= self.opts.max_retries:
-            self.fail(job, f"job {job.index} ({job.name}): {piece.what} failed {piece.retries + 1} times, last: {message}")
+            self.fail(job, f"job {job.index} ({job.name}): {piece.what} failed {piece.retries + 1} times, last: {message}",
+                      keep=True)
             return
         piece.retries += 1
         target = self.other_node(piece.failed_on)
@@ -510,14 +378,17 @@ class Farm:
                if n["Alive"] and n["Resources"].get("CPU", 0) >= self.opts.threads and n["NodeID"] not in avoid]
         return min(fit, key=lambda n: self.pinned.get(n, 0), default=None)
 
-    def fail(self, job, detail):
-        """Fails one job: cancels its tasks in flight (no other job's) and removes its staged pieces, which a
-        fixed job would not merge with."""
-        job.status = ("FAILED", detail)
+    def fail(self, job, detail, keep=False):
+        """Fails one job: cancels its tasks in flight (no other job's). Its staged pieces stay (`keep`) when
+        the job itself is sound and its nodes failed, so that a rerun renders only the missing ones (the merge
+        checks their provenance); they are removed when the job failed, since a fixed job would not merge with
+        them."""
+        job.status = ("FAILED", detail + (f" (its finished pieces stay staged in {job.staging})" if keep else ""))
         for ref, (piece, _, _) in list(self.pending.items()):
             if piece.job == job.index:
                 ray.cancel(ref)
-        shutil.rmtree(job.staging, ignore_errors=True)
+        if not keep:
+            shutil.rmtree(job.staging, ignore_errors=True)
 
     def finish(self, job):
         """Merges a job whose pieces are all staged. A refused merge (pieces of another build or other

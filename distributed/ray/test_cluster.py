@@ -18,7 +18,10 @@
 4. The driver is killed (SIGKILL) once some tiles are staged, a tile of another seed is planted among one job's
    staged tiles, and the driver is run again: it renders only the missing tiles, the planted tile's job fails
    naming the differing settings and its staging folder is gone; a third run renders that job fresh.
-5. Last, as it leaves one node: the whole second node (raylet, workers, kelvin) is killed with SIGKILL mid-run;
+5. The scene file changes while its job runs (as on a node that holds another copy): every later tile fails its
+   input check on both nodes, the job fails after its retries and keeps its finished tiles staged; with the scene
+   restored, a rerun renders only the missing tiles, byte-identical.
+6. Last, as it leaves one node: the whole second node (raylet, workers, kelvin) is killed with SIGKILL mid-run;
    its tiles are retried on the head and every output is byte-identical.
 
 Every wait is bounded. The cluster runs in its own temporary folder and is stopped at the end, also when a
@@ -28,10 +31,8 @@ check fails, by ending the processes that folder names (and their children): not
 import argparse
 import json
 import os
-import secrets
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -39,164 +40,13 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
-SECOND_NODE = "kelvin_second_node"
-# Set in the second node's environment only (its workers inherit it): the broken kelvin of section 3 dies there.
-SECOND_NODE_ENV = "KELVIN_TEST_SECOND_NODE"
+BOX = os.path.join(REPO, "tests/data/gltf/bevy/CornellBox.glb")
+LAMP = os.path.join(REPO, "tests/data/gltf/kelvin/animated_lamp.gltf")
 sys.path.insert(0, HERE)
 from kelvin_ray import tile_grid  # noqa: E402  (the driver's grid, to count the tiles of a job)
+from local_cluster import SECOND_NODE_ENV, Cluster, check, descendants, kill, processes  # noqa: E402
 
 
-def processes():
-    """pid -> (ppid, argv) of every process."""
-    out = {}
-    for pid in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            with open(f"/proc/{pid}/stat") as f:
-                ppid = int(f.read().rsplit(")", 1)[1].split()[1])
-            with open(f"/proc/{pid}/cmdline", "rb") as f:
-                argv = f.read().decode(errors="replace").split("\0")
-        except (OSError, IndexError, ValueError):
-            continue
-        out[int(pid)] = (ppid, argv)
-    return out
-
-
-def descendants(procs, roots):
-    found, todo = set(roots), list(roots)
-    while todo:
-        parent = todo.pop()
-        for pid, (ppid, _) in procs.items():
-            if ppid == parent and pid not in found:
-                found.add(pid)
-                todo.append(pid)
-    return found
-
-
-def kill(pids, sig):
-    for pid in pids:
-        try:
-            os.kill(pid, sig)
-        except ProcessLookupError:
-            pass
-
-
-class Cluster:
-    """A head and a second node started with `ray start`, in a temporary folder of their own."""
-
-    def __init__(self, ray_bin, work, workers=1):
-        """`workers` nodes beside the head (the first is "the second node"; the benchmark starts 0 to 2)."""
-        self.ray, self.temp, self.workers = ray_bin, os.path.join(work, "ray"), workers
-        with socket.socket() as s:
-            s.bind(("127.0.0.1", 0))
-            self.port = s.getsockname()[1]
-        self.address = f"127.0.0.1:{self.port}"
-        # Tasks' temporary files (a killed task's included) stay inside the work folder.
-        self.env = dict(os.environ, RAY_USAGE_STATS_ENABLED="0", TMPDIR=os.path.join(work, "tmp"))
-        # A token of its own, for its nodes and drivers only: the GCS listens on the machine's address, and a
-        # token file that another Ray left in ~/.ray must not decide whether this cluster checks tokens.
-        self.env.update(RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=secrets.token_hex(32))
-        # The GCS declares a silent node dead after about 1.5 s (default 3 s x 5 failures + timeouts), so that
-        # section 5 does not wait half a minute for it.
-        self.env.update(RAY_health_check_period_ms="500", RAY_health_check_timeout_ms="500",
-                        RAY_health_check_failure_threshold="3")
-        os.makedirs(self.env["TMPDIR"], exist_ok=True)
-
-    def start(self):
-        common = ["--num-cpus", "1", "--object-store-memory", "100000000", "--temp-dir", self.temp]
-        common += ["--node-ip-address", "127.0.0.1", "--disable-usage-stats"]
-        head = [self.ray, "start", "--head", "--port", str(self.port), "--include-dashboard=false", *common]
-        self.second = [self.ray, "start", "--address", self.address, "--resources", json.dumps({SECOND_NODE: 1}),
-                       *common]
-        others = [self.second] + [[self.ray, "start", "--address", self.address, *common]] * (self.workers - 1)
-        nodes = [(head, self.env)] + [(cmd, dict(self.env, **{SECOND_NODE_ENV: "1"})) for cmd in others[:self.workers]]
-        for cmd, env in nodes:
-            run = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120)
-            if run.returncode != 0:
-                raise AssertionError(f"{' '.join(cmd)} failed:\n{run.stdout}\n{run.stderr}")
-
-    def own(self, procs):
-        """Our cluster's processes: those whose arguments name our temporary folder, and their children."""
-        roots = [pid for pid, (_, argv) in procs.items() if any(self.temp in a for a in argv)]
-        return descendants(procs, roots)
-
-    def node_ids(self):
-        """{"head": id, "second": id} of the nodes, from Ray (in a process of its own, so that this one never
-        attaches to the cluster)."""
-        code = ("import json, ray; ray.init(address=%r, log_to_driver=False); "
-                "print(json.dumps({('second' if %r in n['Resources'] else 'head'): n['NodeID'] "
-                "for n in ray.nodes() if n['Alive']}))" % (self.address, SECOND_NODE))
-        run = subprocess.run([sys.executable, "-c", code], env=self.env, capture_output=True, text=True, timeout=120)
-        check(run.returncode == 0, run.stderr)
-        ids = json.loads(run.stdout.strip().splitlines()[-1])
-        check(set(ids) == {"head", "second"}, f"two alive nodes: {ids}")
-        return ids
-
-    def second_raylet(self, procs):
-        return [
-            pid
-            for pid, (_, argv) in procs.items()
-            if argv and argv[0].endswith("raylet") and any(SECOND_NODE in a for a in argv) and any(self.temp in a for a in argv)
-        ]
-
-    def kill_second_node(self):
-        """SIGKILL to the second node's raylet and everything under it (workers, agents, kelvin): a lost node."""
-        procs = processes()
-        victims = descendants(procs, self.second_raylet(procs))
-        kill(victims, signal.SIGKILL)
-        return sorted(victims)
-
-    def second_node_workers(self):
-        """Worker processes of the second node (children of its raylet that run tasks), and their children."""
-        procs = processes()
-        raylets = self.second_raylet(procs)
-        workers = []
-        for pid, (ppid, argv) in procs.items():
-            title = " ".join(argv)
-            if ppid in raylets and (title.startswith("ray::") or "default_worker.py" in title) and "Agent" not in title:
-                workers.append((pid, title))
-        return workers, procs
-
-    def second_node_busy(self):
-        """The second node's workers that run a tile or a part, and the process table; None if none does."""
-        workers, procs = self.second_node_workers()
-        busy = [(pid, title) for pid, title in workers if "render_tile" in title or "bake_part" in title]
-        return (busy, procs) if busy else None
-
-    def runs_on_second(self, node, timeout):
-        """Whether a task pinned to the second node (id `node`) runs there within `timeout` seconds."""
-        code = ("import ray; from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy as N; "
-                "ray.init(address=%r, log_to_driver=False); "
-                "f = ray.remote(num_cpus=1, max_retries=0)(lambda: ray.get_runtime_context().get_node_id()); "
-                "print(ray.get(f.options(scheduling_strategy=N(%r, soft=False)).remote(), timeout=%r))"
-                % (self.address, node, timeout))
-        try:
-            run = subprocess.run([sys.executable, "-c", code], env=self.env, capture_output=True, text=True,
-                                 timeout=timeout + 60)
-        except subprocess.TimeoutExpired:
-            return False
-        return run.returncode == 0 and run.stdout.strip().endswith(node)
-
-    def restart_second(self):
-        """Replaces the second node by a fresh one (same resources and environment)."""
-        self.kill_second_node()
-        time.sleep(3)  # the GCS declares it dead after about 1.5 s
-        run = subprocess.run(self.second, env=dict(self.env, **{SECOND_NODE_ENV: "1"}), capture_output=True,
-                             text=True, timeout=120)
-        check(run.returncode == 0, f"restarting the second node failed:\n{run.stdout}\n{run.stderr}")
-
-    def stop(self):
-        procs = self.own(processes())
-        kill(procs, signal.SIGTERM)
-        deadline = time.monotonic() + 5
-        while time.monotonic() < deadline and any(os.path.exists(f"/proc/{p}") for p in procs):
-            time.sleep(0.2)
-        kill([p for p in procs if os.path.exists(f"/proc/{p}")], signal.SIGKILL)
-
-
-
-def check(cond, msg):
-    if not cond:
-        raise AssertionError(msg)
 
 
 def kelvin_plan(kelvin, manifest):
@@ -285,10 +135,10 @@ class Section:
         run = subprocess.run(self.command(*extra), env=self.ctx.cluster.env, capture_output=True, text=True, timeout=300)
         return run.returncode, run.stdout + run.stderr
 
-    def start(self):
+    def start(self, *extra):
         """Starts the driver, its output into a log file (a pipe nobody reads could fill and stall it)."""
         self.log = open(os.path.join(self.folder, "driver.log"), "w+")
-        return subprocess.Popen(self.command(), env=self.ctx.cluster.env, stdout=self.log, stderr=subprocess.STDOUT)
+        return subprocess.Popen(self.command(*extra), env=self.ctx.cluster.env, stdout=self.log, stderr=subprocess.STDOUT)
 
     def finish(self, proc, deadline):
         """Waits (bounded) for a started driver; (exit code, output)."""
@@ -520,8 +370,57 @@ def section_resume(ctx):
           f"({sec.elapsed()})", flush=True)
 
 
+def replace_file(path, source):
+    """Gives `path` the contents of `source` at once (a new file renamed over it)."""
+    shutil.copy(source, path + ".new")
+    os.replace(path + ".new", path)
+
+
+def section_changed_scene(ctx):
+    """5. The scene changes under a running job: later tiles fail their input check everywhere; the job fails
+    keeping its finished tiles, and a rerun with the scene restored renders only the missing ones."""
+    sec = Section(ctx, "changed")
+    scene = os.path.join(sec.folder, "box.glb")
+    shutil.copy(BOX, scene)
+    job = dict(ctx.good[1], scene=scene)
+    with open(sec.manifest, "w") as f:
+        json.dump({"jobs": [job]}, f)
+    output = os.path.join(sec.folder, job["output"])
+    tiles = output + ".tiles"
+    staged_tiles = lambda: len([n for n in os.listdir(tiles) if n.endswith(".exr")]) if os.path.isdir(tiles) else 0
+    proc, deadline, swapped = sec.start("--max-retries", "1"), time.monotonic() + 300, False
+    try:
+        while proc.poll() is None and time.monotonic() < deadline:
+            if not swapped and staged_tiles() >= 3:
+                replace_file(scene, LAMP)
+                swapped = True
+            time.sleep(0.05)
+    finally:
+        code, out = sec.finish(proc, deadline)
+    show(out)
+    check(swapped, "the job ended before 3 tiles were staged")
+    check(code == 1, f"the job with a changed scene fails the run: exit code {code}")
+    result, kept = sec.summary(), staged_tiles()
+    detail = result["jobs"]["0"]["detail"]
+    check("differs on this node" in detail and "stay staged" in detail, detail)
+    check(kept >= 3, f"the finished tiles stay staged: {kept}")
+    check(result["retry_log"] and all("differs on this node" in r["cause"] for r in result["retry_log"]),
+          f"{result['retry_log']}")
+    retries = len(result["retry_log"])
+    replace_file(scene, BOX)
+    code, out = sec.run()
+    show(out)
+    result = sec.summary()
+    check(code == 0, f"the rerun with the scene restored failed: exit code {code}")
+    check(result["resumed"] == kept and result["tiles"] == 16 - kept, f"{result}")
+    same_images({k: v for k, v in sec.refs.items() if k in (output, png_of(output))})
+    print(f"5. scene changed mid-run: {retries} retries failed the input check, the job failed "
+          f"keeping {kept} tiles; the rerun rendered the {16 - kept} missing ones, byte-identical ({sec.elapsed()})",
+          flush=True)
+
+
 def section_node_death(ctx):
-    """5. The whole second node killed mid-run: its tiles are retried on the head."""
+    """6. The whole second node killed mid-run: its tiles are retried on the head."""
     second_node_back(ctx)
     sec = Section(ctx, "node-death")
     proc, victims, deadline = sec.start(), [], time.monotonic() + 300
@@ -544,7 +443,7 @@ def section_node_death(ctx):
     kinds = retries_from_second(ctx, result)
     check(result["nodes"].get(ctx.ids["second"], {}).get("tiles"), f"the second node rendered before: {result['nodes']}")
     tiles = {("second" if k == ctx.ids["second"] else "head"): v["tiles"] for k, v in result["nodes"].items()}
-    print(f"5. second node killed after {tiles['second']} tiles; retries on the head {kinds}; outputs byte-identical "
+    print(f"6. second node killed after {tiles['second']} tiles; retries on the head {kinds}; outputs byte-identical "
           f"({sec.elapsed()})", flush=True)
 
 
@@ -555,21 +454,21 @@ class Context:
         self.kelvin, self.work, self.cluster, self.started = kelvin, work, cluster, time.monotonic()
         self.good = [
             {"name": "room", "output": "out/room.exr", "size": "96x72", "spp": 128},
-            {"name": "box-spectral", "scene": os.path.join(REPO, "tests/data/gltf/bevy/CornellBox.glb"),
+            {"name": "box-spectral", "scene": BOX,
              "output": "out/box.exr", "size": "80x80", "spp": 128, "settings": {"color": "spectral", "seed": 3}},
             {"name": "room-env-camera", "output": "out/env.exr", "size": "96x48", "spp": 128,
              "camera": {"environment_at": [0, 1, 0]}, "settings": {"light_sampler": "power"}},
             # Two frames of an animation: two jobs of 16 tiles.
-            {"name": "lamp", "scene": os.path.join(REPO, "tests/data/gltf/kelvin/animated_lamp.gltf"),
+            {"name": "lamp", "scene": LAMP,
              "output": "out/lamp_#.exr", "frames": "3..4", "fps": 4, "size": "48x32", "spp": 16},
             # ReSTIR's reuse does not tile: one task renders it whole; its exposure reaches the PNG.
             {"name": "room-restir", "output": "out/restir.exr", "size": "40x30", "spp": 8,
              "settings": {"light_sampler": "restir", "exposure": 1.5}},
             # Lightmaps baked in 5 parts on the cluster and merged.
-            {"name": "box-lightmaps", "bake": "lightmaps", "scene": os.path.join(REPO, "tests/data/gltf/bevy/CornellBox.glb"),
+            {"name": "box-lightmaps", "bake": "lightmaps", "scene": BOX,
              "output": "out/maps", "parts": 5, "settings": {"size": 24, "spp": 16, "seed": 2}},
             # A chunk of 3 frames: one task renders them whole in one process.
-            {"name": "lamp-chunk", "scene": os.path.join(REPO, "tests/data/gltf/kelvin/animated_lamp.gltf"),
+            {"name": "lamp-chunk", "scene": LAMP,
              "output": "out/chunk_##.exr", "frames": "5-9x2", "chunk": 3, "fps": 4, "size": "48x32", "spp": 16},
         ]
         bad = [
@@ -606,6 +505,7 @@ def main():
         section_killed_workers(ctx)
         section_broken_binary(ctx)
         section_resume(ctx)
+        section_changed_scene(ctx)
         section_node_death(ctx)  # last: the cluster has one node after it
     finally:
         cluster.stop()

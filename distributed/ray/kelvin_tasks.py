@@ -1,0 +1,197 @@
+"""What runs on the nodes for kelvin_ray.py: one Ray task per tile, bake part or chunk of frames, each running one
+kelvin command in a temporary folder and returning its files' bytes, and the failures they raise.
+
+Before and after its kelvin runs, a task checks that its node holds the files the driver planned with (the kelvin
+binary, the job's scene and environment map) with the same SHA-256: a node with another build or another copy of a
+scene would render tiles that merge with seams, and a file replaced while kelvin read it gives a tile of neither.
+A node that differs raises TaskFault, so the tile is retried elsewhere. (`kelvin merge` checks the tiles'
+provenance again: the last word on what merges.)
+
+The driver sends this module's code to the workers by value (ray.cloudpickle.register_pickle_by_value), so nodes
+need neither this file nor the driver's folder on their path.
+"""
+
+import ctypes
+import hashlib
+import io
+import os
+import resource
+import signal
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+
+import ray
+
+
+class TileFailed(Exception):
+    """kelvin itself refused or failed a tile: retrying would fail the same way, anywhere."""
+
+
+class TaskFault(Exception):
+    """The tile failed for a reason of its node, not of the job (kelvin killed, timed out or not executable):
+    worth retrying elsewhere. Carries the node so that the driver can avoid it."""
+
+    def __init__(self, node, message):
+        super().__init__(node, message)
+        self.node, self.message = node, message
+
+    def __str__(self):
+        return self.message
+
+
+@ray.remote(num_cpus=0)
+class Whereabouts:
+    """Which node each task attempt started on. A task whose worker or node dies cannot say where it ran, and
+    Ray's errors for it (WorkerCrashedError, NodeDiedError) do not name the node; the driver asks here."""
+
+    def __init__(self):
+        self.nodes = {}
+
+    def started(self, attempt, node):
+        self.nodes[attempt] = node
+
+    def node_of(self, attempt):
+        return self.nodes.get(attempt)
+
+
+def die_with_parent():
+    """Runs in the kelvin child before exec: the kernel kills kelvin when its worker dies, so that a killed
+    worker (or node) does not leave an orphan render eating a CPU that its retry needs."""
+    PR_SET_PDEATHSIG = 1
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+
+
+def run_kelvin(cmd, what, timeout, node):
+    """Runs one kelvin command; raises TaskFault for failures of the node and TileFailed for kelvin's own."""
+    preexec = die_with_parent if sys.platform.startswith("linux") else None
+    try:
+        run = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, preexec_fn=preexec)
+    except subprocess.TimeoutExpired:
+        raise TaskFault(node, f"{what}: kelvin took over {timeout} s")
+    except OSError as e:
+        raise TaskFault(node, f"{what}: cannot run {cmd[0]}: {e}")
+    lines = [l for l in run.stderr.splitlines() if l.strip()]
+    last = lines[-1] if lines else "no message"
+    if run.returncode < 0:
+        raise TaskFault(node, f"{what}: kelvin was killed by {signal.Signals(-run.returncode).name}")
+    if run.returncode in (126, 127):
+        raise TaskFault(node, f"{what}: {cmd[0]} could not be executed (exit code {run.returncode}): {last}")
+    if run.returncode != 0:
+        # kelvin's own errors (1, 2) and panics (101) repeat on any node: kelvin is deterministic.
+        raise TileFailed(f"{what}: {last}")
+
+
+# The digests this worker process has computed, by (path, inode, size, modification time): a file is hashed once per
+# worker, not once per task.
+_digests = {}
+
+
+def digest(path):
+    """`sha256:` and the hex SHA-256 of the file at `path`, as kelvin writes digests (`inputs` of its plan)."""
+    st = os.stat(path)
+    key = (path, st.st_ino, st.st_size, st.st_mtime_ns)
+    if key not in _digests:
+        h = hashlib.sha256()
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+        _digests[key] = "sha256:" + h.hexdigest()
+    return _digests[key]
+
+
+def check_inputs(inputs, node, what):
+    """Raises TaskFault unless this node holds every file of `inputs` (path -> digest) with that digest."""
+    for path, want in inputs.items():
+        try:
+            have = digest(path)
+        except OSError as e:
+            raise TaskFault(node, f"{what}: {path}: {e.strerror} on this node")
+        if have != want:
+            raise TaskFault(node, f"{what}: {path} differs on this node ({have[:19]}..., the driver's "
+                                  f"{want[:19]}...)")
+
+
+def report_start(tracker, attempt):
+    """Tells the tracker where this attempt runs (waiting for it, so a kill right after cannot lose it). Only a
+    hint for choosing a retry's node: a tracker that cannot be reached does not fail the tile."""
+    node = ray.get_runtime_context().get_node_id()
+    try:
+        ray.get(tracker.started.remote(attempt, node), timeout=60)
+    except ray.exceptions.RayError:
+        pass
+    return node
+
+
+@ray.remote
+def render_tile(kelvin, inputs, args, crop, threads, timeout, tracker, attempt):
+    """Runs `kelvin render ARGS --crop ...` in a temporary folder; returns (EXR bytes, node, seconds,
+    kelvin's CPU seconds)."""
+    start, cpu = time.monotonic(), cpu_seconds()
+    node = report_start(tracker, attempt)
+    crop_arg = ",".join(map(str, crop))
+    check_inputs(inputs, node, f"tile {crop_arg}")
+    try:
+        with tempfile.TemporaryDirectory(prefix="kelvin-tile-") as tmp:
+            out = os.path.join(tmp, "tile.exr")
+            cmd = [kelvin, "render", *args, "--crop", crop_arg, "--threads", str(threads), "-o", out]
+            run_kelvin(cmd, f"tile {crop_arg}", timeout, node)
+            check_inputs(inputs, node, f"tile {crop_arg}")  # not changed while kelvin read them
+            with open(out, "rb") as f:
+                return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
+    except OSError as e:  # the node's temporary disk, not the job
+        raise TaskFault(node, f"tile {crop_arg}: {e}")
+
+
+@ray.remote
+def bake_part(kelvin, inputs, args, part, parts, threads, timeout, tracker, attempt):
+    """Runs `kelvin bake ARGS --part PART/PARTS` in a temporary folder; returns (part file bytes, node,
+    seconds, kelvin's CPU seconds)."""
+    start, cpu = time.monotonic(), cpu_seconds()
+    node = report_start(tracker, attempt)
+    what = f"part {part}/{parts}"
+    check_inputs(inputs, node, what)
+    try:
+        with tempfile.TemporaryDirectory(prefix="kelvin-bake-") as tmp:
+            # A volume is written as .ktx2 (its parts beside it), lightmaps into a folder.
+            out = os.path.join(tmp, "out.ktx2" if args[0] == "volume" else "out")
+            cmd = [kelvin, "bake", *args, "--part", f"{part}/{parts}", "--threads", str(threads), "-o", out]
+            run_kelvin(cmd, what, timeout, node)
+            check_inputs(inputs, node, what)  # not changed while kelvin read them
+            found = [os.path.join(d, f) for d, _, fs in os.walk(tmp) for f in fs if f.endswith(".kbake")]
+            if len(found) != 1:
+                raise TileFailed(f"{what}: kelvin bake wrote {len(found)} part files")
+            with open(found[0], "rb") as f:
+                return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
+    except OSError as e:
+        raise TaskFault(node, f"{what}: {e}")
+
+
+@ray.remote
+def render_chunk(kelvin, inputs, args, pattern, threads, timeout, tracker, attempt):
+    """Runs `kelvin render ARGS` for a chunk of frames (whole frames, one process) in a temporary folder; returns
+    (a tar of every file it wrote, named as the job's output pattern numbers them, node, seconds, CPU seconds)."""
+    start, cpu = time.monotonic(), cpu_seconds()
+    node = report_start(tracker, attempt)
+    what = f"frames {args[args.index('--frames') + 1]}"
+    check_inputs(inputs, node, what)
+    try:
+        with tempfile.TemporaryDirectory(prefix="kelvin-chunk-") as tmp:
+            cmd = [kelvin, "render", *args, "--threads", str(threads), "-o", os.path.join(tmp, pattern)]
+            run_kelvin(cmd, what, timeout, node)
+            check_inputs(inputs, node, what)  # not changed while kelvin read them
+            packed = io.BytesIO()
+            with tarfile.open(fileobj=packed, mode="w") as tar:
+                for name in sorted(os.listdir(tmp)):
+                    tar.add(os.path.join(tmp, name), arcname=name)
+            return packed.getvalue(), node, time.monotonic() - start, cpu_seconds() - cpu
+    except OSError as e:
+        raise TaskFault(node, f"{what}: {e}")
+
+
+def cpu_seconds():
+    """User and system CPU seconds of this process's finished children (a worker runs one task at a time)."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
