@@ -1,6 +1,7 @@
 //! `kelvin bake volume`: ambient cubes against closed forms (a uniform sky on every side; light from
 //! +X only on the +X side alone, read face by face from the KTX2 file in Bevy's layout), voxels
-//! inside geometry filled from their neighbours, bad input.
+//! inside geometry filled from their neighbours, bad input, and the layout against the volume Bevy
+//! ships for its example scene.
 
 mod common;
 
@@ -159,4 +160,79 @@ fn bad_input_gives_clear_errors() {
     assert!(err.contains("no-such.glb: file not found"), "{err}");
     let err = kelvin(&["bake", "volume", "no-such.glb", "-o", "never.exr", "--resolution", "2,2,2"]);
     assert!(err.contains("never.exr: the volume is written as .ktx2"), "{err}");
+}
+
+/// Against the irradiance volume Bevy ships (`Example.vxgi.ktx2`, baked in Blender by
+/// export-blender-gi for `IrradianceVolumeExample.glb`: a floor of four coloured quadrants under the
+/// volume). kelvin bakes the same file, under a white sky, over the box the Bevy example places the
+/// volume in. Bevy's probe transform maps its voxel x to world -x, y to world z and z to world y,
+/// while the sides stay world axes (its shader samples them with the world normal). Read in the
+/// layout Bevy's shader samples, negative sides in the upper half of each slice (as kelvin writes
+/// them), the colour each side bounces from the floor, the red-blue chromaticity, follows kelvin's
+/// voxel for voxel on every side that sees the floor. Read with positive sides in the upper half
+/// (as the doc comment of Bevy's irradiance_volume.rs has it), the down-facing side does not.
+#[test]
+fn the_layout_matches_bevys_own_volume_side_by_side() {
+    use common::files::test_data;
+    let bytes = std::fs::read(test_data("bake/bevy/Example.vxgi.ktx2")).unwrap();
+    let reader = ktx2::Reader::new(&bytes[..]).unwrap();
+    let header = reader.header();
+    assert_eq!(header.format, Some(ktx2::Format::E5B9G9R9_UFLOAT_PACK32));
+    let (w, h) = (header.pixel_width, header.pixel_height);
+    let rb = UVec3::new(w, h / 2, header.pixel_depth / 3);
+    assert_eq!(rb, UVec3::new(8, 8, 3));
+    let raw = reader.levels().next().unwrap().data.to_vec(); // no supercompression in Bevy's file
+    let bevy = |v: UVec3, axis: u32, upper: bool| {
+        let (t, p) = (v.y + if upper { rb.y } else { 0 }, v.z + axis * rb.z);
+        let k = 4 * ((p * h + t) * w + v.x) as usize;
+        Format::E5B9G9R9.unpack(u32::from_le_bytes(raw[k..k + 4].try_into().unwrap()))
+    };
+
+    // The example's probe: a [-0.5, 0.5]^3 cube scaled by (42.317566, 44.601563, 16.73776) onto world
+    // (-x, z, y), centred at y = 6.544792 (examples/3d/irradiance_volumes.rs, VOXEL_FROM_WORLD).
+    let half = Vec3::new(42.317566, 16.73776, 44.601563) / 2.0;
+    let centre = Vec3::new(0.0, 6.544792, 0.0);
+    let scene = test_data("gltf/bevy/IrradianceVolumeExample.glb");
+    let mut loaded = RenderJob { scene: Some(scene), seed: 5, ..RenderJob::default() }.load().unwrap();
+    sky(&mut loaded.world);
+    let resolution = UVec3::new(rb.x, rb.z, rb.y);
+    let opts = VolumeOptions { spp: 64, ..options(resolution, (centre - half, centre + half)) };
+    let volume = bake_volume(&mut loaded, &opts, |_| {}).unwrap();
+    let kelvin = |v: UVec3, side: usize| {
+        let (i, j, k) = (rb.x - 1 - v.x, v.z, v.y);
+        volume.sides[((k * resolution.y + j) * resolution.x + i) as usize][side]
+    };
+
+    let red_blue = |c: Vec3| (c.x - c.z) as f64 / (c.x + c.y + c.z).max(1e-9) as f64;
+    let correlation = |side: usize, upper_if_negative: bool| {
+        let (axis, negative) = (side as u32 / 2, SIDES[side].min_element() < 0.0);
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for z in 0..rb.z {
+            for y in 0..rb.y {
+                for x in 0..rb.x {
+                    let v = UVec3::new(x, y, z);
+                    a.push(red_blue(kelvin(v, side)));
+                    b.push(red_blue(bevy(v, axis, negative == upper_if_negative)));
+                }
+            }
+        }
+        correlation(&a, &b)
+    };
+    let down = SIDES.iter().position(|s| *s == Vec3::NEG_Y).unwrap();
+    for (side, dir) in SIDES.iter().enumerate().filter(|(_, d)| d.y <= 0.0) {
+        let (shader, doc) = (correlation(side, true), correlation(side, false));
+        assert!(shader > 0.8 && shader > doc, "side {dir}: correlation {shader} in the shader's layout, {doc} in the doc's");
+        if side == down {
+            assert!(shader > 0.9 && doc.abs() < 0.2, "down: {shader} against {doc}");
+        }
+    }
+}
+
+/// Pearson's correlation of two samples.
+fn correlation(a: &[f64], b: &[f64]) -> f64 {
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (ma, mb) = (mean(a), mean(b));
+    let cov: f64 = a.iter().zip(b).map(|(x, y)| (x - ma) * (y - mb)).sum();
+    let var = |v: &[f64], m: f64| v.iter().map(|x| (x - m) * (x - m)).sum::<f64>();
+    cov / (var(a, ma) * var(b, mb)).sqrt()
 }
