@@ -5,7 +5,7 @@
 
 use bevy_ecs::prelude::*;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use kelvin::render::renderer::{RenderOptions, render};
+use kelvin::render::renderer::{Integrator, RenderOptions, render};
 use kelvin::report::render_bench::{RenderBenchConfig, SUITE, suite_options};
 use kelvin::systems::LightingPlugin;
 
@@ -37,14 +37,14 @@ const SUITE_SPP: u32 = 4;
 
 fn bench_suite(c: &mut Criterion) {
     let data_dir = RenderBenchConfig::default().data_dir;
-    let opts = suite_options(128, 128, SUITE_SPP);
+    let opts = suite_options(128, 128, SUITE_SPP, Integrator::Direct);
     let mut group = c.benchmark_group("suite_128x128_4spp");
     group.sample_size(10).throughput(Throughput::Elements(128 * 128 * SUITE_SPP as u64));
     group.warm_up_time(std::time::Duration::from_secs(1)).measurement_time(std::time::Duration::from_secs(3));
     for scene in SUITE {
         let (mut world, mut schedule, _) = scene.world(&data_dir).unwrap_or_else(|e| panic!("{}: {e}", scene.name));
         // The first render builds the scene BVH, light table and sampler; the timed ones reuse them.
-        render(&mut world, &mut schedule, &suite_options(128, 128, 1), |_| {});
+        render(&mut world, &mut schedule, &suite_options(128, 128, 1, Integrator::Direct), |_| {});
         group.bench_function(scene.name, |b| b.iter(|| render(&mut world, &mut schedule, &opts, |_| {})));
     }
     group.finish();

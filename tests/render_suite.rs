@@ -7,7 +7,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 use kelvin::geometry::Transform;
 use kelvin::light::{Amount, PointLight, SpotLight};
-use kelvin::render::renderer::render;
+use kelvin::render::renderer::{Integrator, render};
 use kelvin::report::render_bench::{SUITE, suite_options, suite_scene};
 use kelvin::spectrum::Spectrum;
 
@@ -24,12 +24,40 @@ fn every_suite_scene_loads_and_renders_lit() {
         }
         let (mut world, mut schedule, report) = scene.world(&data).unwrap_or_else(|e| panic!("{}: {e}", scene.name));
         assert!(report.meshes > 0, "{}: no meshes", scene.name);
-        let (film, stats) = render(&mut world, &mut schedule, &suite_options(16, 16, 1), |_| {});
+        let (film, stats) = render(&mut world, &mut schedule, &suite_options(16, 16, 1, Integrator::Direct), |_| {});
         assert_eq!(stats.camera_samples, 256);
         let sum: f32 = film.pixels().iter().map(|c| c.x + c.y + c.z).sum();
         assert!(sum.is_finite() && sum > 0.0, "{}: black or non-finite render ({sum})", scene.name);
         assert!(scene.default_spp(128, 128) == scene.spp_128 && scene.default_spp(256, 256) >= 1);
     }
+}
+
+/// The suite measures both integrators: on points (point lights only) direct lighting traces no
+/// BSDF ray, while the path tracer at depth 2 continues every path that finds a surface with one;
+/// at depth 1 the path tracer is direct lighting, ray for ray.
+#[test]
+fn the_suite_runs_the_path_tracer_too() {
+    use kelvin::render::path::PathDepth;
+    use kelvin::report::render_bench::{RenderBenchConfig, run_scene};
+    let scene = suite_scene("points").unwrap();
+    let run = |integrator| {
+        let cfg = RenderBenchConfig {
+            data_dir: test_data(""),
+            width: 16,
+            height: 16,
+            spp: Some(2),
+            repeat: 1,
+            integrator,
+            ..RenderBenchConfig::default()
+        };
+        run_scene(scene, &cfg).unwrap()
+    };
+    let depth = |d| Integrator::Path(PathDepth { max_depth: d, ..PathDepth::DEFAULT });
+    let (direct, one, two) = (run(Integrator::Direct), run(depth(1)), run(depth(2)));
+    assert_eq!((direct.integrator.as_str(), two.integrator.as_str()), ("direct", "path, depth 2"));
+    assert_eq!((direct.bsdf_rays, one.bsdf_rays), (0, 0));
+    assert_eq!(one.shadow_rays, direct.shadow_rays);
+    assert!(two.bsdf_rays > 0 && two.shadow_rays > direct.shadow_rays, "{} BSDF rays", two.bsdf_rays);
 }
 
 #[test]

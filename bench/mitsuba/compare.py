@@ -3,11 +3,14 @@
 
     python3 bench/mitsuba/compare.py --python /tmp/mitsuba-venv/bin/python [--size 128x128] [--spp N]
         [--scenes a,b] [--rounds 1] [--repeat 3] [--kelvin target/release/kelvin] [--json-out FILE]
+        [--integrator direct|path] [--max-depth 5]
 
 For each scene of `kelvin bench render --list`, one renderer at a time: kelvin's
 `bench render --scenes NAME --size S --json` (which names the file, the environment map and the spp it used),
 then Mitsuba's mitsuba_gltf.py (beside this script) on the same file, size and spp, with `--integrator direct`
-and the same --env/--env-intensity. With --rounds R > 1 the pair is repeated R times (alternating) and each
+and the same --env/--env-intensity. With `--integrator path --max-depth D`, kelvin's path tracer at depth D (D
+surfaces after the camera's, roulette from kelvin's default depth 3) against Mitsuba's `path` with max_depth D + 1
+(Mitsuba counts the camera's segment) and rr_depth 3; M samples/s are camera samples (paths) per second. With --rounds R > 1 the pair is repeated R times (alternating) and each
 renderer's best round counts. Both time the best of --repeat renders after a warm-up, loading excluded.
 Prints a Markdown table (scene | spp | kelvin M samples/s | Mitsuba M samples/s | ratio kelvin/Mitsuba) and the
 geometric mean of the ratios. Progress and both renderers' logs go to stderr.
@@ -63,6 +66,8 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3, help="timed renders per run, for both (default 3)")
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--json-out", default=None, help="write every run's JSON here")
+    ap.add_argument("--integrator", choices=["direct", "path"], default="direct")
+    ap.add_argument("--max-depth", type=int, default=5, help="kelvin's path depth with --integrator path (default 5)")
     args = ap.parse_args(argv)
     if not args.python:
         raise SystemExit("give the Mitsuba venv's python with --python or MITSUBA_PYTHON (see README.md)")
@@ -85,13 +90,16 @@ def main(argv=None):
     for name in names:
         k_runs, m_runs = [], []
         for _ in range(max(1, args.rounds)):
-            cmd = [kelvin, "bench", "render", "--scenes", name, "--size", args.size, "--repeat", args.repeat, "--json"]
+            cmd = [kelvin, "bench", "render", "--scenes", name, "--size", args.size, "--repeat", args.repeat, "--json",
+                   "--integrator", args.integrator, "--max-depth", args.max_depth]
             if args.spp:
                 cmd += ["--spp", args.spp]
             row = run(cmd, f"kelvin on {name}")["rows"][0]
             k_runs.append(row)
             cmd = [args.python, HERE / "mitsuba_gltf.py", row["file"], "--size", args.size, "--spp", row["spp"],
-                   "--variant", args.variant, "--integrator", "direct", "--repeat", args.repeat, "--json"]
+                   "--variant", args.variant, "--integrator", args.integrator, "--repeat", args.repeat, "--json"]
+            if args.integrator == "path":
+                cmd += ["--max-depth", args.max_depth + 1, "--rr-depth", 3]
             if row.get("env"):
                 cmd += ["--env", row["env"], "--env-intensity", row["env_intensity"]]
             m_runs.append(run(cmd, f"Mitsuba on {name}", env))
@@ -100,7 +108,8 @@ def main(argv=None):
         results.append({"scene": name, "spp": k_runs[0]["spp"], "kelvin": k, "mitsuba": m, "ratio": k / m,
                         "kelvin_runs": k_runs, "mitsuba_runs": m_runs})
 
-    print(f"\n{args.size}, {args.variant} direct for Mitsuba, best of {args.repeat} renders"
+    how = "direct" if args.integrator == "direct" else f"path max_depth {args.max_depth + 1} (kelvin depth {args.max_depth})"
+    print(f"\n{args.size}, {args.variant} {how} for Mitsuba, best of {args.repeat} renders"
           f" x {max(1, args.rounds)} round(s)\n")
     print("| scene | spp | kelvin M samples/s | Mitsuba M samples/s | ratio |")
     print("|---|---:|---:|---:|---:|")

@@ -418,8 +418,9 @@ fn volume(args: VolumeArgs) -> Result<(), CliError> {
 fn lightmaps(args: LightmapArgs) -> Result<(), CliError> {
     let common = &args.common;
     let opts = args.options();
-    let provenance = args.provenance()?;
+    // After the load, which names a missing or broken scene or map better than hashing it would.
     let mut loaded = common.load(&args.scene)?;
+    let provenance = args.provenance()?;
     let folder = args.output.join("parts");
     let scene = args.scene.display();
     let report = if common.merge {

@@ -5,6 +5,9 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
+use kelvin::render::job::{self, IntegratorChoice};
+use kelvin::render::path::PathDepth;
+use kelvin::render::renderer::Integrator;
 use kelvin::report::lights::{LightBenchConfig, format_tables, run_light_bench, write_plots};
 use kelvin::report::render_bench::{RenderBenchConfig, SUITE, format_table, run_render_bench, to_json};
 
@@ -21,8 +24,8 @@ enum BenchCommand {
     /// Light samplers against the number of lights: time per sample, relative RMSE at equal
     /// time, and update time when lights move (scaling scene + emissive-panel room).
     Lights(LightsArgs),
-    /// Render throughput on the suite of real glTF files (direct lighting, MIS, light BVH):
-    /// seconds, M samples/s, M shadow rays/s and M BSDF rays/s per scene.
+    /// Render throughput on the suite of real glTF files (direct lighting or the path tracer, MIS,
+    /// light BVH): seconds, M samples/s, M shadow rays/s and M BSDF rays/s per scene.
     Render(RenderArgs),
 }
 
@@ -47,6 +50,13 @@ struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = values::threads())]
     threads: Option<usize>,
+    /// Direct lighting (as Mitsuba's `direct`), or the path tracer (as Mitsuba's `path`).
+    #[arg(long, value_enum, default_value = "direct")]
+    integrator: IntegratorChoice,
+    /// With `--integrator path`: surfaces after the camera's a path may reach (Mitsuba's
+    /// max_depth is one more).
+    #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth, value_parser = values::whole(job::DEPTH))]
+    max_depth: u32,
     /// After the table, print every row (counts, pass times, warnings) as one line of JSON.
     #[arg(long)]
     json: bool,
@@ -113,6 +123,10 @@ fn render(a: RenderArgs) -> Result<(), CliError> {
         spp: a.spp,
         repeat: a.repeat,
         scenes: a.scenes,
+        integrator: match a.integrator {
+            IntegratorChoice::Direct => Integrator::Direct,
+            IntegratorChoice::Path => Integrator::Path(PathDepth { max_depth: a.max_depth, ..PathDepth::DEFAULT }),
+        },
     };
     let rows = run_render_bench(&cfg, |line| eprintln!("{line}")).map_err(|e| e.to_string())?;
     print!("{}", format_table(&rows));

@@ -304,7 +304,8 @@ pub(super) struct BounceRules {
 impl ShadeContext<'_> {
     /// Sample `j` as surface `depth` (0 = the path's first) of a path with throughput `beta`: its
     /// emission when the rules count it, its light samples, and the BSDF sample that continues
-    /// the path (always traced, for MIS, unless roulette ends it).
+    /// the path (traced for MIS unless roulette ends it, or the path ends here and no light could
+    /// be found by it).
     pub(super) fn shade_path_vertex(&self, j: usize, depth: u32, beta: SampledSpectrum, rules: BounceRules) -> Bounce {
         let (surface, bsdf) = self.surface_and_bsdf(j);
         // Emission found by later BSDF rays is added, MIS-weighted, where they are traced.
@@ -316,6 +317,11 @@ impl ShadeContext<'_> {
             l = l.add(self.light_samples(j, &bsdf));
         }
         let radiance = beta.mul(l);
+        // The last surface's BSDF ray only looks for emitters: none to find (delta lights only, or
+        // light samples alone), none traced.
+        if rules.last && !self.bsdf_sampling() {
+            return Bounce { radiance, next: None };
+        }
         let dim = BSDF_DIMENSION + depth * BSDF_DIMENSIONS;
         // Lobe, direction and roulette: one set of the stream.
         let mut rng = self.stream(j, dim);

@@ -139,14 +139,15 @@ impl SuiteScene {
 }
 
 /// The render options of the suite: MIS, `width` x `height`, `spp`.
-pub fn suite_options(width: u32, height: u32, spp: u32) -> RenderOptions {
-    RenderOptions {
-        width,
-        height,
-        spp: spp.max(1),
-        strategy: Strategy::Mis,
-        integrator: Integrator::Direct,
-        ..Default::default()
+pub fn suite_options(width: u32, height: u32, spp: u32, integrator: Integrator) -> RenderOptions {
+    RenderOptions { width, height, spp: spp.max(1), strategy: Strategy::Mis, integrator, ..Default::default() }
+}
+
+/// How a row names its integrator: "direct", or "path, depth N".
+pub fn integrator_name(integrator: Integrator) -> String {
+    match integrator {
+        Integrator::Direct => "direct".into(),
+        Integrator::Path(depth) => format!("path, depth {}", depth.max_depth),
     }
 }
 
@@ -165,6 +166,8 @@ pub struct RenderBenchConfig {
     pub repeat: usize,
     /// Scene names; the whole suite when empty.
     pub scenes: Vec<String>,
+    /// Direct lighting (the default, as Mitsuba's `direct`) or the path tracer (Mitsuba's `path`).
+    pub integrator: Integrator,
 }
 
 impl Default for RenderBenchConfig {
@@ -176,6 +179,7 @@ impl Default for RenderBenchConfig {
             spp: None,
             repeat: 3,
             scenes: Vec::new(),
+            integrator: Integrator::Direct,
         }
     }
 }
@@ -214,6 +218,8 @@ pub struct RenderBenchRow {
     pub height: u32,
     /// Samples per pixel of the timed renders.
     pub spp: u32,
+    /// The integrator ([`integrator_name`]).
+    pub integrator: String,
     /// Rayon worker threads.
     pub threads: usize,
     /// Meshes spawned from the file.
@@ -269,10 +275,10 @@ pub fn run_scene(scene: &SuiteScene, cfg: &RenderBenchConfig) -> Result<RenderBe
     let (mut world, mut schedule, spawned) =
         scene.world(&cfg.data_dir).map_err(|e| format!("scene {}: {e}", scene.name))?;
     let seconds_load = load_start.elapsed().as_secs_f64();
-    let (_, setup) = render(&mut world, &mut schedule, &suite_options(width, height, 1), |_| {});
+    let (_, setup) = render(&mut world, &mut schedule, &suite_options(width, height, 1, cfg.integrator), |_| {});
     let mut warnings = spawned.warnings.clone();
     warnings.extend(setup.report.warnings.iter().cloned());
-    let opts = suite_options(width, height, spp);
+    let opts = suite_options(width, height, spp, cfg.integrator);
     let mut best: Option<RenderStats> = None;
     let mut seconds_all = Vec::new();
     for _ in 0..cfg.repeat.max(1) {
@@ -293,6 +299,7 @@ pub fn run_scene(scene: &SuiteScene, cfg: &RenderBenchConfig) -> Result<RenderBe
         width,
         height,
         spp,
+        integrator: integrator_name(cfg.integrator),
         threads: rayon::current_num_threads(),
         meshes: spawned.meshes,
         triangles: spawned.triangles,
@@ -339,13 +346,14 @@ pub fn run_render_bench(
 pub fn format_table(rows: &[RenderBenchRow]) -> String {
     use std::fmt::Write;
     let mut s = String::new();
-    let _ = writeln!(s, "| scene | size | spp | seconds | M samples/s | M shadow rays/s | M BSDF rays/s |");
-    let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|");
+    let _ = writeln!(s, "| scene | integrator | size | spp | seconds | M samples/s | M shadow rays/s | M BSDF rays/s |");
+    let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|");
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {}x{} | {} | {:.3} | {:.2} | {:.2} | {:.2} |",
+            "| {} | {} | {}x{} | {} | {:.3} | {:.2} | {:.2} | {:.2} |",
             r.scene,
+            r.integrator,
             r.width,
             r.height,
             r.spp,
