@@ -170,7 +170,8 @@ def pieces_of(i, job, tiles):
         return [Piece(i, k, f"part {k + 1}/{n}", (k + 1, n), os.path.join(job.staging, f"part-{k + 1}-of-{n}.kbake"))
                 for k in range(n)]
     if job.chunk:
-        job.staging = entry["output"] + ".chunk"
+        # Beside the job's output pattern, one folder per chunk (the chunks of a job share the pattern).
+        job.staging = f"{entry['output']}.chunk-{entry['frames'][0]}-{entry['frames'][-1]}"
         frames = entry["frames"]
         return [Piece(i, 0, f"frames {frames[0]}-{frames[-1]}", (), os.path.join(job.staging, "frames.tar"))]
     # A job whose tiles would not merge into its image (ReSTIR's reuse) renders as one tile.

@@ -106,7 +106,7 @@ def pieces(job):
         n = job["parts"]
         return [os.path.join(job["parts_dir"], f"part-{k}-of-{n}.kbake") for k in range(1, n + 1)]
     if len(job["frames"]) > 1:
-        return [os.path.join(job["output"] + ".chunk", "frames.tar")]
+        return [os.path.join(f"{job['output']}.chunk-{job['frames'][0]}-{job['frames'][-1]}", "frames.tar")]
     crops = tile_grid(job["width"], job["height"], 1 if job["untileable"] else 16)
     return [os.path.join(job["output"] + ".tiles", "_".join(map(str, c)) + ".exr") for c in crops]
 

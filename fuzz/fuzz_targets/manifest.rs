@@ -3,8 +3,9 @@
 //! and IES files can name real files. The `kelvin` program's own `cli` module is compiled in, since
 //! the manifest is parsed by its `render` and `bake` argument definitions. An error is fine; a panic
 //! is a crash, and so is an accepted job that breaks the plan's promises: a render job has a .exr or
-//! .png output, a size and arguments that parse again; no two accepted jobs write one output; the
-//! plan prints as JSON.
+//! .png output, a size and arguments that parse again; no two accepted jobs write one file (a
+//! chunk writes each of its frames); the plan prints as JSON. libFuzzer's slow-unit reports count
+//! too: the first hour found a manifest whose plan took 416 s under ASan.
 #![no_main]
 
 #[allow(dead_code, unused_imports)]
@@ -23,7 +24,9 @@ fuzz_target!(|data: &[u8]| {
     serde_json::to_string(&serde_json::json!({ "jobs": jobs })).expect("the plan prints");
     let mut outputs = HashSet::new();
     for job in jobs.iter().filter(|j| j.error.is_none()) {
-        assert!(outputs.insert(job.output.clone()), "two accepted jobs write {}", job.output.display());
+        for output in job.outputs() {
+            assert!(outputs.insert(output.clone()), "two accepted jobs write {}", output.display());
+        }
         if job.command == "render" {
             let ext = job.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
             assert!(matches!(ext.as_deref(), Some("exr" | "png")), "output {}", job.output.display());

@@ -127,7 +127,19 @@ impl PlannedJob {
     pub fn render_args(&self, output: &Path) -> Result<RenderArgs, String> {
         parse_render_args(&self.args, output)
     }
+
+    /// The images (or bake output) the job writes: a chunk's `output` is its job's pattern, and it
+    /// writes one image per frame.
+    pub fn outputs(&self) -> Vec<PathBuf> {
+        match self.frames.as_slice() {
+            [_, _, ..] => self.frames.iter().filter_map(|&k| frame_path(&self.output, k).ok()).collect(),
+            _ => vec![self.output.clone()],
+        }
+    }
 }
+
+/// Most writers a "written by" error names.
+const NAMED_WRITERS: usize = 3;
 
 #[derive(Parser)]
 #[command(name = "kelvin render")]
@@ -170,13 +182,22 @@ pub fn plan_text(text: &str, path: &Path) -> Result<Vec<PlannedJob>, String> {
     // file "done"): both are errors, named.
     let mut writers: std::collections::HashMap<PathBuf, Vec<usize>> = std::collections::HashMap::new();
     for (k, job) in jobs.iter().enumerate().filter(|(_, j)| j.error.is_none()) {
-        writers.entry(job.output.clone()).or_default().push(k);
+        for output in job.outputs() {
+            writers.entry(output).or_default().push(k);
+        }
     }
-    for same in writers.values().filter(|w| w.len() > 1) {
-        let names: Vec<String> = same.iter().map(|&k| format!("job {} ({})", jobs[k].index, jobs[k].name)).collect();
+    for (output, same) in writers.iter().filter(|(_, w)| w.len() > 1) {
+        let mut names: Vec<String> = same
+            .iter()
+            .take(NAMED_WRITERS)
+            .map(|&k| format!("job {} ({})", jobs[k].index, jobs[k].name))
+            .collect();
+        if same.len() > NAMED_WRITERS {
+            names.push(format!("{} more", same.len() - NAMED_WRITERS));
+        }
+        let what = format!("{}: written by {}", output.display(), names.join(" and "));
         for &k in same {
-            let what = format!("{}: written by {}", jobs[k].output.display(), names.join(" and "));
-            jobs[k].error = Some(what);
+            jobs[k].error.get_or_insert_with(|| what.clone());
         }
     }
     Ok(jobs)
@@ -231,7 +252,7 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -
         index,
         frame,
         frames: frames.to_vec(),
-        name: name.clone().map_or_else(|| format!("job {index}"), |n| label.map_or(n.clone(), |l| format!("{n} {l}"))),
+        name: name.clone().map_or_else(|| format!("job {index}"), |n| label.as_ref().map_or(n.clone(), |l| format!("{n} {l}"))),
         output: output.clone().unwrap_or_default(),
         width: 0,
         height: 0,
@@ -249,7 +270,12 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -
     if name.is_none()
         && let Some(file) = output.as_ref().and_then(|o| o.file_name())
     {
-        planned.name = file.to_string_lossy().into_owned();
+        // A chunk's output is its job's pattern: its frames tell the chunks apart.
+        let file = file.to_string_lossy();
+        planned.name = match (frames, &label) {
+            ([_, _, ..], Some(l)) => format!("{file} {l}"),
+            _ => file.into_owned(),
+        };
     }
     if job.get("bake").is_some() {
         planned.command = "bake";
