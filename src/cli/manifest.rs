@@ -176,8 +176,9 @@ pub fn plan_text(text: &str, path: &Path) -> Result<Vec<PlannedJob>, String> {
     // Absolute paths in the arguments, so that they mean the same from any working directory.
     let base = std::path::absolute(path).map_err(|e| format!("{what}: {e}"))?;
     let base = base.parent().unwrap_or(Path::new("/"));
+    let digests = Digests::default();
     let mut jobs: Vec<PlannedJob> =
-        manifest.jobs.into_iter().enumerate().flat_map(|(i, job)| plan_frames(i, job, base)).collect();
+        manifest.jobs.into_iter().enumerate().flat_map(|(i, job)| plan_frames(i, job, base, &digests)).collect();
     // Two jobs writing one output would overwrite each other (and the second would find the first's
     // file "done"): both are errors, named.
     let mut writers: std::collections::HashMap<PathBuf, Vec<usize>> = std::collections::HashMap::new();
@@ -204,9 +205,9 @@ pub fn plan_text(text: &str, path: &Path) -> Result<Vec<PlannedJob>, String> {
 }
 
 /// A job, or one job per frame of its `frames` (per `chunk` frames, with a chunk).
-fn plan_frames(index: usize, job: serde_json::Value, base: &Path) -> Vec<PlannedJob> {
+fn plan_frames(index: usize, job: serde_json::Value, base: &Path, digests: &Digests) -> Vec<PlannedJob> {
     let frames = match job.get("frames") {
-        None => return vec![plan_job(index, &[], job, base)],
+        None => return vec![plan_job(index, &[], job, base, digests)],
         Some(f) => f.as_str().ok_or_else(|| format!("frames: {f} is not a string like \"0..47\" or \"1-100x2\"")),
     };
     let chunk = match job.get("chunk") {
@@ -220,10 +221,10 @@ fn plan_frames(index: usize, job: serde_json::Value, base: &Path) -> Vec<Planned
     match range.and_then(|r| Ok((r, chunk?))) {
         Ok((range, chunk)) => {
             let frames: Vec<u32> = range.iter().collect();
-            frames.chunks(chunk as usize).map(|c| plan_job(index, c, job.clone(), base)).collect()
+            frames.chunks(chunk as usize).map(|c| plan_job(index, c, job.clone(), base, digests)).collect()
         }
         Err(e) => {
-            let mut failed = plan_job(index, &[], serde_json::Value::Null, base);
+            let mut failed = plan_job(index, &[], serde_json::Value::Null, base, digests);
             failed.error = Some(format!("job {index}: {e}"));
             vec![failed]
         }
@@ -235,7 +236,7 @@ const MAX_CHUNK: u64 = 10_000;
 
 /// Plans `job`, for `frames` of its animation (none: a still; one: that frame; more: a chunk,
 /// whose output is the job's pattern of '#').
-fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -> PlannedJob {
+fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path, digests: &Digests) -> PlannedJob {
     let name = job.get("name").and_then(|n| n.as_str()).map(str::to_owned);
     let pattern = job.get("output").and_then(|o| o.as_str()).map(|o| base.join(o));
     let frame = frames.first().copied();
@@ -283,7 +284,7 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -
             Ok(bake) => {
                 (planned.done, planned.stale) = bake.parsed.finished();
                 planned.parts_dir = Some(bake.parsed.output().1);
-                match digests(&bake.parsed.input_files()) {
+                match digests.of(&bake.parsed.input_files()) {
                     Ok(inputs) => planned.inputs = inputs,
                     Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
                 }
@@ -324,7 +325,7 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -
             (planned.width, planned.height) = parsed.size();
             planned.untileable = planned.untileable.or(parsed.tiling_refusal());
             (planned.args, planned.exposure) = (args, parsed.exposure());
-            match digests(&parsed.input_files()) {
+            match digests.of(&parsed.input_files()) {
                 Ok(inputs) => planned.inputs = inputs,
                 Err(e) => planned.error = Some(format!("job {index} ({}): {e}", planned.name)),
             }
@@ -334,10 +335,25 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path) -
     planned
 }
 
-/// Each file's `sha256:` digest.
-fn digests(files: &[&Path]) -> Result<BTreeMap<PathBuf, String>, String> {
-    let digest = |f: &&Path| kelvin::provenance::file_sha256(f).map_err(|e| format!("{}: {e}", f.display()));
-    files.iter().map(|f| Ok((f.to_path_buf(), digest(f)?))).collect()
+/// The `sha256:` digests of the files the plan's jobs read, each file hashed once (a job of many
+/// frames names its scene in every entry).
+#[derive(Default)]
+struct Digests(std::cell::RefCell<std::collections::HashMap<PathBuf, String>>);
+
+impl Digests {
+    /// Each of `files` with its digest.
+    fn of(&self, files: &[&Path]) -> Result<BTreeMap<PathBuf, String>, String> {
+        let mut known = self.0.borrow_mut();
+        let mut digest = |f: &Path| -> Result<String, String> {
+            if let Some(d) = known.get(f) {
+                return Ok(d.clone());
+            }
+            let d = kelvin::provenance::file_sha256(f).map_err(|e| format!("{}: {e}", f.display()))?;
+            known.insert(f.to_path_buf(), d.clone());
+            Ok(d)
+        };
+        files.iter().map(|f| Ok((f.to_path_buf(), digest(f)?))).collect()
+    }
 }
 
 /// Whether `output` is a finished render of `args` (frame `frame`): it reads back and records
