@@ -47,5 +47,6 @@ grep -o '"[a-z_$][a-z_0-9]*"' "$fuzz_dir/../docs/manifest.schema.json" | sort -u
 cd "$fuzz_dir"
 cargo run --quiet --example make_seeds -- "$corpus" "$data"
 for t in gltf_import ies_parse env_map tile_exr bake_part manifest; do
-    echo "$t: $(ls "$corpus/$t" | wc -l) seed files, $(du -sh "$corpus/$t" | cut -f1)"
+    # (du may race a running fuzzer that replaces corpus files.)
+    echo "$t: $(ls "$corpus/$t" | wc -l) seed files, $(du -sh "$corpus/$t" 2>/dev/null | cut -f1)"
 done
