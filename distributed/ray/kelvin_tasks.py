@@ -31,8 +31,9 @@ class TileFailed(Exception):
 
 
 class TaskFault(Exception):
-    """The tile failed for a reason of its node, not of the job (kelvin killed, timed out or not executable):
-    worth retrying elsewhere. Carries the node so that the driver can avoid it."""
+    """The tile failed for a reason of its node, not of the job (kelvin killed, timed out or not executable, or the
+    node's binary, scene or map not the planned file): worth retrying elsewhere. Carries the node so that the driver
+    can avoid it."""
 
     def __init__(self, node, message):
         super().__init__(node, message)
