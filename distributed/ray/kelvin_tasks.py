@@ -126,70 +126,68 @@ def report_start(tracker, attempt):
     return node
 
 
-@ray.remote
-def render_tile(kelvin, inputs, args, crop, threads, timeout, tracker, attempt):
-    """Runs `kelvin render ARGS --crop ...` in a temporary folder; returns (EXR bytes, node, seconds,
-    kelvin's CPU seconds)."""
+def run_task(what, kelvin_args, collect, inputs, timeout, tracker, attempt):
+    """What every task does: reports its node, checks the node's files, runs kelvin with `kelvin_args(tmp)` in a
+    temporary folder, checks the files again (not changed while kelvin read them) and returns (`collect(tmp)`, the
+    bytes to send back, node, seconds, kelvin's CPU seconds)."""
     start, cpu = time.monotonic(), cpu_seconds()
     node = report_start(tracker, attempt)
-    crop_arg = ",".join(map(str, crop))
-    check_inputs(inputs, node, f"tile {crop_arg}")
+    check_inputs(inputs, node, what)
     try:
-        with tempfile.TemporaryDirectory(prefix="kelvin-tile-") as tmp:
-            out = os.path.join(tmp, "tile.exr")
-            cmd = [kelvin, "render", *args, "--crop", crop_arg, "--threads", str(threads), "-o", out]
-            run_kelvin(cmd, f"tile {crop_arg}", timeout, node)
-            check_inputs(inputs, node, f"tile {crop_arg}")  # not changed while kelvin read them
-            with open(out, "rb") as f:
-                return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
+        with tempfile.TemporaryDirectory(prefix="kelvin-task-") as tmp:
+            run_kelvin(kelvin_args(tmp), what, timeout, node)
+            check_inputs(inputs, node, what)
+            return collect(tmp), node, time.monotonic() - start, cpu_seconds() - cpu
     except OSError as e:  # the node's temporary disk, not the job
-        raise TaskFault(node, f"tile {crop_arg}: {e}")
+        raise TaskFault(node, f"{what}: {e}")
+
+
+def read(path):
+    with open(path, "rb") as f:
+        return f.read()
+
+
+@ray.remote
+def render_tile(kelvin, inputs, args, crop, threads, timeout, tracker, attempt):
+    """`kelvin render ARGS --crop ...`; returns the tile's EXR bytes (with `run_task`'s figures)."""
+    crop_arg = ",".join(map(str, crop))
+    cmd = lambda tmp: [kelvin, "render", *args, "--crop", crop_arg, "--threads", str(threads), "-o",
+                       os.path.join(tmp, "tile.exr")]
+    return run_task(f"tile {crop_arg}", cmd, lambda tmp: read(os.path.join(tmp, "tile.exr")), inputs, timeout,
+                    tracker, attempt)
 
 
 @ray.remote
 def bake_part(kelvin, inputs, args, part, parts, threads, timeout, tracker, attempt):
-    """Runs `kelvin bake ARGS --part PART/PARTS` in a temporary folder; returns (part file bytes, node,
-    seconds, kelvin's CPU seconds)."""
-    start, cpu = time.monotonic(), cpu_seconds()
-    node = report_start(tracker, attempt)
+    """`kelvin bake ARGS --part PART/PARTS`; returns the part file's bytes (with `run_task`'s figures)."""
     what = f"part {part}/{parts}"
-    check_inputs(inputs, node, what)
-    try:
-        with tempfile.TemporaryDirectory(prefix="kelvin-bake-") as tmp:
-            # A volume is written as .ktx2 (its parts beside it), lightmaps into a folder.
-            out = os.path.join(tmp, "out.ktx2" if args[0] == "volume" else "out")
-            cmd = [kelvin, "bake", *args, "--part", f"{part}/{parts}", "--threads", str(threads), "-o", out]
-            run_kelvin(cmd, what, timeout, node)
-            check_inputs(inputs, node, what)  # not changed while kelvin read them
-            found = [os.path.join(d, f) for d, _, fs in os.walk(tmp) for f in fs if f.endswith(".kbake")]
-            if len(found) != 1:
-                raise TileFailed(f"{what}: kelvin bake wrote {len(found)} part files")
-            with open(found[0], "rb") as f:
-                return f.read(), node, time.monotonic() - start, cpu_seconds() - cpu
-    except OSError as e:
-        raise TaskFault(node, f"{what}: {e}")
+    # A volume is written as .ktx2 (its parts beside it), lightmaps into a folder.
+    cmd = lambda tmp: [kelvin, "bake", *args, "--part", f"{part}/{parts}", "--threads", str(threads), "-o",
+                       os.path.join(tmp, "out.ktx2" if args[0] == "volume" else "out")]
+
+    def collect(tmp):
+        found = [os.path.join(d, f) for d, _, fs in os.walk(tmp) for f in fs if f.endswith(".kbake")]
+        if len(found) != 1:
+            raise TileFailed(f"{what}: kelvin bake wrote {len(found)} part files")
+        return read(found[0])
+
+    return run_task(what, cmd, collect, inputs, timeout, tracker, attempt)
 
 
 @ray.remote
 def render_chunk(kelvin, inputs, args, pattern, threads, timeout, tracker, attempt):
-    """Runs `kelvin render ARGS` for a chunk of frames (whole frames, one process) in a temporary folder; returns
-    (a tar of every file it wrote, named as the job's output pattern numbers them, node, seconds, CPU seconds)."""
-    start, cpu = time.monotonic(), cpu_seconds()
-    node = report_start(tracker, attempt)
-    what = f"frames {args[args.index('--frames') + 1]}"
-    check_inputs(inputs, node, what)
-    try:
-        with tempfile.TemporaryDirectory(prefix="kelvin-chunk-") as tmp:
-            cmd = [kelvin, "render", *args, "--threads", str(threads), "-o", os.path.join(tmp, pattern)]
-            run_kelvin(cmd, what, timeout, node)
-            check_inputs(inputs, node, what)  # not changed while kelvin read them
-            packed = io.BytesIO()
-            with tarfile.open(fileobj=packed, mode="w") as tar:
-                for name in sorted(os.listdir(tmp)):
-                    tar.add(os.path.join(tmp, name), arcname=name)
-            return packed.getvalue(), node, time.monotonic() - start, cpu_seconds() - cpu
-    except OSError as e:
-        raise TaskFault(node, f"{what}: {e}")
+    """`kelvin render ARGS` for a chunk of frames (whole frames, one process); returns a tar of every file it
+    wrote, named as the job's output pattern numbers them (with `run_task`'s figures)."""
+    cmd = lambda tmp: [kelvin, "render", *args, "--threads", str(threads), "-o", os.path.join(tmp, pattern)]
+
+    def collect(tmp):
+        packed = io.BytesIO()
+        with tarfile.open(fileobj=packed, mode="w") as tar:
+            for name in sorted(os.listdir(tmp)):
+                tar.add(os.path.join(tmp, name), arcname=name)
+        return packed.getvalue()
+
+    return run_task(f"frames {args[args.index('--frames') + 1]}", cmd, collect, inputs, timeout, tracker, attempt)
 
 
 def cpu_seconds():
