@@ -116,18 +116,8 @@ impl ResolvedSpot {
     /// The delta direction toward the light; None when the point is outside the cone or at the
     /// light.
     pub fn sample_li(&self, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let (wi, r2) = ctx.toward(self.position)?;
-        let f = self.falloff(-wi);
-        if f <= 0.0 {
-            return None;
-        }
-        Some(LiSample {
-            radiance: self.intensity.eval(query).scale(f / r2),
-            wi,
-            pdf: 1.0,
-            p_light: self.position,
-            n_light: Vec3::ZERO,
-        })
+        let cone = (self.direction, self.cos_outer, self.cos_inner);
+        sample_li_at(self.position, cone, || self.intensity.eval(query), ctx)
     }
 
     /// A delta light is never hit by sampled directions.
@@ -210,13 +200,9 @@ impl SpotColumns {
     /// Sample_Li of the light at `row` straight from the columns.
     #[inline]
     pub fn sample_li(&self, row: usize, ctx: &LightSampleContext, query: ColorQuery) -> Option<LiSample> {
-        let (wi, r2) = ctx.toward(self.position[row])?;
-        let f = smooth_step(-wi.dot(self.direction[row]), self.cos_outer[row], self.cos_inner[row]);
-        if f <= 0.0 {
-            return None;
-        }
-        let radiance = query.intensity_column(self.rgb[row], &self.spectrum[row], self.scale[row]).scale(f / r2);
-        Some(LiSample { radiance, wi, pdf: 1.0, p_light: self.position[row], n_light: Vec3::ZERO })
+        let cone = (self.direction[row], self.cos_outer[row], self.cos_inner[row]);
+        let intensity = || query.intensity_column(self.rgb[row], &self.spectrum[row], self.scale[row]);
+        sample_li_at(self.position[row], cone, intensity, ctx)
     }
 
     /// [`Self::sample_li`] with the vector to the light, r^2, the cone cosine and 1/r^2 in f64
@@ -284,18 +270,21 @@ impl crate::light::table::Block for SpotColumns {
     }
 }
 
-impl SpotColumns {
-    /// Sample_Li of light `row` for a batch of points in RGB mode (the SoA batch form): direction
-    /// toward the light and radiance I falloff / r^2 per point.
-    pub fn sample_li_batch_rgb(&self, row: usize, positions: &[Vec3], wi: &mut [Vec3], radiance: &mut [Vec3]) {
-        let (p, dir, rgb) = (self.position[row], self.direction[row], self.rgb[row]);
-        let (c0, c1) = (self.cos_outer[row], self.cos_inner[row]);
-        for ((x, w), l) in positions.iter().zip(wi.iter_mut()).zip(radiance.iter_mut()) {
-            let d = p - *x;
-            let r2 = d.length_squared();
-            let inv_r = if r2 > 0.0 { r2.sqrt().recip() } else { 0.0 };
-            *w = d * inv_r;
-            *l = rgb * (smooth_step(-w.dot(dir), c0, c1) * inv_r * inv_r);
-        }
+/// Spot Sample_Li, f32: the delta direction from `ctx` toward a light at `position` with radiance
+/// I falloff / r^2, the falloff a smoothstep of the cosine to the axis between the cone's
+/// (`direction`, `cos_outer`, `cos_inner`); None outside the cone or at the light. The one f32
+/// form (`SpotColumns::sample_li_f64` is its f64 reference).
+#[inline(always)]
+fn sample_li_at(
+    position: Vec3,
+    (direction, cos_outer, cos_inner): (Vec3, f32, f32),
+    intensity: impl FnOnce() -> crate::spectrum::SampledSpectrum,
+    ctx: &LightSampleContext,
+) -> Option<LiSample> {
+    let (wi, r2) = ctx.toward(position)?;
+    let f = smooth_step(-wi.dot(direction), cos_outer, cos_inner);
+    if f <= 0.0 {
+        return None;
     }
+    Some(LiSample { radiance: intensity().scale(f / r2), wi, pdf: 1.0, p_light: position, n_light: Vec3::ZERO })
 }
