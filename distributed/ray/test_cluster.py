@@ -5,7 +5,7 @@
 
 1. A manifest of 3 jobs (two scenes, both colour modes, an environment camera), one of 2 frames of an animated
    scene, a ReSTIR job with an exposure (rendered as one tile: its reuse does not tile), a lightmap bake in 5 parts,
-   and 2 bad ones (a missing scene, a bad size), split into 16 tiles each: every merged image and its PNG preview
+   6 frames in two chunks of 3 (a task each, staged apart), and 2 bad ones (a missing scene, a bad size), split into 16 tiles each: every merged image and its PNG preview
    is byte for byte a plain `kelvin render`'s (every baked file a plain `kelvin bake`'s), both nodes rendered
    tiles, the bad jobs fail with kelvin's message and the exit code says so, without retries. --threads 2 (more
    than any node's CPUs) is refused at start.
@@ -199,17 +199,19 @@ def section_jobs(ctx):
     with open(summary) as f:
         result = json.load(f)
     states = {int(k): v for k, v in result["jobs"].items()}
-    check([states[i]["status"] for i in range(10)] == ["rendered"] * 8 + ["FAILED"] * 2, f"{states}")
-    check("no/such/scene.glb: no such file" in states[8]["detail"], states[8]["detail"])
-    check("'0x10'" in states[9]["detail"], states[9]["detail"])
+    n = ctx.n_good
+    check([states[i]["status"] for i in range(n + 2)] == ["rendered"] * n + ["FAILED"] * 2, f"{states}")
+    check("no/such/scene.glb: no such file" in states[n]["detail"], states[n]["detail"])
+    check("'0x10'" in states[n + 1]["detail"], states[n + 1]["detail"])
     check(result["retries"] == 0, f"kelvin's own errors are not retried: {result['retry_log']}")
     check(len(result["nodes"]) == 2, f"tiles ran on both nodes: {result['nodes']}")
-    check(sum(n["tiles"] for n in result["nodes"].values()) == 87, f"{result['nodes']}")
+    check(sum(v["tiles"] for v in result["nodes"].values()) == ctx.tasks, f"{result['nodes']}")
     # No node has 2 CPUs: refused at once, not left waiting.
     run = subprocess.run(cmd + ["--threads", "2"], env=ctx.cluster.env, capture_output=True, text=True, timeout=120)
     check(run.returncode != 0 and "--threads 2: no node of the cluster has 2 CPUs" in run.stderr,
           f"--threads 2 on 1-CPU nodes: exit code {run.returncode}: {run.stderr[-2000:]}")
-    print(f"1. 3 jobs and 2 frames x 16 tiles, a whole ReSTIR job and a bake of 5 parts byte-identical, PNGs "
+    print(f"1. 3 jobs and 2 frames x 16 tiles, a whole ReSTIR job, a bake of 5 parts and 2 chunks ({ctx.tasks} tasks) "
+          f"byte-identical, PNGs "
           f"included; bad jobs failed clearly, not retried; --threads 2 refused "
           f"({time.monotonic() - started:.1f} s, total {time.monotonic() - ctx.started:.1f} s)", flush=True)
 
@@ -281,7 +283,7 @@ def section_broken_binary(ctx):
     kinds = retries_from_second(ctx, result, causes=["killed by SIGKILL", "exit code 127"])
     check(all(r["failed_on"] == ctx.ids["second"] for r in result["retry_log"]), "the failing node is known")
     check(set(result["nodes"]) == {ctx.ids["head"]}, f"tiles succeed on the head only: {result['nodes']}")
-    check(result["nodes"][ctx.ids["head"]]["tiles"] == 87, f"{result['nodes']}")
+    check(result["nodes"][ctx.ids["head"]]["tiles"] == ctx.tasks, f"{result['nodes']}")
     check(len(kinds) == 2, f"both kinds of death retried: {kinds}")
     print(f"3. kelvin broken on the second node: {result['retries']} retries on the head {kinds}; outputs "
           f"byte-identical ({sec.elapsed()})", flush=True)
@@ -467,9 +469,9 @@ class Context:
             # Lightmaps baked in 5 parts on the cluster and merged.
             {"name": "box-lightmaps", "bake": "lightmaps", "scene": BOX,
              "output": "out/maps", "parts": 5, "settings": {"size": 24, "spp": 16, "seed": 2}},
-            # A chunk of 3 frames: one task renders them whole in one process.
+            # Two chunks of 3 frames: each one task that renders its frames whole in one process.
             {"name": "lamp-chunk", "scene": LAMP,
-             "output": "out/chunk_##.exr", "frames": "5-9x2", "chunk": 3, "fps": 4, "size": "48x32", "spp": 16},
+             "output": "out/chunk_##.exr", "frames": "5-15x2", "chunk": 3, "fps": 4, "size": "48x32", "spp": 16},
         ]
         bad = [
             {"name": "missing-scene", "scene": "no/such/scene.glb", "output": "out/missing.exr"},
@@ -478,7 +480,11 @@ class Context:
         self.manifest = os.path.join(work, "jobs.json")
         with open(self.manifest, "w") as f:
             json.dump({"jobs": self.good + bad}, f)
-        self.refs = references(kelvin, kelvin_plan(kelvin, self.manifest)[:8], work)
+        planned = kelvin_plan(kelvin, self.manifest)
+        # The good jobs' plan entries (the frames and chunks of a job are entries of their own) and their tasks.
+        self.n_good = len(planned) - len(bad)
+        self.tasks = sum(len(pieces(job)) for job in planned[:self.n_good])
+        self.refs = references(kelvin, planned[:self.n_good], work)
         self.ids = None
 
 
