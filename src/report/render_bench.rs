@@ -138,7 +138,7 @@ impl SuiteScene {
     }
 }
 
-/// The render options of the suite: MIS, `width` x `height`, `spp`.
+/// The render options of the suite: MIS, `width` x `height`, `spp`, `integrator`.
 pub fn suite_options(width: u32, height: u32, spp: u32, integrator: Integrator) -> RenderOptions {
     RenderOptions { width, height, spp: spp.max(1), strategy: Strategy::Mis, integrator, ..Default::default() }
 }
