@@ -221,7 +221,10 @@ fn the_layout_matches_bevys_own_volume_side_by_side() {
     let down = SIDES.iter().position(|s| *s == Vec3::NEG_Y).unwrap();
     for (side, dir) in SIDES.iter().enumerate().filter(|(_, d)| d.y <= 0.0) {
         let (shader, doc) = (correlation(side, true), correlation(side, false));
-        assert!(shader > 0.8 && shader > doc, "side {dir}: correlation {shader} in the shader's layout, {doc} in the doc's");
+        assert!(
+            shader > 0.8 && shader > doc,
+            "side {dir}: correlation {shader} in the shader's layout, {doc} in the doc's"
+        );
         if side == down {
             assert!(shader > 0.9 && doc.abs() < 0.2, "down: {shader} against {doc}");
         }

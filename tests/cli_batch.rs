@@ -278,7 +278,10 @@ fn outputs_written_twice_are_found_per_frame_and_named_briefly() {
     let dir = TempDir::new("cli-batch", "writers");
     let lamp = test_data("gltf/kelvin/animated_lamp.gltf");
     let mut jobs = vec![
-        format!(r#"{{"name": "chunked", "scene": "{}", "output": "c_#.exr", "frames": "1-4", "chunk": 2, "size": "4x4"}}"#, lamp.display()),
+        format!(
+            r#"{{"name": "chunked", "scene": "{}", "output": "c_#.exr", "frames": "1-4", "chunk": 2, "size": "4x4"}}"#,
+            lamp.display()
+        ),
         r#"{"name": "three", "output": "c_3.exr", "size": "4x4"}"#.to_owned(),
     ];
     jobs.extend((0..50).map(|k| format!(r#"{{"name": "m{k}", "output": "many.exr", "size": "4x4"}}"#)));
@@ -291,7 +294,11 @@ fn outputs_written_twice_are_found_per_frame_and_named_briefly() {
         assert!(error(k).contains("c_3.exr: written by job 0 (chunked frames 3-4) and job 1 (three)"), "{}", error(k));
     }
     for k in 3..53 {
-        assert!(error(k).ends_with("many.exr: written by job 2 (m0) and job 3 (m1) and job 4 (m2) and 47 more"), "{}", error(k));
+        assert!(
+            error(k).ends_with("many.exr: written by job 2 (m0) and job 3 (m1) and job 4 (m2) and 47 more"),
+            "{}",
+            error(k)
+        );
     }
 }
 
@@ -315,7 +322,10 @@ fn chunks_of_frames_render_as_each_frame_alone() {
     let frames: Vec<&serde_json::Value> = jobs.iter().map(|j| &j["frames"]).collect();
     assert_eq!(frames, [&serde_json::json!([1, 3, 5]), &serde_json::json!([7, 9, 11])]);
     assert!(jobs.iter().all(|j| j["error"].is_null()), "{jobs:?}");
-    assert_eq!((jobs[0]["name"].as_str(), jobs[1]["name"].as_str()), (Some("lamp frames 1-5"), Some("lamp frames 7-11")));
+    assert_eq!(
+        (jobs[0]["name"].as_str(), jobs[1]["name"].as_str()),
+        (Some("lamp frames 1-5"), Some("lamp frames 7-11"))
+    );
     assert!(jobs[0]["untileable"].as_str().unwrap().contains("chunk of 3 frames"), "{}", jobs[0]);
     let out = kelvin(&["batch", &manifest]);
     assert!(out.status.success() && text(&out).contains("2 jobs: 2 rendered"), "{}", text(&out));

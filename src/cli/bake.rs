@@ -305,7 +305,8 @@ fn index_path(command: &BakeCommand) -> PathBuf {
 /// and renamed, so a stop in between leaves an index without it: not finished, baked again).
 fn record_provenance(index: &Path, provenance: serde_json::Value) -> Result<(), CliError> {
     let what = index.display().to_string();
-    let mut json: serde_json::Value = serde_json::from_slice(&std::fs::read(index).map_err(|e| format!("{what}: {e}"))?)?;
+    let mut json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(index).map_err(|e| format!("{what}: {e}"))?)?;
     json["provenance"] = provenance;
     let text = serde_json::to_string_pretty(&json)? + "\n";
     write_file(index, &what, text.as_bytes())?;

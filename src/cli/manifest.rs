@@ -188,11 +188,8 @@ pub fn plan_text(text: &str, path: &Path) -> Result<Vec<PlannedJob>, String> {
         }
     }
     for (output, same) in writers.iter().filter(|(_, w)| w.len() > 1) {
-        let mut names: Vec<String> = same
-            .iter()
-            .take(NAMED_WRITERS)
-            .map(|&k| format!("job {} ({})", jobs[k].index, jobs[k].name))
-            .collect();
+        let mut names: Vec<String> =
+            same.iter().take(NAMED_WRITERS).map(|&k| format!("job {} ({})", jobs[k].index, jobs[k].name)).collect();
         if same.len() > NAMED_WRITERS {
             names.push(format!("{} more", same.len() - NAMED_WRITERS));
         }
@@ -253,7 +250,9 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path, d
         index,
         frame,
         frames: frames.to_vec(),
-        name: name.clone().map_or_else(|| format!("job {index}"), |n| label.as_ref().map_or(n.clone(), |l| format!("{n} {l}"))),
+        name: name
+            .clone()
+            .map_or_else(|| format!("job {index}"), |n| label.as_ref().map_or(n.clone(), |l| format!("{n} {l}"))),
         output: output.clone().unwrap_or_default(),
         width: 0,
         height: 0,

@@ -346,7 +346,8 @@ pub fn run_render_bench(
 pub fn format_table(rows: &[RenderBenchRow]) -> String {
     use std::fmt::Write;
     let mut s = String::new();
-    let _ = writeln!(s, "| scene | integrator | size | spp | seconds | M samples/s | M shadow rays/s | M BSDF rays/s |");
+    let _ =
+        writeln!(s, "| scene | integrator | size | spp | seconds | M samples/s | M shadow rays/s | M BSDF rays/s |");
     let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|");
     for r in rows {
         let _ = writeln!(
