@@ -10,7 +10,7 @@ use glam::Vec2;
 use glam::Vec3;
 use kelvin::geometry::Transform;
 use kelvin::geometry::{Mesh, Ray, Rectangle, SceneBvh, Sphere};
-use kelvin::lanes::{self, LANES};
+use kelvin::lanes::{self, LANES, U32x16, Vec3x16};
 use kelvin::light::{
     Amount, AreaLight, ColorQuery, DistantLight, GoniometricLight, LightSampleContext, LightTable, PointLight,
     ProjectionLight, SpotLight, UniformInfiniteLight,
@@ -51,14 +51,9 @@ fn point_lanes(table: &LightTable, row: usize, positions: &[Vec3], wi: &mut [Vec
         #[inline(always)]
         || {
             for b in (0..positions.len()).step_by(LANES) {
-                let lit = table
-                    .points()
-                    .sample_li_rgb_lanes(&[row as u32; LANES], &lanes::columns(lanes::block(positions, b)));
-                let (w, l) = (lanes::block_mut(wi, b), lanes::block_mut(radiance, b));
-                for k in 0..LANES {
-                    w[k] = Vec3::new(lit.wi[0][k], lit.wi[1][k], lit.wi[2][k]);
-                    l[k] = Vec3::new(lit.radiance[0][k], lit.radiance[1][k], lit.radiance[2][k]);
-                }
+                let lit = table.points().sample_li_rgb_lanes(U32x16::splat(row as u32), &Vec3x16::load(positions, b));
+                lit.wi.store_vec3s(lanes::block_mut(wi, b));
+                lit.radiance.store_vec3s(lanes::block_mut(radiance, b));
             }
         },
     )

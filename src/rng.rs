@@ -2,7 +2,7 @@
 //! sample, dimension), so images are bit-identical for any thread count and any batch order. Scene
 //! generators, tests and benchmarks use the sequential [`SplitMix64`].
 
-use crate::lanes::LANES;
+use crate::lanes::{F32x16, LANES};
 
 /// Which numbers a render's samples draw.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -154,29 +154,20 @@ impl SampleStream {
         seed: u64,
         pixel: &[u32; LANES],
         sample: &[u32; LANES],
-    ) -> [[f32; LANES]; D] {
+    ) -> [F32x16; D] {
         Self::lanes_from_keys(pattern, pixel.map(|p| pixel_key(seed, p)), sample)
     }
 
     /// [`Self::lanes`] of samples of one pixel: its key is hashed once (for blocks of one pixel's
     /// samples, as any spp of 16 or more gives).
     #[inline(always)]
-    pub fn pixel_lanes<const D: usize>(
-        pattern: Pattern,
-        seed: u64,
-        pixel: u32,
-        sample: &[u32; LANES],
-    ) -> [[f32; LANES]; D] {
+    pub fn pixel_lanes<const D: usize>(pattern: Pattern, seed: u64, pixel: u32, sample: &[u32; LANES]) -> [F32x16; D] {
         Self::lanes_from_keys(pattern, [pixel_key(seed, pixel); LANES], sample)
     }
 
     #[inline(always)]
-    fn lanes_from_keys<const D: usize>(
-        pattern: Pattern,
-        key: [u64; LANES],
-        sample: &[u32; LANES],
-    ) -> [[f32; LANES]; D] {
-        let mut out = [[0.0; LANES]; D];
+    fn lanes_from_keys<const D: usize>(pattern: Pattern, key: [u64; LANES], sample: &[u32; LANES]) -> [F32x16; D] {
+        let mut out = [F32x16::ZERO; D];
         match pattern {
             Pattern::Sobol => {
                 for set in 0..D.div_ceil(4) {
@@ -193,7 +184,7 @@ impl SampleStream {
                     let values: [[f32; 2]; LANES] =
                         std::array::from_fn(|l| independent_pair(key[l], sample[l], pair as u32));
                     for (d, row) in out.iter_mut().enumerate().skip(2 * pair).take(2) {
-                        for (o, v) in row.iter_mut().zip(&values) {
+                        for (o, v) in row.0.iter_mut().zip(&values) {
                             *o = v[d % 2];
                         }
                     }

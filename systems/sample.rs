@@ -5,7 +5,7 @@ use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::lanes::{self, LANES};
+use crate::lanes::{LANES, U32x16, Vec3x16};
 use crate::light::point::PointLanes;
 use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
@@ -402,19 +402,18 @@ impl Sampling<'_> {
         lit: &PointLanes,
         l: usize,
     ) -> bool {
-        if !lit.valid[l] {
+        if !lit.valid.test(l) {
             return self.write(cols, e, light, None);
         }
-        let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
-        let radiance = SampledSpectrum([lit.radiance[0][l], lit.radiance[1][l], lit.radiance[2][l], 0.0]);
+        let radiance = SampledSpectrum([lit.radiance.x[l], lit.radiance.y[l], lit.radiance.z[l], 0.0]);
         (cols.light[e], cols.occluded[e]) = (light, false);
         let pdf = pmf * self.spp as f32;
-        (cols.radiance[e], cols.wi[e], cols.pdf[e]) = (radiance, v(&lit.wi), pdf);
+        (cols.radiance[e], cols.wi[e], cols.pdf[e]) = (radiance, lit.wi.lane(l), pdf);
         cols.delta[e] = LightKind::Point.flags().is_delta();
         let ray = self.wants_shadow_ray(pdf, &radiance, light);
         cols.ray_kind[e] = if ray { ShadowTarget::Point } else { ShadowTarget::None };
         if ray {
-            cols.target[e] = v(&lit.target);
+            cols.target[e] = lit.target.lane(l);
         }
         ray
     }
@@ -424,7 +423,7 @@ impl Sampling<'_> {
     #[inline(always)]
     fn block(&self, first: usize, e: usize, n: usize) -> Block {
         let (mut point, mut pixel, mut stream) = ([0usize; LANES], [0u32; LANES], [0u32; LANES]);
-        let mut p = [[0.0f32; LANES]; 3];
+        let mut p = Vec3x16::ZERO;
         if self.k == 1 && n == LANES {
             // One entry per point: entries are points, read as contiguous runs (as
             // `point_and_stream`, whose slot and sample offset are then 0).
@@ -433,21 +432,19 @@ impl Sampling<'_> {
             for l in 0..LANES {
                 (point[l], pixel[l], stream[l]) = (i + l, pixels[l], samples[l] * self.spp);
             }
-            p = lanes::columns(lanes::block(&self.batch.position, i));
+            p = Vec3x16::load(&self.batch.position, i);
         } else {
             for l in 0..n {
                 let (i, _, s) = self.point_and_stream(first + e + l);
                 (point[l], pixel[l], stream[l]) = (i, self.batch.pixel[i], s);
-                let x = self.batch.position[i];
-                (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
+                p.set_lane(l, self.batch.position[i]);
             }
         }
         // The shading normals, which the light BVH ranks clusters by (as the BSDF and RIS's target
         // weigh light).
-        let mut normal = [[0.0f32; LANES]; 3];
+        let mut normal = Vec3x16::ZERO;
         for l in 0..n {
-            let v = self.batch.shading_normal[point[l]];
-            (normal[0][l], normal[1][l], normal[2][l]) = (v.x, v.y, v.z);
+            normal.set_lane(l, self.batch.shading_normal[point[l]]);
         }
         Block { point, pixel, stream, p, normal }
     }
@@ -485,7 +482,7 @@ impl Sampling<'_> {
         // Blocks where no entry chose a point light (scenes lit by other kinds) skip the kernel;
         // lanes that chose none sample row 0, which exists (see `sample_direct_lighting`).
         // `if`, not `bool::then`: a closure would keep the kernel out of the wide code.
-        let lit = if points > 0 { Some(self.table.points.sample_li_rgb_lanes(&rows, &p)) } else { None };
+        let lit = if points > 0 { Some(self.table.points.sample_li_rgb_lanes(U32x16(rows), &p)) } else { None };
         let mut traced = 0;
         for l in 0..n {
             let chosen = chosen[l].then_some((light[l], pmf[l]));
@@ -509,9 +506,9 @@ struct Block {
     point: [usize; LANES],
     pixel: [u32; LANES],
     stream: [u32; LANES],
-    p: [[f32; LANES]; 3],
+    p: Vec3x16,
     /// Shading normals.
-    normal: [[f32; LANES]; 3],
+    normal: Vec3x16,
 }
 
 /// One chunk of the columns the sampling pass writes, indexed by entry within the chunk.

@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use crate::geometry::ray::spawn_rays_to_points_lanes;
 use crate::geometry::{GeometryId, RAY_CHUNK, Ray, SHADOW_EPSILON, SceneBvh, ShadowOffset, SurfacePoint};
-use crate::lanes::{self, LANES};
+use crate::lanes::{F32x16, LANES, Vec3x16};
 use crate::shading::{RunReport, SceneBounds, Settings, ShadingBatch};
 
 use super::{ShadowRays, ShadowTarget, Work};
@@ -104,7 +104,7 @@ pub fn trace_shadow_rays(
                         let points = k == 1 && n == LANES && offset == ShadowOffset::ErrorBound;
                         let segments = if points && kind[first..first + LANES].iter().all(|&t| t == ShadowTarget::Point)
                         {
-                            let columns = |v: &[Vec3]| lanes::columns(lanes::block(v, first));
+                            let columns = |v: &[Vec3]| Vec3x16::load(v, first);
                             // Origin, its error bound, normal and target. (Not `array::map`: its closure
                             // may stay out of the wide code.)
                             let ends = Aligned([
@@ -115,15 +115,14 @@ pub fn trace_shadow_rays(
                             ]);
                             let [origin, error, normal, to] = &ends.0;
                             let [o, d] = spawn_rays_to_points_lanes([origin, error, normal], to);
-                            Aligned((o, d, [1.0 - SHADOW_EPSILON; LANES]))
+                            Aligned((o, d, F32x16::splat(1.0 - SHADOW_EPSILON)))
                         } else {
-                            let mut s = Aligned(([[0f32; LANES]; 3], [[0f32; LANES]; 3], [0f32; LANES]));
+                            let mut s = Aligned((Vec3x16::ZERO, Vec3x16::ZERO, F32x16::ZERO));
                             let (o, d, t) = &mut s.0;
                             for l in 0..n {
                                 let ray = segment(first + l);
-                                for a in 0..3 {
-                                    (o[a][l], d[a][l]) = (ray.origin[a], ray.dir[a]);
-                                }
+                                o.set_lane(l, ray.origin);
+                                d.set_lane(l, ray.dir);
                                 t[l] = ray.t_max;
                             }
                             s

@@ -522,7 +522,7 @@ fn light_tree_quality() {
 #[test]
 #[cfg(feature = "internals")]
 fn lane_sampling_matches_one_point_at_a_time() {
-    use kelvin::lanes::LANES;
+    use kelvin::lanes::{F32x16, LANES, Vec3x16};
     let mut rng = SplitMix64::new(77);
     let mut with_distant = random_lights(40, 8, 0);
     with_distant.push(L::Distant(Vec3::new(0.3, -1.0, 0.2), 5.0));
@@ -539,16 +539,15 @@ fn lane_sampling_matches_one_point_at_a_time() {
         for sampler in all_samplers(&table) {
             for block in 0..200 {
                 let ctxs = contexts(block as u64 + 1000 * lights.len() as u64, LANES);
-                let (mut p, mut n, mut u) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3], [0f32; LANES]);
+                let (mut p, mut n, mut u) = (Vec3x16::ZERO, Vec3x16::ZERO, F32x16::ZERO);
                 for (l, c) in ctxs.iter().enumerate() {
                     // Coherent blocks (one small patch) and scattered ones.
                     let at = if block % 2 == 0 { ctxs[0].p + 0.01 * c.p } else { c.p };
-                    for a in 0..3 {
-                        (p[a][l], n[a][l]) = (at[a], c.n[a]);
-                    }
+                    p.set_lane(l, at);
+                    n.set_lane(l, c.n);
                     u[l] = rng.f32();
                 }
-                p[1][5] = f32::NAN;
+                p.y[5] = f32::NAN;
                 let active = if block % 3 == 0 { 0xffff & !(1 << 9) } else { 0xffff };
                 for wide in [false, true] {
                     let got = if wide {
@@ -557,8 +556,7 @@ fn lane_sampling_matches_one_point_at_a_time() {
                         sampler.sample_lanes(&p, &n, &u, active)
                     };
                     for l in 0..LANES {
-                        let at = Vec3::new(p[0][l], p[1][l], p[2][l]);
-                        let normal = Vec3::new(n[0][l], n[1][l], n[2][l]);
+                        let (at, normal) = (p.lane(l), n.lane(l));
                         // The lanes take shading normals: a geometric normal that differs must not matter.
                         let ctx = LightSampleContext { p: at, n: normal.any_orthonormal_vector(), ns: normal };
                         let want = if active & (1 << l) != 0 { sampler.sample(&ctx, u[l]) } else { None };

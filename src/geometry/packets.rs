@@ -1,14 +1,14 @@
 //! Closest hits of [`LANES`] rays at once over the wide tree (`wide/packet.rs`): for coherent
 //! rays, such as one pixel's camera samples. Each lane's answer is [`SceneBvh::closest_hit`]'s.
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
 use super::bvh::{GeometryId, SceneBvh};
 use super::ray::Ray;
 use super::triangle::ShearedRay;
 use super::visibility::{Best, FEW_PRIMITIVES, Hit, TriangleAttributes};
-use super::wide::packet::{Columns, RayPacket, triangle_lanes};
-use crate::lanes::LANES;
+use super::wide::packet::{RayPacket, triangle_lanes};
+use crate::lanes::{F32x16, LANES, Vec3x16};
 
 /// No primitive: the `prim` of a lane without a hit.
 const NO_PRIM: u32 = u32::MAX;
@@ -29,12 +29,11 @@ impl<F: FnMut(usize, Option<Hit>)> HitSink for F {
 
 /// Up to `LANES` rays as the lane columns the packet queries take: origins, directions and
 /// t_max (lanes past `rays.len()` are zero, and a query told `n = rays.len()` ignores them).
-pub fn ray_columns(rays: &[Ray]) -> ([[f32; LANES]; 3], [[f32; LANES]; 3], [f32; LANES]) {
-    let (mut o, mut d, mut t) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3], [0f32; LANES]);
+pub fn ray_columns(rays: &[Ray]) -> (Vec3x16, Vec3x16, F32x16) {
+    let (mut o, mut d, mut t) = (Vec3x16::ZERO, Vec3x16::ZERO, F32x16::ZERO);
     for (l, r) in rays.iter().take(LANES).enumerate() {
-        for a in 0..3 {
-            (o[a][l], d[a][l]) = (r.origin[a], r.dir[a]);
-        }
+        o.set_lane(l, r.origin);
+        d.set_lane(l, r.dir);
         t[l] = r.t_max;
     }
     (o, d, t)
@@ -47,17 +46,13 @@ impl SceneBvh {
     #[inline(always)]
     pub fn closest_hits_packet(
         &self,
-        origin: &Columns,
-        dir: &Columns,
-        t_max: &[f32; LANES],
+        origin: &Vec3x16,
+        dir: &Vec3x16,
+        t_max: &F32x16,
         n: usize,
         out: &mut impl HitSink,
     ) {
-        let ray = |l: usize| Ray {
-            origin: Vec3::new(origin[0][l], origin[1][l], origin[2][l]),
-            dir: Vec3::new(dir[0][l], dir[1][l], dir[2][l]),
-            t_max: t_max[l],
-        };
+        let ray = |l: usize| Ray { origin: origin.lane(l), dir: dir.lane(l), t_max: t_max[l] };
         if self.leaf.len() <= FEW_PRIMITIVES {
             // No tree walk pays for so few primitives (as `closest_hit`).
             for l in 0..n {
@@ -65,9 +60,9 @@ impl SceneBvh {
             }
             return;
         }
-        let rays = RayPacket::new(origin, dir, t_max, n);
-        let mut best_t = *t_max;
-        let (mut prim, mut slot, mut b) = ([NO_PRIM; LANES], [0u32; LANES], [[0f32; LANES]; 3]);
+        let rays = RayPacket::new(origin, dir, &t_max.0, n);
+        let mut best_t = t_max.0;
+        let (mut prim, mut slot, mut b) = ([NO_PRIM; LANES], [0u32; LANES], Vec3x16::ZERO);
         // Object-space points of shape hits (see `SceneBvh::make_hit`), per lane.
         let mut local: [Option<DVec3>; LANES] = [None; LANES];
         let complete = self.wide.traverse_packet::<true>(
@@ -160,18 +155,14 @@ impl SceneBvh {
     #[inline(always)]
     pub fn occluded_packet(
         &self,
-        origin: &Columns,
-        dir: &Columns,
-        t_max: &[f32; LANES],
+        origin: &Vec3x16,
+        dir: &Vec3x16,
+        t_max: &F32x16,
         n: usize,
         origins: &[GeometryId; LANES],
     ) -> u32 {
-        let ray = |l: usize| Ray {
-            origin: Vec3::new(origin[0][l], origin[1][l], origin[2][l]),
-            dir: Vec3::new(dir[0][l], dir[1][l], dir[2][l]),
-            t_max: t_max[l],
-        };
-        let rays = RayPacket::new(origin, dir, t_max, n);
+        let ray = |l: usize| Ray { origin: origin.lane(l), dir: dir.lane(l), t_max: t_max[l] };
+        let rays = RayPacket::new(origin, dir, &t_max.0, n);
         if self.leaf.len() <= FEW_PRIMITIVES {
             let mut blocked = 0;
             for l in 0..n {
@@ -180,7 +171,7 @@ impl SceneBvh {
             return blocked;
         }
         let mut blocked = 0u32;
-        let mut limits = *t_max;
+        let mut limits = t_max.0;
         let complete = self.wide.traverse_packet::<false>(
             &rays,
             rays.valid,
@@ -246,7 +237,7 @@ mod tests {
     use crate::geometry::{
         GeometryId, GeometryInstance, GeometryRef, Hit, Mesh, Ray, SceneBvh, Shape, Sphere, Transform,
     };
-    use crate::lanes::LANES;
+    use crate::lanes::{F32x16, LANES, Vec3x16};
     use crate::rng::SplitMix64;
 
     fn v(rng: &mut SplitMix64, r: f32) -> Vec3 {
@@ -385,11 +376,11 @@ mod tests {
                 material: 0,
             }])
         };
-        let column = |v: Vec3| [[v.x; LANES], [v.y; LANES], [v.z; LANES]];
+        let column = Vec3x16::splat;
         let plane = one(Shape::Rectangle(Rectangle { half_size: Vec2::new(2.0, 1.0) }));
         let id = |bvh: &SceneBvh| bvh.geometry_of_slot(0);
         let up = Ray::new(Vec3::new(0.3, 0.2, -1e-6), Vec3::Z);
-        let (o, d, t) = (column(up.origin), column(up.dir), [up.t_max; LANES]);
+        let (o, d, t) = (column(up.origin), column(up.dir), F32x16::splat(up.t_max));
         assert!(plane.occluded(&up) && !plane.occluded_from(&up, id(&plane)));
         assert_eq!(plane.occluded_packet(&o, &d, &t, LANES, &[GeometryId::NONE; LANES]), (1 << LANES) - 1);
         let mut origins = [id(&plane); LANES];

@@ -21,7 +21,7 @@
 
 use glam::{DVec3, Vec3};
 
-use crate::lanes::LANES;
+use crate::lanes::{F32x16, Vec3x16};
 
 /// Unit roundoff of f32 round-to-nearest: half the distance from 1 to the next float (2^-24).
 pub const F32_UNIT_ROUNDOFF: f32 = f32::EPSILON * 0.5;
@@ -174,41 +174,21 @@ pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
 /// origins and directions (each t_max is `1 - SHADOW_EPSILON`). The operations of
 /// [`offset_ray_origin`] in the same order, so the rays are the same bit for bit.
 #[inline(always)]
-pub fn spawn_rays_to_points_lanes(from: [&Lanes3; 3], target: &Lanes3) -> [Lanes3; 2] {
-    // One statement per loop over all lanes: LLVM vectorises such loops across lanes, where a
-    // loop holding the whole computation per lane was vectorised across x, y, z only.
-    let [p, e, n] = from;
-    let (mut d, mut side, mut finite) = ([0.0f32; LANES], [0.0f32; LANES], [true; LANES]);
-    for l in 0..LANES {
-        d[l] = n[0][l].abs() * e[0][l] + n[1][l].abs() * e[1][l] + n[2][l].abs() * e[2][l];
-    }
-    for l in 0..LANES {
-        let w = [target[0][l] - p[0][l], target[1][l] - p[1][l], target[2][l] - p[2][l]];
-        side[l] = w[0] * n[0][l] + w[1] * n[1][l] + w[2] * n[2][l];
-    }
-    for l in 0..LANES {
-        d[l] = if side[l] < 0.0 { -d[l] } else { d[l] };
-    }
-    let (mut offset, mut po) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
-    for a in 0..3 {
-        for l in 0..LANES {
-            offset[a][l] = d[l] * n[a][l];
-            po[a][l] = p[a][l] + offset[a][l];
-            finite[l] &= po[a][l].is_finite();
-        }
-    }
-    let (mut origin, mut dir) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
-    for a in 0..3 {
-        for l in 0..LANES {
-            origin[a][l] = if finite[l] { step_toward(po[a][l], offset[a][l]) } else { po[a][l] };
-            dir[a][l] = target[a][l] - origin[a][l];
-        }
-    }
-    [origin, dir]
+pub fn spawn_rays_to_points_lanes(from: [&Vec3x16; 3], target: &Vec3x16) -> [Vec3x16; 2] {
+    let [&p, &e, &n] = from;
+    let d = n.map(F32x16::abs).dot(e);
+    let side = (*target - p).dot(n);
+    let d = F32x16::select(side.lt(F32x16::ZERO), -d, d);
+    let offset = n * d;
+    let po = p + offset;
+    let stepped = Vec3x16 {
+        x: po.x.zip(offset.x, step_toward),
+        y: po.y.zip(offset.y, step_toward),
+        z: po.z.zip(offset.z, step_toward),
+    };
+    let origin = Vec3x16::select(po.is_finite(), stepped, po);
+    [origin, *target - origin]
 }
-
-/// Lane columns x, y, z of `LANES` vectors.
-pub type Lanes3 = [[f32; LANES]; 3];
 
 /// Finite `v` moved one float in the direction of `towards` (`next_up` for positive `towards`,
 /// `next_down` for negative), unchanged for zero `towards`. Integer steps on the bit pattern
@@ -249,6 +229,7 @@ pub fn triangle_surface_point(v: &[Vec3; 3], b: [f32; 3]) -> SurfacePoint {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lanes::LANES;
 
     /// Hard cases among random points: a point at the origin (steps from zero), a zero error
     /// bound, a light behind the surface, a light at the point, and an overflowing offset.
@@ -267,8 +248,12 @@ mod tests {
             (SurfacePoint { p: Vec3::splat(f32::MAX), p_error: Vec3::splat(f32::MAX), n: Vec3::X }, Vec3::ONE),
         ]);
         for block in cases.chunks(LANES) {
-            let column = |f: &dyn Fn(usize) -> Vec3| -> Lanes3 {
-                std::array::from_fn(|a| std::array::from_fn(|l| f(l.min(block.len() - 1))[a]))
+            let column = |f: &dyn Fn(usize) -> Vec3| {
+                let mut c = Vec3x16::ZERO;
+                for l in 0..LANES {
+                    c.set_lane(l, f(l.min(block.len() - 1)));
+                }
+                c
             };
             let from = [column(&|l| block[l].0.p), column(&|l| block[l].0.p_error), column(&|l| block[l].0.n)];
             let [origin, dir] = spawn_rays_to_points_lanes([&from[0], &from[1], &from[2]], &column(&|l| block[l].1));

@@ -3,12 +3,13 @@
 //! the lanes (see the parent module) and is accurate to a few ulps, not correctly rounded: kernels
 //! that use them are tested against the scalar code they stand for.
 
-use super::LANES;
+use super::{F32x16, LANES};
 
 /// e^x per lane, for x clamped to [-87, 88] (e^-87 = 1.6e-38 is the smallest result: no
 /// subnormals, no zero). Relative error under 2.5e-7 (3 ulps), measured in the tests.
 #[inline(always)]
-pub fn exp(x: &[f32; LANES]) -> [f32; LANES] {
+pub fn exp(x: F32x16) -> F32x16 {
+    let x = &x.0;
     // Cephes expf (S. L. Moshier, cephes/single/expf.c): x = n ln 2 + r, |r| <= ln 2 / 2, ln 2 in
     // two parts (C1 exact in 9 bits, so n C1 is exact) and a degree-7 polynomial for e^r.
     const C1: f32 = 0.693_359_4;
@@ -36,13 +37,14 @@ pub fn exp(x: &[f32; LANES]) -> [f32; LANES] {
         let scale = f32::from_bits(((n + 127) << 23) as u32);
         out[l] = (p * z + r + 1.0) * scale;
     }
-    out
+    F32x16(out)
 }
 
 /// atan2(y, x) per lane for y >= 0 (the angle of (x, y) from +x, in [0, pi]); 0 for y = x = 0.
 /// Absolute error under 3e-7 and relative error under 3e-7 for small angles (the tests).
 #[inline(always)]
-pub fn atan2_upper(y: &[f32; LANES], x: &[f32; LANES]) -> [f32; LANES] {
+pub fn atan2_upper(y: F32x16, x: F32x16) -> F32x16 {
+    let (y, x) = (&y.0, &x.0);
     use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
     // Cephes atanf (cephes/single/atanf.c): the ratio t = y / |x| reduced to |u| <= tan(pi/8) by
     // atan t = pi/4 + atan((t - 1) / (t + 1)) above tan(pi/8) and pi/2 - atan(1 / t) above
@@ -87,7 +89,7 @@ pub fn atan2_upper(y: &[f32; LANES], x: &[f32; LANES]) -> [f32; LANES] {
         let a = base[l] + ((((P[0] * z + P[1]) * z + P[2]) * z + P[3]) * z * u + u);
         out[l] = if x[l] < 0.0 { PI - a } else { a };
     }
-    out
+    F32x16(out)
 }
 
 #[cfg(test)]
@@ -127,7 +129,7 @@ mod tests {
         xs.extend((-250..=250).map(|n| n as f32 * std::f32::consts::LN_2 / 2.0).filter(|x| x.abs() <= 87.0));
         xs.extend([0.0, -0.0, 1e-30, -1e-30, 1e-7, -1e-7, 88.0, -87.0, f32::MIN_POSITIVE]);
         let pairs: Vec<[f32; 2]> = xs.iter().map(|&x| [x, 0.0]).collect();
-        let levels = per_level(&pairs, |x, _| exp(x));
+        let levels = per_level(&pairs, |x, _| exp(F32x16(*x)).0);
         for got in &levels {
             assert_eq!(got, &levels[0], "the levels differ");
         }
@@ -138,8 +140,8 @@ mod tests {
             .fold(0.0f64, f64::max);
         assert!(worst < 2.5e-7, "exp: worst relative error {worst:e}");
         // Clamped, not overflowing or flushing to zero; NaN stays NaN.
-        let ends = exp(&std::array::from_fn(|l| [1e3, -1e3, f32::NAN, 88.5][l % 4]));
-        assert_eq!(ends[0], exp(&[88.0; LANES])[0]);
+        let ends = exp(F32x16(std::array::from_fn(|l| [1e3, -1e3, f32::NAN, 88.5][l % 4]))).0;
+        assert_eq!(ends[0], exp(F32x16::splat(88.0))[0]);
         assert!(ends[0].is_finite() && ends[1] > 0.0 && ends[2].is_nan() && ends[3] == ends[0]);
     }
 
@@ -164,7 +166,7 @@ mod tests {
             pairs.extend([[t, 1.0], [t, -1.0], [1.0, t], [1.0, -t], [t, 0.5]]);
         }
         pairs.extend([[0.0, 0.0], [0.0, -0.0], [0.0, 1.0], [0.0, -1.0], [1.0, 0.0], [2.0, 0.0]]);
-        let levels = per_level(&pairs, atan2_upper);
+        let levels = per_level(&pairs, |y, x| atan2_upper(F32x16(*y), F32x16(*x)).0);
         for got in &levels {
             assert_eq!(got, &levels[0], "the levels differ");
         }

@@ -1,6 +1,7 @@
-//! Lane kernels: code written as loops over fixed-size arrays of `LANES` values, which LLVM
-//! turns into vector instructions, and a run-time choice of the widest instruction set the CPU
-//! has to compile them for. Without `-C target-cpu`, Rust targets baseline x86-64 (SSE2, 4 f32
+//! Lane kernels: code written over the lane types [`F32x16`], [`U32x16`], [`Mask16`] and
+//! [`Vec3x16`] (`LANES` values each), whose every operation is a loop over a fixed-size array that
+//! LLVM turns into vector instructions, and a run-time choice of the widest instruction set the
+//! CPU has to compile them for. Without `-C target-cpu`, Rust targets baseline x86-64 (SSE2, 4 f32
 //! lanes); `widest` runs its closure as AVX-512 or AVX2 code where the CPU has every feature
 //! that code is compiled with (`Level`).
 //!
@@ -14,9 +15,10 @@
 //! - lane arrays of plain numbers: copying `Option`s or structs of mixed field sizes between lane
 //!   arrays stalls on store-to-load forwarding, and a `match` per lane keeps a loop scalar.
 
-use glam::Vec3;
-
 pub mod math;
+mod types;
+
+pub use types::{F32x16, Mask16, U32x16, Vec3x16};
 
 /// Values per lane array: one AVX-512 register of f32.
 pub const LANES: usize = 16;
@@ -32,34 +34,6 @@ pub fn block<T>(column: &[T], first: usize) -> &[T; LANES] {
 #[inline(always)]
 pub fn block_mut<T>(column: &mut [T], first: usize) -> &mut [T; LANES] {
     column[first..].first_chunk_mut().expect("a whole block")
-}
-
-/// The lane columns (all x, all y, all z) of `LANES` vectors: read from the block as one run of floats, which LLVM loads as whole registers and shuffles, where reading
-/// `v[l].x` lane by lane made scalar loads and stores that stalled the vector loads after them.
-#[inline(always)]
-pub fn columns(v: &[Vec3; LANES]) -> [[f32; LANES]; 3] {
-    // SAFETY: `Vec3` is `#[repr(C)]` of three f32 (no padding), so the block is 3 * LANES f32.
-    let flat: &[f32; 3 * LANES] = unsafe { &*(v as *const [Vec3; LANES]).cast() };
-    let mut c = [[0.0f32; LANES]; 3];
-    for l in 0..LANES {
-        for a in 0..3 {
-            c[a][l] = flat[3 * l + a];
-        }
-    }
-    c
-}
-
-/// The inverse of [`columns`]: writes lane columns x, y, z as `LANES` vectors, through the block
-/// as one run of floats (an interleaving store LLVM can shuffle), not vector by vector.
-#[inline(always)]
-pub fn store_columns(c: &[[f32; LANES]; 3], v: &mut [Vec3; LANES]) {
-    // SAFETY: as in `columns`: `Vec3` is `#[repr(C)]` of three f32, the block 3 * LANES f32.
-    let flat: &mut [f32; 3 * LANES] = unsafe { &mut *(v as *mut [Vec3; LANES]).cast() };
-    for l in 0..LANES {
-        for a in 0..3 {
-            flat[3 * l + a] = c[a][l];
-        }
-    }
 }
 
 /// Runs `f` compiled for the widest instruction set the CPU has ([`level`]: AVX-512 or AVX2,
@@ -219,20 +193,5 @@ mod tests {
         for &f in level.features() {
             assert_eq!(cpu_has(f), Some(true), "{level:?} in use without {f}");
         }
-    }
-
-    #[test]
-    fn columns_of_vectors() {
-        let c: [[f32; LANES]; 3] = std::array::from_fn(|a| std::array::from_fn(|l| (100 * a + l) as f32 - 0.5));
-        let v: [Vec3; LANES] = std::array::from_fn(|l| Vec3::new(c[0][l], c[1][l], c[2][l]));
-        assert_eq!(v[5], Vec3::new(4.5, 104.5, 204.5));
-        assert_eq!(columns(&v), c);
-        assert_eq!(widest(|| columns(&v)), c);
-        let mut back = [Vec3::NAN; LANES];
-        store_columns(&c, &mut back);
-        assert_eq!(back, v);
-        let mut back = [Vec3::NAN; LANES];
-        widest(|| store_columns(&c, &mut back));
-        assert_eq!(back, v);
     }
 }

@@ -8,7 +8,7 @@ use glam::Vec3;
 use super::emitter::check_amount;
 use super::{Amount, ColorQuery, Emitter, LiSample, LightBounds, LightError, LightSampleContext, Quantity};
 use crate::geometry::Transform;
-use crate::lanes::LANES;
+use crate::lanes::{F32x16, Mask16, U32x16, Vec3x16};
 use crate::spectrum::Spectrum;
 
 /// Default luminous power of a point light: 800 lm, about a 60 W incandescent bulb.
@@ -219,19 +219,19 @@ impl crate::light::table::Block for PointColumns {
     }
 }
 
-/// Sample_Li of `LANES` points toward point lights in RGB mode, as lane columns (x, y, z).
+/// Sample_Li of `LANES` points toward point lights in RGB mode.
 #[derive(Clone, Copy, Debug)]
 #[repr(align(64))]
 pub struct PointLanes {
     /// Light position.
-    pub target: [[f32; LANES]; 3],
+    pub target: Vec3x16,
     /// Unit direction toward the light.
-    pub wi: [[f32; LANES]; 3],
+    pub wi: Vec3x16,
     /// Photometric RGB I / r^2.
-    pub radiance: [[f32; LANES]; 3],
-    /// False where `sample_li` has no sample (the point is at the light, or r^2 overflows) or
+    pub radiance: Vec3x16,
+    /// Unset where `sample_li` has no sample (the point is at the light, or r^2 overflows) or
     /// its radiance is not finite.
-    pub valid: [bool; LANES],
+    pub valid: Mask16,
 }
 
 impl PointLanes {
@@ -239,14 +239,12 @@ impl PointLanes {
     /// it has no sample.
     #[inline(always)]
     pub fn li_sample(&self, l: usize) -> Option<LiSample> {
-        let v = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]);
-        let radiance =
-            crate::spectrum::SampledSpectrum([self.radiance[0][l], self.radiance[1][l], self.radiance[2][l], 0.0]);
-        self.valid[l].then(|| LiSample {
-            radiance,
-            wi: v(&self.wi),
+        let r = self.radiance.lane(l);
+        self.valid.test(l).then(|| LiSample {
+            radiance: crate::spectrum::SampledSpectrum([r.x, r.y, r.z, 0.0]),
+            wi: self.wi.lane(l),
             pdf: 1.0,
-            p_light: v(&self.target),
+            p_light: self.target.lane(l),
             n_light: Vec3::ZERO,
         })
     }
@@ -256,48 +254,22 @@ impl PointColumns {
     /// [`Self::sample_li`] in RGB mode for `LANES` points at once, bit for bit: lane `l` samples
     /// light `rows[l]` from `p[l]`. Every row must be a valid row.
     #[inline(always)]
-    pub fn sample_li_rgb_lanes(&self, rows: &[u32; LANES], p: &[[f32; LANES]; 3]) -> PointLanes {
-        let (mut target, mut rgb) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
-        // The operations of `LightSampleContext::toward` and `Self::sample_li`, in order, one step
-        // per loop over all lanes (so that LLVM vectorises across lanes).
-        let mut d = [[0.0f32; LANES]; 3];
-        if rows.iter().all(|&r| r == rows[0]) {
+    pub fn sample_li_rgb_lanes(&self, rows: U32x16, p: &Vec3x16) -> PointLanes {
+        // The operations of `LightSampleContext::toward` and `Self::sample_li`, in order.
+        let (target, rgb) = if rows.is_uniform() {
             // One light for every lane (a one-light scene, or neighbours that chose alike): whole
-            // lanes of one value, without the per-lane stores a gather makes, and the direction
-            // from the value itself (reading it back from the lanes stalled).
-            let (x, c) = (self.position[rows[0] as usize], self.rgb[rows[0] as usize]);
-            for a in 0..3 {
-                (target[a], rgb[a]) = ([x[a]; LANES], [c[a]; LANES]);
-                for l in 0..LANES {
-                    d[a][l] = x[a] - p[a][l];
-                }
-            }
+            // lanes of one value, without the per-lane stores a gather makes.
+            let row = rows.0[0] as usize;
+            (Vec3x16::splat(self.position[row]), Vec3x16::splat(self.rgb[row]))
         } else {
-            for l in 0..LANES {
-                let (x, c) = (self.position[rows[l] as usize], self.rgb[rows[l] as usize]);
-                (target[0][l], target[1][l], target[2][l]) = (x.x, x.y, x.z);
-                (rgb[0][l], rgb[1][l], rgb[2][l]) = (c.x, c.y, c.z);
-            }
-            for a in 0..3 {
-                for l in 0..LANES {
-                    d[a][l] = target[a][l] - p[a][l];
-                }
-            }
-        }
-        let (mut inv_r, mut inv_r2, mut valid) = ([0.0f32; LANES], [0.0f32; LANES], [false; LANES]);
-        for l in 0..LANES {
-            let r2 = d[0][l] * d[0][l] + d[1][l] * d[1][l] + d[2][l] * d[2][l];
-            (inv_r[l], inv_r2[l]) = (1.0 / r2.sqrt(), 1.0 / r2);
-            valid[l] = r2 > 0.0 && r2.is_finite() && inv_r2[l].is_finite();
-        }
-        let (mut wi, mut radiance) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
-        for a in 0..3 {
-            for l in 0..LANES {
-                wi[a][l] = d[a][l] * inv_r[l];
-                radiance[a][l] = rgb[a][l] * inv_r2[l];
-                valid[l] &= radiance[a][l].is_finite();
-            }
-        }
+            (Vec3x16::gather(&self.position, rows), Vec3x16::gather(&self.rgb, rows))
+        };
+        let d = target - *p;
+        let r2 = d.length_squared();
+        let (inv_r, inv_r2) = (1.0 / r2.sqrt(), 1.0 / r2);
+        let wi = d * inv_r;
+        let radiance = rgb * inv_r2;
+        let valid = r2.gt(F32x16::ZERO) & r2.is_finite() & inv_r2.is_finite() & radiance.is_finite();
         PointLanes { target, wi, radiance, valid }
     }
 }
@@ -324,9 +296,9 @@ mod tests {
         }
         let mut compared = 0;
         for block in 0..40 {
-            let mut p = [[0.0f32; LANES]; 3];
-            let mut rows = [0u32; LANES];
-            for l in 0..LANES {
+            let mut p = Vec3x16::ZERO;
+            let mut rows = U32x16::splat(0);
+            for l in 0..crate::lanes::LANES {
                 let x = Vec3::new(rng.range(-5.0, 5.0), rng.range(-1.0, 3.0), rng.range(-5.0, 5.0));
                 let x = match (block, l) {
                     (0, 0) => points.position[0],
@@ -334,23 +306,23 @@ mod tests {
                     (0, 2) => Vec3::new(1e30, 0.0, 0.0),
                     _ => x,
                 };
-                (p[0][l], p[1][l], p[2][l]) = (x.x, x.y, x.z);
-                rows[l] = if block % 2 == 0 { 1 } else { rng.below(3) as u32 };
+                p.set_lane(l, x);
+                rows.0[l] = if block % 2 == 0 { 1 } else { rng.below(3) as u32 };
             }
-            let lanes = crate::lanes::widest(|| points.sample_li_rgb_lanes(&rows, &p));
-            for l in 0..LANES {
-                let (row, ctx) = (rows[l] as usize, LightSampleContext::at(Vec3::new(p[0][l], p[1][l], p[2][l])));
+            let lanes = crate::lanes::widest(|| points.sample_li_rgb_lanes(rows, &p));
+            for l in 0..crate::lanes::LANES {
+                let (row, ctx) = (rows.0[l] as usize, LightSampleContext::at(p.lane(l)));
                 let scalar = points.sample_li(row, &ctx, ColorQuery::Rgb).filter(|s| s.radiance.is_finite());
                 assert_eq!(
                     points.get(row).sample_li(&ctx, ColorQuery::Rgb),
                     points.sample_li(row, &ctx, ColorQuery::Rgb)
                 );
                 let Some(s) = scalar else {
-                    assert!(!lanes.valid[l], "block {block}, lane {l}");
+                    assert!(!lanes.valid.test(l), "block {block}, lane {l}");
                     continue;
                 };
-                assert!(lanes.valid[l]);
-                let lane = |c: &[[f32; LANES]; 3]| Vec3::new(c[0][l], c[1][l], c[2][l]).to_array().map(f32::to_bits);
+                assert!(lanes.valid.test(l));
+                let lane = |c: &Vec3x16| c.lane(l).to_array().map(f32::to_bits);
                 assert_eq!(lane(&lanes.wi), s.wi.to_array().map(f32::to_bits));
                 assert_eq!(lane(&lanes.radiance), [0, 1, 2].map(|c| s.radiance.0[c].to_bits()));
                 assert_eq!(lane(&lanes.target), s.p_light.to_array().map(f32::to_bits));

@@ -8,9 +8,8 @@
 use glam::Vec4;
 
 use super::bvh::{BvhSampler, ONE_MINUS_EPSILON};
-use super::importance_lanes::Mask16;
 use super::wide::choose_lane;
-use crate::lanes::LANES;
+use crate::lanes::{F32x16, LANES, Vec3x16};
 use crate::light::{LightId, LightKind};
 
 /// Fewest lanes at one node for which the 16-wide pass pays over 4-wide ones per lane.
@@ -33,17 +32,11 @@ impl BvhSampler {
     /// columns; zero normals for none) and numbers `u`. Lanes outside `active` choose nothing.
     /// Run it inside `lanes::widest`.
     #[inline(always)]
-    pub fn sample_lanes(
-        &self,
-        p: &[[f32; LANES]; 3],
-        n: &[[f32; LANES]; 3],
-        u: &[f32; LANES],
-        active: u32,
-    ) -> LaneChoices {
+    pub fn sample_lanes(&self, p: &Vec3x16, n: &Vec3x16, u: &F32x16, active: u32) -> LaneChoices {
         let none = LightId { kind: LightKind::Point, row: 0 };
         let mut out = LaneChoices { light: [none; LANES], pmf: [0.0; LANES], chosen: 0 };
-        let point = |l: usize| glam::Vec3::new(p[0][l], p[1][l], p[2][l]);
-        let normal = |l: usize| glam::Vec3::new(n[0][l], n[1][l], n[2][l]);
+        let (point, normal) = (|l: usize| p.lane(l), |l: usize| n.lane(l));
+        let u = &u.0;
         let p_inf = self.infinite_probability();
         let (mut remapped, mut pmf, mut at) = ([0f32; LANES], [0f32; LANES], [0u32; LANES]);
         // Lanes still walking the tree.
@@ -64,10 +57,8 @@ impl BvhSampler {
             pmf[l] = 1.0 - p_inf;
             walking |= 1 << l;
         }
-        let mut has_n = [false; LANES];
-        for l in 0..LANES {
-            has_n[l] = (n[0][l] != 0.0) | (n[1][l] != 0.0) | (n[2][l] != 0.0);
-        }
+        let zero = F32x16::ZERO;
+        let has_n = n.x.ne(zero) | n.y.ne(zero) | n.z.ne(zero);
         while walking != 0 {
             let w = at[walking.trailing_zeros() as usize];
             let mut here = 0u32;
@@ -80,7 +71,7 @@ impl BvhSampler {
             if here.count_ones() >= SHARED_PASS_LANES {
                 let mut c4 = [[0f32; LANES]; 4];
                 for (c, column) in c4.iter_mut().enumerate() {
-                    *column = node.importance_from_points(c, p, n, Mask16::from(has_n)).0;
+                    *column = node.importance_from_points(c, p, n, has_n).0;
                 }
                 for (l, weight) in weights.iter_mut().enumerate() {
                     *weight = Vec4::new(c4[0][l], c4[1][l], c4[2][l], c4[3][l]);

@@ -1,6 +1,6 @@
 //! The light BVH's importance formula ([`super::importance::ClusterQuery::importance`], the
 //! scalar reference) written once over lane types: a wide node's four clusters seen from one
-//! point ([`Vec4`]), or one cluster seen from [`LANES`] points ([`F32x16`], for batches of
+//! point ([`Vec4`]), or one cluster seen from `LANES` points ([`F32x16`], for batches of
 //! shading points in `BvhSampler::sample_lanes`). Both lane types round every operation as the
 //! other does (IEEE +, -, *, /, sqrt; `max` / `min` with SSE's operand order), so a point's
 //! importances, and so its choices and pmfs, are the same bits whichever form computed them.
@@ -10,7 +10,7 @@ use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Sub};
 use glam::{BVec4A, Vec4};
 
 use super::importance::{MAX_IMPORTANCE, MIN_DISTANCE_SQUARED};
-use crate::lanes::LANES;
+use crate::lanes::{F32x16, Mask16};
 
 /// What the importance formula needs of a lane type.
 pub(super) trait Lanes:
@@ -85,153 +85,55 @@ impl Lanes for Vec4 {
     }
 }
 
-/// [`LANES`] f32 as plain loops, which compile to one register per operation inside
-/// [`crate::lanes::widest`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct F32x16(pub [f32; LANES]);
-
-/// [`F32x16`]'s comparisons.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Mask16([bool; LANES]);
-
-impl From<[bool; LANES]> for Mask16 {
-    fn from(lanes: [bool; LANES]) -> Self {
-        Self(lanes)
-    }
-}
-
-macro_rules! lane_op {
-    ($trait:ident, $f:ident, $op:tt) => {
-        impl $trait for F32x16 {
-            type Output = Self;
-            #[inline(always)]
-            fn $f(self, o: Self) -> Self {
-                let mut r = [0.0; LANES];
-                for l in 0..LANES {
-                    r[l] = self.0[l] $op o.0[l];
-                }
-                Self(r)
-            }
-        }
-    };
-}
-lane_op!(Add, add, +);
-lane_op!(Sub, sub, -);
-lane_op!(Mul, mul, *);
-lane_op!(Div, div, /);
-
-impl Neg for F32x16 {
-    type Output = Self;
-    #[inline(always)]
-    fn neg(self) -> Self {
-        self.map(|v| -v)
-    }
-}
-
-impl BitOr for Mask16 {
-    type Output = Self;
-    #[inline(always)]
-    fn bitor(self, o: Self) -> Self {
-        let mut r = [false; LANES];
-        for l in 0..LANES {
-            r[l] = self.0[l] | o.0[l];
-        }
-        Self(r)
-    }
-}
-
-impl BitAnd for Mask16 {
-    type Output = Self;
-    #[inline(always)]
-    fn bitand(self, o: Self) -> Self {
-        let mut r = [false; LANES];
-        for l in 0..LANES {
-            r[l] = self.0[l] & o.0[l];
-        }
-        Self(r)
-    }
-}
-
-impl F32x16 {
-    #[inline(always)]
-    fn map(self, f: impl Fn(f32) -> f32) -> Self {
-        let mut r = [0.0; LANES];
-        for l in 0..LANES {
-            r[l] = f(self.0[l]);
-        }
-        Self(r)
-    }
-    #[inline(always)]
-    fn zip(self, o: Self, f: impl Fn(f32, f32) -> f32) -> Self {
-        let mut r = [0.0; LANES];
-        for l in 0..LANES {
-            r[l] = f(self.0[l], o.0[l]);
-        }
-        Self(r)
-    }
-    #[inline(always)]
-    fn test(self, o: Self, f: impl Fn(f32, f32) -> bool) -> Mask16 {
-        let mut r = [false; LANES];
-        for l in 0..LANES {
-            r[l] = f(self.0[l], o.0[l]);
-        }
-        Mask16(r)
-    }
-}
-
 impl Lanes for F32x16 {
     type Mask = Mask16;
     #[inline(always)]
     fn splat(v: f32) -> Self {
-        Self([v; LANES])
+        F32x16::splat(v)
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        self.map(f32::sqrt)
+        F32x16::sqrt(self)
     }
     #[inline(always)]
     fn abs(self) -> Self {
-        self.map(f32::abs)
+        F32x16::abs(self)
     }
     #[inline(always)]
     fn max(self, o: Self) -> Self {
-        self.zip(o, |a, b| if a > b { a } else { b })
+        F32x16::max(self, o)
     }
     #[inline(always)]
     fn min(self, o: Self) -> Self {
-        self.zip(o, |a, b| if a < b { a } else { b })
+        F32x16::min(self, o)
     }
     #[inline(always)]
     fn gt(self, o: Self) -> Mask16 {
-        self.test(o, |a, b| a > b)
+        F32x16::gt(self, o)
     }
     #[inline(always)]
     fn ge(self, o: Self) -> Mask16 {
-        self.test(o, |a, b| a >= b)
+        F32x16::ge(self, o)
     }
     #[inline(always)]
     fn lt(self, o: Self) -> Mask16 {
-        self.test(o, |a, b| a < b)
+        F32x16::lt(self, o)
     }
     #[inline(always)]
     fn le(self, o: Self) -> Mask16 {
-        self.test(o, |a, b| a <= b)
+        F32x16::le(self, o)
     }
     #[inline(always)]
     fn select(mask: Mask16, yes: Self, no: Self) -> Self {
-        let mut r = [0.0; LANES];
-        for l in 0..LANES {
-            r[l] = if mask.0[l] { yes.0[l] } else { no.0[l] };
-        }
-        Self(r)
+        F32x16::select(mask, yes, no)
     }
     #[inline(always)]
     fn all(mask: Mask16) -> bool {
-        mask.0.iter().fold(true, |a, &b| a & b)
+        mask.all()
     }
     #[inline(always)]
     fn any(mask: Mask16) -> bool {
-        mask.0.iter().fold(false, |a, &b| a | b)
+        mask.any()
     }
 }
 

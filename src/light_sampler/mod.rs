@@ -12,7 +12,7 @@ mod wide;
 
 use bevy_ecs::resource::Resource;
 
-use crate::lanes::LANES;
+use crate::lanes::{F32x16, LANES, Vec3x16};
 use crate::light::{LightId, LightSampleContext, LightTable};
 use crate::shading::LightSamplerKind;
 
@@ -86,17 +86,11 @@ impl LightSampler {
     /// BVH sampler weighs each node's clusters for all the points at it at once. Run it inside
     /// `lanes::widest`.
     #[inline(always)]
-    pub fn sample_lanes(
-        &self,
-        p: &[[f32; LANES]; 3],
-        n: &[[f32; LANES]; 3],
-        u: &[f32; LANES],
-        active: u32,
-    ) -> LaneChoices {
+    pub fn sample_lanes(&self, p: &Vec3x16, n: &Vec3x16, u: &F32x16, active: u32) -> LaneChoices {
+        let finite = p.is_finite();
         let mut active = active;
         for l in 0..LANES {
-            let finite = p[0][l].is_finite() & p[1][l].is_finite() & p[2][l].is_finite();
-            active &= !(u32::from(!finite) << l);
+            active &= !(u32::from(!finite.test(l)) << l);
         }
         if let Self::Bvh(s) = self {
             return s.sample_lanes(p, n, u, active);
@@ -106,8 +100,8 @@ impl LightSampler {
         while active != 0 {
             let l = active.trailing_zeros() as usize;
             active &= active - 1;
-            let ctx = LightSampleContext::at(glam::Vec3::new(p[0][l], p[1][l], p[2][l]));
-            if let Some((id, q)) = self.sample(&ctx, u[l]) {
+            let ctx = LightSampleContext::at(p.lane(l));
+            if let Some((id, q)) = self.sample(&ctx, u.0[l]) {
                 (out.light[l], out.pmf[l], out.chosen) = (id, q, out.chosen | 1 << l);
             }
         }

@@ -8,8 +8,8 @@ use glam::{BVec4A, Vec3, Vec4};
 
 use super::bvh_build::Node;
 use super::importance::{ClusterQuery, EMPTY_BOUNDS};
-use super::importance_lanes::{self, ClusterLanes, F32x16, Lanes, Mask16};
-use crate::lanes::LANES;
+use super::importance_lanes::{self, ClusterLanes};
+use crate::lanes::{F32x16, Mask16, Vec3x16};
 use crate::light::{LightId, LightKind};
 
 /// Marks "no slot" in `slot_of` and "no parent" for the root.
@@ -105,16 +105,10 @@ impl WideNode {
         }
     }
 
-    /// Cluster `c` seen from [`LANES`] points (`p`, `n` as lane columns; `has_n`: lanes with a
+    /// Cluster `c` seen from `LANES` points (`p`, `n` as lane columns; `has_n`: lanes with a
     /// normal): the same bits as lane `c` of [`Self::importance`] at each point.
     #[inline(always)]
-    pub fn importance_from_points(
-        &self,
-        c: usize,
-        p: &[[f32; LANES]; 3],
-        n: &[[f32; LANES]; 3],
-        has_n: Mask16,
-    ) -> F32x16 {
+    pub fn importance_from_points(&self, c: usize, p: &Vec3x16, n: &Vec3x16, has_n: Mask16) -> F32x16 {
         let one = |v: &Vec4| F32x16::splat(v[c]);
         let three = |v: &[Vec4; 3]| [one(&v[0]), one(&v[1]), one(&v[2])];
         let cluster = ClusterLanes {
@@ -128,7 +122,7 @@ impl WideNode {
             cos_theta_e: one(&self.cos_theta_e),
             two_sided: one(&self.two_sided),
         };
-        importance_lanes::importance(&cluster, p.map(F32x16), n.map(F32x16), has_n)
+        importance_lanes::importance(&cluster, [p.x, p.y, p.z], [n.x, n.y, n.z], has_n)
     }
 }
 

@@ -5,8 +5,8 @@ use bevy_ecs::component::Component;
 use glam::{Vec2, Vec3};
 
 use crate::geometry::Transform;
-use crate::geometry::ray::{Lanes3, Ray};
-use crate::lanes::LANES;
+use crate::geometry::ray::Ray;
+use crate::lanes::{F32x16, LANES, U32x16, Vec3x16};
 
 /// A perspective camera at its entity's `Transform`, looking along local -Z.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
@@ -75,20 +75,11 @@ impl PinholeCamera {
     /// The directions of [`Self::ray`] for `LANES` samples at once, bit for bit: lane `l` is
     /// pixel (`x[l]`, `y[l]`) at offset (`u[l]`, `v[l]`).
     #[inline(always)]
-    pub fn dirs_lanes(&self, [x, y]: [&[u32; LANES]; 2], u: &[f32; LANES], v: &[f32; LANES]) -> Lanes3 {
-        let mut d = [[0.0f32; LANES]; 3];
-        for l in 0..LANES {
-            let (fx, fy) = (x[l] as f32 + u[l], y[l] as f32 + v[l]);
-            // Vec3 arithmetic and `normalize` (times 1 / sqrt(dot)), in the same order.
-            let c = [self.corner.x, self.corner.y, self.corner.z];
-            let (px, py) = ([self.per_x.x, self.per_x.y, self.per_x.z], [self.per_y.x, self.per_y.y, self.per_y.z]);
-            let w: [f32; 3] = std::array::from_fn(|a| c[a] + px[a] * fx + py[a] * fy);
-            let inv = 1.0 / (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-            for a in 0..3 {
-                d[a][l] = w[a] * inv;
-            }
-        }
-        d
+    pub fn dirs_lanes(&self, [x, y]: [&[u32; LANES]; 2], u: &F32x16, v: &F32x16) -> Vec3x16 {
+        let (fx, fy) = (U32x16(*x).to_f32() + *u, U32x16(*y).to_f32() + *v);
+        // Vec3 arithmetic and `normalize` (times 1 / sqrt(dot)), in the same order.
+        let w = Vec3x16::splat(self.corner) + Vec3x16::splat(self.per_x) * fx + Vec3x16::splat(self.per_y) * fy;
+        w * (1.0 / w.length())
     }
 
     /// Image size.
@@ -123,14 +114,13 @@ impl CameraModel {
     /// The directions of [`Self::ray`] for `LANES` samples of pixels (`x`, `y`) at offsets
     /// (`u`, `v`), as lane columns. Every ray starts at [`Self::origin`].
     #[inline(always)]
-    pub fn dirs_lanes(&self, xy: [&[u32; LANES]; 2], u: &[f32; LANES], v: &[f32; LANES]) -> Lanes3 {
+    pub fn dirs_lanes(&self, xy: [&[u32; LANES]; 2], u: &F32x16, v: &F32x16) -> Vec3x16 {
         match self {
             Self::Pinhole(c) => c.dirs_lanes(xy, u, v),
             Self::LatLong { .. } => {
-                let mut d = [[0.0; LANES]; 3];
+                let mut d = Vec3x16::ZERO;
                 for l in 0..LANES {
-                    let dir = self.ray(xy[0][l], xy[1][l], Vec2::new(u[l], v[l])).dir;
-                    (d[0][l], d[1][l], d[2][l]) = (dir.x, dir.y, dir.z);
+                    d.set_lane(l, self.ray(xy[0][l], xy[1][l], Vec2::new(u[l], v[l])).dir);
                 }
                 d
             }
@@ -193,13 +183,12 @@ mod tests {
             for _ in 0..20 {
                 let x: [u32; LANES] = std::array::from_fn(|_| (rng.next_u64() % w as u64) as u32);
                 let y: [u32; LANES] = std::array::from_fn(|_| (rng.next_u64() % h as u64) as u32);
-                let (u, v): ([f32; LANES], [f32; LANES]) =
-                    (std::array::from_fn(|_| rng.f32()), std::array::from_fn(|_| rng.f32()));
+                let (u, v) = (F32x16(std::array::from_fn(|_| rng.f32())), F32x16(std::array::from_fn(|_| rng.f32())));
                 let dirs = camera.dirs_lanes([&x, &y], &u, &v);
                 for l in 0..LANES {
                     let one = camera.ray(x[l], y[l], Vec2::new(u[l], v[l]));
                     assert_eq!(camera.origin(), one.origin);
-                    let dir = Vec3::new(dirs[0][l], dirs[1][l], dirs[2][l]);
+                    let dir = dirs.lane(l);
                     assert_eq!(dir.to_array().map(f32::to_bits), one.dir.to_array().map(f32::to_bits), "{camera:?}");
                 }
             }

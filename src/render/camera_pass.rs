@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use super::bsdf::bent_shading_normal;
 use super::camera::CameraModel;
 use crate::geometry::{GeometryId, Hit, HitSink, RAY_CHUNK, SceneBvh};
-use crate::lanes::LANES;
+use crate::lanes::{F32x16, LANES, Vec3x16};
 use crate::rng::{Pattern, SampleStream};
 use crate::shading::{ImageLayout, ShadingBatch};
 
@@ -131,15 +131,14 @@ struct SlotWriter<'c, 'a> {
     b: usize,
     /// Lanes that are samples (the chunk's last block may be partial).
     n: usize,
-    dirs: &'c [[f32; LANES]; 3],
+    dirs: &'c Vec3x16,
 }
 
 impl HitSink for SlotWriter<'_, '_> {
     #[inline(always)]
     fn hit(&mut self, l: usize, hit: Option<Hit>) {
         if l < self.n {
-            let dir = Vec3::new(self.dirs[0][l], self.dirs[1][l], self.dirs[2][l]);
-            write_slot(self.chunk, self.b + l, dir, hit);
+            write_slot(self.chunk, self.b + l, self.dirs.lane(l), hit);
         }
     }
 }
@@ -286,7 +285,7 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
     let row_step = full_width - width;
     let len = chunk.pixel.len();
     let origin = camera.origin();
-    let origins = [[origin.x; LANES], [origin.y; LANES], [origin.z; LANES]];
+    let origins = Vec3x16::splat(origin);
     let mut b = 0;
     while b < len {
         let end = (b + LANES).min(len);
@@ -337,7 +336,7 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
         };
         let dirs = camera.dirs_lanes([&x, &y], &u, &v);
         let mut writer = SlotWriter { chunk: &mut *chunk, b, n: end - b, dirs: &dirs };
-        bvh.closest_hits_packet(&origins, &dirs, &[f32::INFINITY; LANES], end - b, &mut writer);
+        bvh.closest_hits_packet(&origins, &dirs, &F32x16::splat(f32::INFINITY), end - b, &mut writer);
         b = end;
     }
 }

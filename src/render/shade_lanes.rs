@@ -11,7 +11,7 @@ use glam::Vec3;
 use super::camera_pass::SampleSurface;
 use super::renderer::{Strategy, power_heuristic};
 use super::shade::ShadeContext;
-use crate::lanes::{self, LANES};
+use crate::lanes::{self, F32x16, LANES, Mask16, Vec3x16};
 use crate::sampling::cosine_hemisphere_pdf;
 
 impl ShadeContext<'_> {
@@ -25,14 +25,12 @@ impl ShadeContext<'_> {
         // Base colour / pi (the Lambertian f above the surface) per lane. Neighbouring samples
         // usually share a surface, so its checks run once per run of equal (material, instance),
         // and a block of one surface fills whole lanes.
-        let mut f_up = [[0.0f32; LANES]; 3];
+        let mut f_up = Vec3x16::ZERO;
         let (material, instance) =
             (&self.columns.material[first..first + LANES], &self.columns.instance[first..first + LANES]);
         if material.iter().all(|&m| m == material[0]) && instance.iter().all(|&i| i == instance[0]) {
             let Some(base) = self.lambertian_base(material[0], instance[0]) else { return false };
-            for c in 0..3 {
-                f_up[c] = [base[c] * FRAC_1_PI; LANES];
-            }
+            f_up = Vec3x16::splat(Vec3::from(base) * FRAC_1_PI);
         } else {
             let (mut surface_of_base, mut base) = ((u32::MAX, u32::MAX), [0.0f32; 3]);
             for l in 0..LANES {
@@ -40,9 +38,7 @@ impl ShadeContext<'_> {
                     let Some(b) = self.lambertian_base(material[l], instance[l]) else { return false };
                     (surface_of_base, base) = ((material[l], instance[l]), b);
                 }
-                for c in 0..3 {
-                    f_up[c][l] = base[c] * FRAC_1_PI;
-                }
+                f_up.set_lane(l, Vec3::from(base) * FRAC_1_PI);
             }
         }
         // Point j's entries must be `e0 + (j - first) k ..` for a k shared by the block.
@@ -51,7 +47,7 @@ impl ShadeContext<'_> {
         if offsets.iter().enumerate().any(|(l, &o)| o as usize != e0 + l * k) {
             return false;
         }
-        let mut sum = [[0.0f32; LANES]; 3];
+        let mut sum = Vec3x16::ZERO;
         // A literal stride of 1 lets LLVM load the common case's columns as contiguous runs.
         if k == 1 {
             self.add_entry_lanes(first, e0, 1, &f_up, &mut sum);
@@ -60,9 +56,7 @@ impl ShadeContext<'_> {
                 self.add_entry_lanes(first, e0 + slot, k, &f_up, &mut sum);
             }
         }
-        for (l, o) in out.iter_mut().enumerate() {
-            *o = Vec3::new(sum[0][l], sum[1][l], sum[2][l]);
-        }
+        sum.store_vec3s(lanes::block_mut(out, 0));
         true
     }
 
@@ -87,20 +81,13 @@ impl ShadeContext<'_> {
     /// l, as `ShadeContext::shade` would. Loops over the lanes without branches (selects, `&`,
     /// both sides computed), so that they vectorise.
     #[inline(always)]
-    fn add_entry_lanes(
-        &self,
-        first: usize,
-        e: usize,
-        stride: usize,
-        f_up: &[[f32; LANES]; 3],
-        sum: &mut [[f32; LANES]; 3],
-    ) {
+    fn add_entry_lanes(&self, first: usize, e: usize, stride: usize, f_up: &Vec3x16, sum: &mut Vec3x16) {
         let lighting = self.lighting;
         let mis = self.strategy == Strategy::Mis;
         // The other strategies weigh every light sample alike, whatever its pdfs.
         let fixed_weight = self.strategy.light_weight(1.0, 1.0);
-        let dir = self.columns.dir.each_ref().map(|c| lanes::block(c, first));
-        let shading_normal = &self.batch.shading_normal[first..first + LANES];
+        let [dx, dy, dz] = self.columns.dir.each_ref().map(|c| F32x16::load(c, first));
+        let wo = -Vec3x16 { x: dx, y: dy, z: dz };
         // Slices of a length known at compile time for a literal stride: no bounds checks in the loop.
         let span = e..e + (LANES - 1) * stride + 1;
         let (wi, pdf, delta, radiance) = (
@@ -109,51 +96,36 @@ impl ShadeContext<'_> {
             &lighting.delta[span.clone()],
             &lighting.radiance[span],
         );
-        // One step per loop over the lanes: as one loop of whole entries, LLVM vectorised the
-        // first eight lanes and left the other eight scalar.
-        let (mut wo, mut wi_l, mut li) = ([[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3], [[0.0f32; LANES]; 3]);
-        let (mut pdf_l, mut delta_l) = ([0.0f32; LANES], [false; LANES]);
+        let (mut li, mut pdf_l, mut delta_l) = (Vec3x16::ZERO, F32x16::ZERO, [false; LANES]);
         for l in 0..LANES {
             let e = l * stride;
             let r = radiance[e];
-            for a in 0..3 {
-                (wo[a][l], li[a][l]) = (-dir[a][l], r.0[a]);
-            }
+            (li.x[l], li.y[l], li.z[l]) = (r.0[0], r.0[1], r.0[2]);
             (pdf_l[l], delta_l[l]) = (pdf[e], delta[e]);
         }
-        // Runs of whole blocks, read as such (see `lanes::columns`).
-        let ns = lanes::columns(lanes::block(shading_normal, 0));
-        if stride == 1 {
-            wi_l = lanes::columns(lanes::block(wi, 0));
+        // Runs of whole blocks, read as such (see `Vec3x16::from_vec3s`).
+        let ns = Vec3x16::load(&self.batch.shading_normal, first);
+        let wi_l = if stride == 1 {
+            Vec3x16::load(wi, 0)
         } else {
+            let mut w = Vec3x16::ZERO;
             for l in 0..LANES {
-                let w = wi[l * stride];
-                (wi_l[0][l], wi_l[1][l], wi_l[2][l]) = (w.x, w.y, w.z);
+                w.set_lane(l, wi[l * stride]);
             }
-        }
-        // Selects as bit masks (all ones or zero): selects on arrays of bools stayed scalar.
-        let (mut upper, mut s, mut counts) = ([0u32; LANES], [0.0f32; LANES], [0u32; LANES]);
-        for l in 0..LANES {
-            // `Bsdf::f` and `Bsdf::pdf` without a specular lobe: the frame's z is `ns`.
-            let cos_o = (wo[0][l] * ns[0][l]) + (wo[1][l] * ns[1][l]) + (wo[2][l] * ns[2][l]);
-            let cos_i = (wi_l[0][l] * ns[0][l]) + (wi_l[1][l] * ns[1][l]) + (wi_l[2][l] * ns[2][l]);
-            let is_upper = (cos_o > 0.0) & (cos_i > 0.0);
-            upper[l] = 0u32.wrapping_sub(is_upper as u32);
-            let bsdf_pdf = if is_upper { cosine_hemisphere_pdf(cos_i) } else { 0.0 };
-            let pdf = pdf_l[l];
-            let light_weight = if mis { power_heuristic(pdf, bsdf_pdf) } else { fixed_weight };
-            let w = if delta_l[l] { 1.0 } else { light_weight };
-            s[l] = cos_i.abs() * w / pdf;
-            // `shade` skips entries with pdf <= 0 and weight 0 (NaN goes on, as there).
-            counts[l] = 0u32.wrapping_sub((((pdf > 0.0) | pdf.is_nan()) & (w != 0.0)) as u32);
-        }
-        for c in 0..3 {
-            for l in 0..LANES {
-                let f = f32::from_bits(f_up[c][l].to_bits() & upper[l]);
-                let added = sum[c][l] + f * li[c][l] * s[l];
-                sum[c][l] = f32::from_bits((added.to_bits() & counts[l]) | (sum[c][l].to_bits() & !counts[l]));
-            }
-        }
+            w
+        };
+        let zero = F32x16::ZERO;
+        // `Bsdf::f` and `Bsdf::pdf` without a specular lobe: the frame's z is `ns`.
+        let (cos_o, cos_i) = (wo.dot(ns), wi_l.dot(ns));
+        let upper = cos_o.gt(zero) & cos_i.gt(zero);
+        let bsdf_pdf = F32x16::select(upper, cos_i.map(cosine_hemisphere_pdf), zero);
+        let light_weight = if mis { pdf_l.zip(bsdf_pdf, power_heuristic) } else { F32x16::splat(fixed_weight) };
+        let w = F32x16::select(Mask16::from_bools(delta_l), F32x16::ONE, light_weight);
+        let s = cos_i.abs() * w / pdf_l;
+        // `shade` skips entries with pdf <= 0 and weight 0 (NaN goes on, as there).
+        let counts = (pdf_l.gt(zero) | pdf_l.is_nan()) & w.ne(zero);
+        let f = Vec3x16::select(upper, *f_up, Vec3x16::ZERO);
+        *sum = Vec3x16::select(counts, *sum + f * li * s, *sum);
     }
 }
 

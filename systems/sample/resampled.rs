@@ -13,7 +13,7 @@
 use glam::Vec2;
 
 use super::{EntryColumns, NO_LIGHT, Sampled, Sampling};
-use crate::lanes::LANES;
+use crate::lanes::{F32x16, LANES, U32x16};
 use crate::light::{LiSample, LightFlags, LightId, LightKind, LightSampleContext};
 use crate::rng::SampleStream;
 
@@ -174,7 +174,7 @@ impl Sampling<'_> {
             for r in &mut rng {
                 *r = r.at_dimension(3 * j);
             }
-            let u: [f32; LANES] = std::array::from_fn(|l| rng[l].next_f32());
+            let u = F32x16(std::array::from_fn(|l| rng[l].next_f32()));
             let choices = self.sampler.sample_lanes(&block.p, &block.normal, &u, (1u32 << n) - 1);
             let (mut rows, mut points) = ([0u32; LANES], 0);
             for l in 0..n {
@@ -182,7 +182,8 @@ impl Sampling<'_> {
                     (rows[l], points) = (choices.light[l].row, points + 1);
                 }
             }
-            let lit = if points > 0 { Some(self.table.points.sample_li_rgb_lanes(&rows, &block.p)) } else { None };
+            let lit =
+                if points > 0 { Some(self.table.points.sample_li_rgb_lanes(U32x16(rows), &block.p)) } else { None };
             for l in 0..n {
                 if choices.chosen & (1 << l) == 0 {
                     continue;

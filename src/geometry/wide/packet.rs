@@ -13,10 +13,10 @@ use std::mem::MaybeUninit;
 use super::{EMPTY, LEAF, MAX_INV_DIR, PrimBlock, STACK, WIDTH, WideBvh};
 use crate::geometry::ray::gamma;
 use crate::geometry::triangle::{EARLY_REJECT_SLACK, t_error_bound};
-use crate::lanes::LANES;
+use crate::lanes::{LANES, Vec3x16};
 
 /// Lane columns: `[axis][lane]`.
-pub(crate) type Columns = [[f32; LANES]; 3];
+pub(crate) type Columns = Vec3x16;
 
 /// A packet's rays in the form the traversal and the triangle test read: origins, capped
 /// reciprocal directions, and the watertight test's axis choice and shear per lane.
@@ -42,7 +42,7 @@ impl RayPacket {
             let i = 1.0 / d;
             if i.is_finite() && i.abs() <= MAX_INV_DIR { i } else { MAX_INV_DIR.copysign(d) }
         };
-        let (mut inv_dir, mut shear) = ([[0f32; LANES]; 3], [[0f32; LANES]; 3]);
+        let (mut inv_dir, mut shear) = (Vec3x16::ZERO, Vec3x16::ZERO);
         let (mut neg, mut by_kz, mut valid) = ([0u32; 3], [0u32; 3], 0u32);
         for l in 0..LANES {
             let d = [dir[0][l], dir[1][l], dir[2][l]];
@@ -114,7 +114,7 @@ pub(crate) fn triangle_lanes(
     mask: u32,
     t_max: &[f32; LANES],
 ) -> TriangleLanes {
-    let mut out = TriangleLanes { hit: 0, exact: 0, t: [0.0; LANES], b: [[0.0; LANES]; 3] };
+    let mut out = TriangleLanes { hit: 0, exact: 0, t: [0.0; LANES], b: Vec3x16::ZERO };
     for (kz, &lanes) in rays.by_kz.iter().enumerate() {
         if lanes & mask != 0 {
             triangle_lanes_kz(block, k, rays, lanes & mask, t_max, permuted(kz), &mut out);
@@ -136,7 +136,7 @@ fn triangle_lanes_kz(
 ) {
     let (o, s) = (&rays.origin, &rays.shear);
     // p[vertex][axis][lane], translated, permuted and sheared.
-    let mut p = [[[0f32; LANES]; 3]; 3];
+    let mut p = [Vec3x16::ZERO; 3];
     for (vertex, pv) in p.iter_mut().enumerate() {
         let v = [block.v[vertex][ax][k], block.v[vertex][ay][k], block.v[vertex][az][k]];
         for l in 0..LANES {

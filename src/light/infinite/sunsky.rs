@@ -31,7 +31,7 @@ use rayon::prelude::*;
 
 use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions};
 use super::{ColorQuery, LiSample, LightError, LightFlags, LightSampleContext, SceneSphere, far_distance};
-use crate::lanes::{self, LANES};
+use crate::lanes::{self, F32x16, LANES};
 use crate::light::distant::SUN_ANGULAR_DIAMETER;
 use crate::sampling::{Frame, sample_uniform_cone_sin2};
 use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
@@ -308,11 +308,11 @@ fn fill_sky_image(
                 // Index loops: `step_by` may stay out of the widest code (see `lanes::widest`).
                 for k in 0..whole / LANES {
                     let b = k * LANES;
-                    let (c, s) = (lanes::block(cos_phi, b), lanes::block(sin_phi, b));
-                    let rgb = sky.rgb_nits_lanes(&factors, (sin_t, cos_t), c, s, sun);
-                    lanes::store_columns(&rgb, lanes::block_mut(row, b));
+                    let (c, s) = (F32x16::load(cos_phi, b), F32x16::load(sin_phi, b));
+                    let rgb = sky.rgb_nits_lanes(&factors, (sin_t, cos_t), &c, &s, sun);
+                    rgb.store_vec3s(lanes::block_mut(row, b));
                     for l in 0..LANES {
-                        let [r, g, b] = [rgb[0][l], rgb[1][l], rgb[2][l]].map(f64::from);
+                        let [r, g, b] = rgb.lane(l).to_array().map(f64::from);
                         acc[l] += weights.x * r + weights.y * g + weights.z * b;
                     }
                 }

@@ -1,4 +1,4 @@
-//! The RGB sky model over [`LANES`] directions of one lat-long row: the sky image's kernel. It is
+//! The RGB sky model over `LANES` directions of one lat-long row: the sky image's kernel. It is
 //! the second copy of [`SkyModel::rgb_nits_in_row`] (the reference, evaluated per ray), with the
 //! same operations in the same order, except that e^x and atan2 are the lane polynomials of
 //! [`crate::lanes::math`]; the tests bound the difference.
@@ -6,7 +6,7 @@
 use glam::Vec3;
 
 use super::hosek::{RgbRow, SkyModel};
-use crate::lanes::{LANES, math};
+use crate::lanes::{F32x16, Vec3x16, math};
 
 impl SkyModel {
     /// [`Self::rgb_nits_in_row`] toward the `LANES` directions (sin theta cos phi, cos theta,
@@ -16,41 +16,27 @@ impl SkyModel {
         &self,
         row: &RgbRow,
         (sin_t, cos_t): (f32, f32),
-        cos_phi: &[f32; LANES],
-        sin_phi: &[f32; LANES],
+        cos_phi: &F32x16,
+        sin_phi: &F32x16,
         sun: Vec3,
-    ) -> [[f32; LANES]; 3] {
-        let mut rgb = [[0.0f32; LANES]; 3];
+    ) -> Vec3x16 {
+        let mut rgb = Vec3x16::ZERO;
         if !(cos_t > 0.0) {
             return rgb;
         }
         // The direction, cos gamma and |w x sun| as glam's dot, cross and length compute them.
-        let (mut cos_g, mut cross) = ([0.0f32; LANES], [0.0f32; LANES]);
-        for l in 0..LANES {
-            let (x, y, z) = (sin_t * cos_phi[l], cos_t, sin_t * sin_phi[l]);
-            cos_g[l] = ((x * sun.x + y * sun.y) + z * sun.z).clamp(-1.0, 1.0);
-            let (cx, cy, cz) = (y * sun.z - sun.y * z, z * sun.x - sun.z * x, x * sun.y - sun.x * y);
-            cross[l] = ((cx * cx + cy * cy) + cz * cz).sqrt();
-        }
-        let gamma = math::atan2_upper(&cross, &cos_g);
-        // Index loop: a zip with `dome.to_array()` built the pair on the stack per block and
-        // stalled on reading it back (store forwarding).
+        let w = Vec3x16 { x: sin_t * *cos_phi, y: F32x16::splat(cos_t), z: sin_t * *sin_phi };
+        let sun_lanes = Vec3x16::splat(sun);
+        let cos_g = w.dot(sun_lanes).map(|v| v.clamp(-1.0, 1.0));
+        let gamma = math::atan2_upper(w.cross(sun_lanes).length(), cos_g);
         for ch in 0..3 {
             let [_, _, c, d, e, f, g, i, h] = self.rgb[ch].params;
-            let dome = row.dome[ch];
-            let mut eg = [0.0f32; LANES];
-            for l in 0..LANES {
-                eg[l] = e * gamma[l];
-            }
-            let glow = math::exp(&eg);
+            let glow = math::exp(e * gamma);
             // ChannelConfig::circumsolar, term for term.
-            for l in 0..LANES {
-                let cg = cos_g[l];
-                let x = 1.0 + h * h - 2.0 * h * cg;
-                let mie = (1.0 + cg * cg) / (x * x.sqrt());
-                let v = dome * (c + d * glow[l] + f * cg * cg + g * mie + i * row.sqrt_cos_theta);
-                rgb[ch][l] = if v > 0.0 { v } else { 0.0 };
-            }
+            let x = (1.0 + h * h) - 2.0 * h * cos_g;
+            let mie = (1.0 + cos_g * cos_g) / (x * x.sqrt());
+            let v = row.dome[ch] * (c + d * glow + f * cos_g * cos_g + g * mie + i * row.sqrt_cos_theta);
+            rgb[ch] = v.max(F32x16::ZERO);
         }
         rgb
     }
@@ -59,7 +45,7 @@ impl SkyModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lanes::{self, Level};
+    use crate::lanes::{self, LANES, Level};
 
     /// The magnitude of F L_M 683's sum of terms in channel `ch` toward `w` (the scalar's angles,
     /// f64): what rounding in the sum is relative to. C + D e^(E gamma) cancels where C ~ -D and E
@@ -99,8 +85,8 @@ mod tests {
                         for k in 0..width / LANES {
                             let b = k * LANES;
                             let mut out = [Vec3::NAN; LANES];
-                            let (c, s) = (lanes::block(&cos_phi, b), lanes::block(&sin_phi, b));
-                            lanes::store_columns(&sky.rgb_nits_lanes(&row, (sin_t, cos_t), c, s, sun), &mut out);
+                            let (c, s) = (F32x16::load(&cos_phi, b), F32x16::load(&sin_phi, b));
+                            sky.rgb_nits_lanes(&row, (sin_t, cos_t), &c, &s, sun).store_vec3s(&mut out);
                             for l in 0..LANES {
                                 let w = Vec3::new(sin_t * c[l], cos_t, sin_t * s[l]);
                                 let want = sky.rgb_nits_in_row(&row, w, sun).as_dvec3();
