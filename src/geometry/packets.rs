@@ -7,11 +7,23 @@ use super::bvh::{GeometryId, SceneBvh};
 use super::ray::Ray;
 use super::triangle::ShearedRay;
 use super::visibility::{Best, FEW_PRIMITIVES, Hit, TriangleAttributes};
+use super::wide::PrimBlock;
 use super::wide::packet::{RayPacket, triangle_lanes};
 use crate::lanes::{F32x16, LANES, Vec3x16};
 
 /// No primitive: the `prim` of a lane without a hit.
 const NO_PRIM: u32 = u32::MAX;
+
+/// The closest hit so far of each lane of a packet (`best_t` beside it): input primitive, leaf
+/// slot, barycentrics, the object-space point of a shape hit (see `SceneBvh::make_hit`), and the
+/// lanes whose single-ray walk ran out of stack (they then test every primitive).
+struct Nearest {
+    prim: [u32; LANES],
+    slot: [u32; LANES],
+    b: Vec3x16,
+    local: [Option<DVec3>; LANES],
+    redo: u32,
+}
 
 /// Where [`SceneBvh::closest_hits_packet`] hands its hits (a returned array of hits would be
 /// copied once more). Any `FnMut(lane, hit)` is one.
@@ -62,15 +74,15 @@ impl SceneBvh {
         }
         let rays = RayPacket::new(origin, dir, &t_max.0, n);
         let mut best_t = t_max.0;
-        let (mut prim, mut slot, mut b) = ([NO_PRIM; LANES], [0u32; LANES], Vec3x16::ZERO);
-        // Object-space points of shape hits (see `SceneBvh::make_hit`), per lane.
-        let mut local: [Option<DVec3>; LANES] = [None; LANES];
-        let complete = self.wide.traverse_packet::<true>(
+        let mut st =
+            Nearest { prim: [NO_PRIM; LANES], slot: [0; LANES], b: Vec3x16::ZERO, local: [None; LANES], redo: 0 };
+        let complete = self.wide.traverse_packet::<true, _>(
             &rays,
             rays.valid,
             &mut best_t,
+            &mut st,
             #[inline(always)]
-            |block, mask, best_t| {
+            |st, block, mask, best_t| {
                 let mut triangles = block.triangles;
                 while triangles != 0 {
                     let k = triangles.trailing_zeros() as usize;
@@ -80,11 +92,11 @@ impl SceneBvh {
                     let hits = triangle_lanes(block, k, &rays, mask, best_t);
                     for l in 0..LANES {
                         let t = hits.t[l];
-                        let wins = (hits.hit >> l) & 1 != 0 && (t < best_t[l] || (t == best_t[l] && p < prim[l]));
+                        let wins = (hits.hit >> l) & 1 != 0 && (t < best_t[l] || (t == best_t[l] && p < st.prim[l]));
                         if wins {
-                            (best_t[l], prim[l], slot[l]) = (t, p, s);
-                            (b[0][l], b[1][l], b[2][l]) = (hits.b[0][l], hits.b[1][l], hits.b[2][l]);
-                            local[l] = None;
+                            (best_t[l], st.prim[l], st.slot[l]) = (t, p, s);
+                            (st.b[0][l], st.b[1][l], st.b[2][l]) = (hits.b[0][l], hits.b[1][l], hits.b[2][l]);
+                            st.local[l] = None;
                         }
                     }
                     let mut exact = hits.exact;
@@ -94,9 +106,9 @@ impl SceneBvh {
                         let Some(h) = ShearedRay::new(&ray(l)).intersect(&self.leaf[s as usize].v, best_t[l]) else {
                             continue;
                         };
-                        if h.t < best_t[l] || (h.t == best_t[l] && p < prim[l]) {
-                            (best_t[l], prim[l], slot[l], local[l]) = (h.t, p, s, None);
-                            (b[0][l], b[1][l], b[2][l]) = (h.b[0], h.b[1], h.b[2]);
+                        if h.t < best_t[l] || (h.t == best_t[l] && p < st.prim[l]) {
+                            (best_t[l], st.prim[l], st.slot[l], st.local[l]) = (h.t, p, s, None);
+                            (st.b[0][l], st.b[1][l], st.b[2][l]) = (h.b[0], h.b[1], h.b[2]);
                         }
                     }
                 }
@@ -113,10 +125,43 @@ impl SceneBvh {
                         let Some((t, at)) = self.shape_in_slot(s as usize).local_hit(&ray(l), best_t[l]) else {
                             continue;
                         };
-                        if t < best_t[l] || (t == best_t[l] && p < prim[l]) {
-                            (best_t[l], prim[l], slot[l], local[l]) = (t, p, s, Some(at));
-                            (b[0][l], b[1][l], b[2][l]) = (0.0, 0.0, 0.0);
+                        if t < best_t[l] || (t == best_t[l] && p < st.prim[l]) {
+                            (best_t[l], st.prim[l], st.slot[l], st.local[l]) = (t, p, s, Some(at));
+                            (st.b[0][l], st.b[1][l], st.b[2][l]) = (0.0, 0.0, 0.0);
                         }
+                    }
+                }
+                0
+            },
+            #[inline(always)]
+            |st, entry, mask, best_t| {
+                let mut lanes = mask;
+                while lanes != 0 {
+                    let l = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let (ray, mut t) = (ray(l), best_t[l]);
+                    let sheared = ShearedRay::new(&ray);
+                    let mut best = (st.prim[l] != NO_PRIM).then(|| Best {
+                        t: best_t[l],
+                        prim: st.prim[l],
+                        slot: st.slot[l] as usize,
+                        b: [st.b[0][l], st.b[1][l], st.b[2][l]],
+                    });
+                    let mut best_local = st.local[l];
+                    let complete = self.wide.traverse_from::<true>(
+                        entry,
+                        &ray,
+                        &mut t,
+                        #[inline(always)]
+                        |block: &PrimBlock, t: &mut f32| {
+                            self.closest_in_block(block, &ray, &sheared, t, &mut best, &mut best_local);
+                            false
+                        },
+                    );
+                    st.redo |= u32::from(!complete) << l;
+                    if let Some(h) = best {
+                        (best_t[l], st.prim[l], st.slot[l], st.local[l]) = (h.t, h.prim, h.slot as u32, best_local);
+                        (st.b[0][l], st.b[1][l], st.b[2][l]) = (h.b[0], h.b[1], h.b[2]);
                     }
                 }
                 0
@@ -127,23 +172,23 @@ impl SceneBvh {
         for l in 0..n {
             let hit = if rays.valid & (1 << l) == 0 {
                 None
-            } else if !complete {
+            } else if !complete || st.redo & (1 << l) != 0 {
                 self.closest_hit_each(&ray(l))
-            } else if prim[l] == NO_PRIM {
+            } else if st.prim[l] == NO_PRIM {
                 None
-            } else if local[l].is_some() {
-                let best = Best { t: best_t[l], prim: prim[l], slot: slot[l] as usize, b: [0.0; 3] };
-                Some(self.make_hit(&ray(l), best, local[l]))
+            } else if st.local[l].is_some() {
+                let best = Best { t: best_t[l], prim: st.prim[l], slot: st.slot[l] as usize, b: [0.0; 3] };
+                Some(self.make_hit(&ray(l), best, st.local[l]))
             } else {
                 let attributes = match shared {
-                    Some((p, a)) if p == prim[l] => a,
+                    Some((p, a)) if p == st.prim[l] => a,
                     _ => {
-                        let a = self.triangle_attributes(prim[l], slot[l] as usize);
-                        shared = Some((prim[l], a));
+                        let a = self.triangle_attributes(st.prim[l], st.slot[l] as usize);
+                        shared = Some((st.prim[l], a));
                         a
                     }
                 };
-                Some(attributes.hit(best_t[l], [b[0][l], b[1][l], b[2][l]]))
+                Some(attributes.hit(best_t[l], [st.b[0][l], st.b[1][l], st.b[2][l]]))
             };
             out.hit(l, hit);
         }
@@ -172,12 +217,13 @@ impl SceneBvh {
         }
         let mut blocked = 0u32;
         let mut limits = t_max.0;
-        let complete = self.wide.traverse_packet::<false>(
+        let complete = self.wide.traverse_packet::<false, _>(
             &rays,
             rays.valid,
             &mut limits,
+            &mut blocked,
             #[inline(always)]
-            |block, mask, t_max| {
+            |blocked, block, mask, t_max| {
                 let mut found = 0u32;
                 let mut triangles = block.triangles;
                 while triangles != 0 {
@@ -213,7 +259,33 @@ impl SceneBvh {
                         }
                     }
                 }
-                blocked |= found;
+                *blocked |= found;
+                found
+            },
+            #[inline(always)]
+            |blocked, entry, mask, t_max| {
+                let mut found = 0u32;
+                let mut lanes = mask;
+                while lanes != 0 {
+                    let l = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let (ray, mut t) = (ray(l), t_max[l]);
+                    let sheared = ShearedRay::new(&ray);
+                    let mut hit = false;
+                    let complete = self.wide.traverse_from::<false>(
+                        entry,
+                        &ray,
+                        &mut t,
+                        #[inline(always)]
+                        |block: &PrimBlock, t: &mut f32| {
+                            hit = self.block_blocks(block, &ray, &sheared, *t, origins[l]);
+                            hit
+                        },
+                    );
+                    let blocks = if complete { hit } else { self.occluded_from(&ray, origins[l]) };
+                    found |= u32::from(blocks) << l;
+                }
+                *blocked |= found;
                 found
             },
         );
@@ -275,7 +347,9 @@ mod tests {
     /// dominant axes, rays down the fan's shared edges and centre vertex (edge functions exactly
     /// zero), short t_max that cut hits off, and invalid lanes (zero direction, NaN origin,
     /// t_max 0) and lanes past `n`, which report nothing. Any-hit likewise, with half the lanes
-    /// leaving the primitive they first hit (which then must not block them).
+    /// leaving the primitive they first hit (which then must not block them). Incoherent packets
+    /// hand subtrees to single rays (the hybrid), carrying each lane's best hit so far across; the
+    /// test also passed with every subtree handed over (`SINGLE_RAY_LANES` = 16).
     #[test]
     fn packets_match_one_ray_at_a_time() {
         let mut rng = SplitMix64::new(11);

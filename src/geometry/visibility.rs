@@ -149,7 +149,14 @@ impl SceneBvh {
 
     /// Whether a primitive of `block` other than a flat `origin` blocks `ray` over (0, t_max].
     #[inline(always)]
-    fn block_blocks(&self, block: &PrimBlock, ray: &Ray, sheared: &ShearedRay, t_max: f32, origin: GeometryId) -> bool {
+    pub(super) fn block_blocks(
+        &self,
+        block: &PrimBlock,
+        ray: &Ray,
+        sheared: &ShearedRay,
+        t_max: f32,
+        origin: GeometryId,
+    ) -> bool {
         if block.triangles != 0 {
             let (hit, exact, ..) = triangle_block_hits(block, sheared, t_max);
             let mut lanes = hit | exact;
@@ -202,7 +209,7 @@ impl SceneBvh {
 
     /// Folds the hits of `block`'s primitives over (0, t_max] into `best` (lowering `t_max`).
     #[inline(always)]
-    fn closest_in_block(
+    pub(super) fn closest_in_block(
         &self,
         block: &PrimBlock,
         ray: &Ray,

@@ -240,6 +240,19 @@ impl WideBvh {
         &self,
         ray: &Ray,
         t_max: &mut f32,
+        visit: impl FnMut(&PrimBlock, &mut f32) -> bool,
+    ) -> bool {
+        self.traverse_from::<NEAREST>(0, ray, t_max, visit)
+    }
+
+    /// [`Self::traverse`] of the subtree at stack entry `root` (a node index, or a block with
+    /// `LEAF` set): packets hand a subtree to it once few of their rays are left there.
+    #[inline(always)]
+    pub(crate) fn traverse_from<const NEAREST: bool>(
+        &self,
+        root: u32,
+        ray: &Ray,
+        t_max: &mut f32,
         mut visit: impl FnMut(&PrimBlock, &mut f32) -> bool,
     ) -> bool {
         if self.nodes.is_empty() {
@@ -255,7 +268,7 @@ impl WideBvh {
         let far_pad = 1.0 + 2.0 * gamma(3);
         // Left uninitialised: zeroing 4 KB per ray cost more than the traversal of a small scene.
         let mut stack = [const { MaybeUninit::<(u32, f32)>::uninit() }; STACK];
-        stack[0].write((0, 0.0));
+        stack[0].write((root, 0.0));
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;

@@ -1,7 +1,10 @@
 //! Packet traversal: [`LANES`] rays walk the wide tree together, one lane per ray. A node's child
 //! boxes are tested against every ray of the packet, and a leaf's triangles one at a time against
 //! every ray that reached the leaf, so coherent rays (a pixel's camera samples, a point's shadow
-//! rays toward one light) share each node and triangle fetch.
+//! rays toward one light) share each node and triangle fetch. Where the rays part ways and at most
+//! [`SINGLE_RAY_LANES`] of them reach a subtree, each walks it alone (8 child boxes per node for
+//! one ray instead of 8 x 16 lanes for a few live ones): the hybrid that keeps incoherent packets
+//! as fast as single rays.
 //!
 //! Answers are the single-ray traversal's, bit for bit: the slab test is the same conservative
 //! one, per lane; triangle lanes run the operations of `ShearedRay::intersect` (lanes where an
@@ -184,19 +187,27 @@ fn triangle_lanes_kz(
     out.hit |= hit & mask;
 }
 
+/// Most live lanes at a stack entry for which the packet hands the subtree to single rays.
+const SINGLE_RAY_LANES: u32 = 2;
+
 impl WideBvh {
     /// [`WideBvh::traverse`] for a packet: visits each block whose box some lane of `active` may
-    /// meet over [0, t_max[l]], with the mask of those lanes; `visit` may lower `t_max` and
+    /// meet over [0, t_max[l]], with the mask of those lanes (both closures get `state`, the
+    /// per-lane results they share); `visit` may lower `t_max` and
     /// returns lanes that are done (any hit found), which leave the packet. With `NEAREST`, each
-    /// node's children are visited nearest first (by their nearest lane). Returns false if the
-    /// tree was too deep for the stack.
+    /// node's children are visited nearest first (by their nearest lane). Where at most
+    /// [`SINGLE_RAY_LANES`] lanes reach a stack entry, `alone(entry, lanes, t_max)` takes the
+    /// subtree instead (each lane as a single ray, [`WideBvh::traverse_from`]) and returns the
+    /// lanes that are done. Returns false if the tree was too deep for the stack.
     #[inline(always)]
-    pub(crate) fn traverse_packet<const NEAREST: bool>(
+    pub(crate) fn traverse_packet<const NEAREST: bool, S>(
         &self,
         rays: &RayPacket,
         mut active: u32,
         t_max: &mut [f32; LANES],
-        mut visit: impl FnMut(&PrimBlock, u32, &mut [f32; LANES]) -> u32,
+        state: &mut S,
+        mut visit: impl FnMut(&mut S, &PrimBlock, u32, &mut [f32; LANES]) -> u32,
+        mut alone: impl FnMut(&mut S, u32, u32, &mut [f32; LANES]) -> u32,
     ) -> bool {
         if self.nodes.is_empty() || active == 0 {
             return true;
@@ -219,8 +230,17 @@ impl WideBvh {
             if mask == 0 {
                 continue;
             }
+            if mask.count_ones() <= SINGLE_RAY_LANES {
+                // Few rays left here: each walks the subtree alone (8 boxes per node for one ray,
+                // not 8 x 16 lanes for a few live ones).
+                active &= !alone(state, entry, mask, t_max);
+                if active == 0 {
+                    return true;
+                }
+                continue;
+            }
             if entry & LEAF != 0 {
-                active &= !visit(&self.blocks[(entry & !LEAF) as usize], mask, t_max);
+                active &= !visit(state, &self.blocks[(entry & !LEAF) as usize], mask, t_max);
                 if active == 0 {
                     return true;
                 }
