@@ -1,5 +1,7 @@
-//! Closest hits of [`LANES`] rays at once over the wide tree (`wide/packet.rs`): for coherent
-//! rays, such as one pixel's camera samples. Each lane's answer is [`SceneBvh::closest_hit`]'s.
+//! Closest hits and any hits of [`LANES`] rays at once over the wide tree (`wide/packet.rs`): for
+//! rays that share a path, such as one pixel's camera samples or one point's shadow rays; lanes
+//! that part ways finish their subtrees as single rays. Each lane's answer is
+//! [`SceneBvh::closest_hit`]'s (or [`SceneBvh::occluded_from`]'s).
 
 use glam::DVec3;
 
