@@ -192,13 +192,13 @@ const SINGLE_RAY_LANES: u32 = 2;
 
 impl WideBvh {
     /// [`WideBvh::traverse`] for a packet: visits each block whose box some lane of `active` may
-    /// meet over [0, t_max[l]], with the mask of those lanes (both closures get `state`, the
-    /// per-lane results they share); `visit` may lower `t_max` and
-    /// returns lanes that are done (any hit found), which leave the packet. With `NEAREST`, each
-    /// node's children are visited nearest first (by their nearest lane). Where at most
-    /// [`SINGLE_RAY_LANES`] lanes reach a stack entry, `alone(entry, lanes, t_max)` takes the
-    /// subtree instead (each lane as a single ray, [`WideBvh::traverse_from`]) and returns the
-    /// lanes that are done. Returns false if the tree was too deep for the stack.
+    /// meet over [0, t_max[l]], with the mask of those lanes; `visit` may lower `t_max` and returns
+    /// lanes that are done (any hit found), which leave the packet. With `NEAREST`, each node's
+    /// children are visited nearest first (by their nearest lane). Where at most
+    /// [`SINGLE_RAY_LANES`] lanes reach a stack entry, `alone(state, entry, lanes, t_max)` takes
+    /// the subtree instead (each lane as a single ray, [`WideBvh::traverse_from`]) and returns the
+    /// lanes that are done. Both closures get `state`, the per-lane results they share. Returns
+    /// false if the tree was too deep for the stack.
     #[inline(always)]
     pub(crate) fn traverse_packet<const NEAREST: bool, S>(
         &self,
