@@ -29,6 +29,8 @@ for t in "${targets[@]}"; do
     cpu=0 stopped=""
     while kill -0 "$runner" 2>/dev/null; do
         sleep 2
+        # Once stopped, the CPU seconds at the stop are the run's (a later match may be another process).
+        [ -n "$stopped" ] && continue
         fuzzer=$(pgrep -f "release/$t -" | head -1 || true)
         [ -n "$fuzzer" ] && [ -r "/proc/$fuzzer/stat" ] || continue
         # utime and stime, fields 14 and 15 of /proc/PID/stat (the name, field 2, has no spaces here).
