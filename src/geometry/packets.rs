@@ -351,9 +351,17 @@ mod tests {
     /// t_max 0) and lanes past `n`, which report nothing. Any-hit likewise, with half the lanes
     /// leaving the primitive they first hit (which then must not block them). Incoherent packets
     /// hand subtrees to single rays (the hybrid), carrying each lane's best hit so far across; the
-    /// test also passed with every subtree handed over (`SINGLE_RAY_LANES` = 16).
+    /// test runs at the hybrid's threshold and with every subtree handed over.
     #[test]
     fn packets_match_one_ray_at_a_time() {
+        use crate::geometry::wide::packet::SINGLE_RAY_LANES_FOR_TESTS;
+        for threshold in [SINGLE_RAY_LANES_FOR_TESTS.with(|c| c.get()), LANES as u32] {
+            SINGLE_RAY_LANES_FOR_TESTS.with(|c| c.set(threshold));
+            packets_match_one_ray_at_a_time_at_this_threshold();
+        }
+    }
+
+    fn packets_match_one_ray_at_a_time_at_this_threshold() {
         let mut rng = SplitMix64::new(11);
         let (soup, fan) = scene(&mut rng);
         let placed = Transform {

@@ -190,6 +190,21 @@ fn triangle_lanes_kz(
 /// Most live lanes at a stack entry for which the packet hands the subtree to single rays.
 const SINGLE_RAY_LANES: u32 = 2;
 
+#[cfg(test)]
+thread_local! {
+    /// Tests raise it (to `LANES`: every subtree handed over) to check the single-ray side alone.
+    pub(crate) static SINGLE_RAY_LANES_FOR_TESTS: std::cell::Cell<u32> = const { std::cell::Cell::new(SINGLE_RAY_LANES) };
+}
+
+/// [`SINGLE_RAY_LANES`], or a test's value.
+#[inline(always)]
+fn single_ray_lanes() -> u32 {
+    #[cfg(test)]
+    return SINGLE_RAY_LANES_FOR_TESTS.with(|c| c.get());
+    #[cfg(not(test))]
+    SINGLE_RAY_LANES
+}
+
 impl WideBvh {
     /// [`WideBvh::traverse`] for a packet: visits each block whose box some lane of `active` may
     /// meet over [0, t_max[l]], with the mask of those lanes; `visit` may lower `t_max` and returns
@@ -230,7 +245,7 @@ impl WideBvh {
             if mask == 0 {
                 continue;
             }
-            if mask.count_ones() <= SINGLE_RAY_LANES {
+            if mask.count_ones() <= single_ray_lanes() {
                 // Few rays left here: each walks the subtree alone (8 boxes per node for one ray,
                 // not 8 x 16 lanes for a few live ones).
                 active &= !alone(state, entry, mask, t_max);
