@@ -42,6 +42,15 @@ def descendants(procs, roots):
     return found
 
 
+def running(pid):
+    """Whether `pid` exists and has not exited (a zombie has)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] not in "ZX"
+    except (OSError, IndexError):
+        return False
+
+
 def kill(pids, sig):
     for pid in pids:
         try:
@@ -126,11 +135,28 @@ class Cluster:
                 workers.append((pid, title))
         return workers, procs
 
-    def second_node_busy(self):
-        """The second node's workers that run a tile or a part, and the process table; None if none does."""
+    def kill_second_mid_task(self, whole_node):
+        """SIGKILL to the whole second node (`whole_node`) or to its workers that run a tile or a bake part, at a
+        moment when one of those workers still waits for its kelvin: the node is frozen (SIGSTOP) before the check,
+        so no task can finish between the check and the kill. Returns the killed pids; [] (the node resumed) when
+        no task was mid-run. Killing a worker that Ray is still starting would stall the node's worker pool (its
+        start-up concurrency is its 1 CPU) until Ray's registration timeout, hence only those running a task."""
         workers, procs = self.second_node_workers()
-        busy = [(pid, title) for pid, title in workers if "render_tile" in title or "bake_part" in title]
-        return (busy, procs) if busy else None
+        if not any("render_tile" in title or "bake_part" in title for _, title in workers):
+            return []
+        frozen = descendants(procs, self.second_raylet(procs))
+        kill(frozen, signal.SIGSTOP)
+        workers, procs = self.second_node_workers()
+        late = descendants(procs, self.second_raylet(procs)) - frozen
+        kill(late, signal.SIGSTOP)  # started between the two readings of the process table
+        frozen |= late
+        busy = [pid for pid, title in workers if "render_tile" in title or "bake_part" in title]
+        waiting = [pid for pid in busy if any(running(c) for c in descendants(procs, [pid]) - {pid})]
+        victims = descendants(procs, self.second_raylet(procs)) if whole_node else descendants(procs, busy)
+        if waiting:
+            kill(victims, signal.SIGKILL)
+        kill(frozen, signal.SIGCONT)
+        return sorted(victims) if waiting else []
 
     def runs_on_second(self, node, timeout):
         """Whether a task pinned to the second node (id `node`) runs there within `timeout` seconds."""

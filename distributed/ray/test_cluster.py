@@ -44,7 +44,7 @@ BOX = os.path.join(REPO, "tests/data/gltf/bevy/CornellBox.glb")
 LAMP = os.path.join(REPO, "tests/data/gltf/kelvin/animated_lamp.gltf")
 sys.path.insert(0, HERE)
 from kelvin_ray import tile_grid  # noqa: E402  (the driver's grid, to count the tiles of a job)
-from local_cluster import SECOND_NODE_ENV, Cluster, check, descendants, kill, processes  # noqa: E402
+from local_cluster import SECOND_NODE_ENV, Cluster, check, processes  # noqa: E402
 
 
 
@@ -222,15 +222,10 @@ def section_killed_workers(ctx):
     proc, kills, deadline = sec.start(), [], time.monotonic() + 300
     try:
         while proc.poll() is None and time.monotonic() < deadline and len(kills) < 2:
-            found = ctx.cluster.second_node_busy()
-            if found:
-                # Only the workers running a tile: killing one that Ray is still starting stalls the node's
-                # worker pool (its start-up concurrency is its 1 CPU) until Ray's registration timeout.
-                workers, procs = found
-                victims = descendants(procs, [pid for pid, _ in workers])
-                kill(victims, signal.SIGKILL)
-                kills.append(sorted(victims))
-                print(f"killed the second node's workers {sorted(victims)}", flush=True)
+            victims = ctx.cluster.kill_second_mid_task(whole_node=False)
+            if victims:
+                kills.append(victims)
+                print(f"killed the second node's workers {victims}", flush=True)
                 time.sleep(2.0)
             time.sleep(0.05)
     finally:
@@ -431,8 +426,9 @@ def section_node_death(ctx):
             # Once a quarter of the tiles are done, so that the second node has finished some and runs more.
             sec.log.seek(0)
             progress = sum(1 for l in sec.log if l.startswith("["))
-            if progress >= 20 and ctx.cluster.second_node_busy():
-                victims = ctx.cluster.kill_second_node()
+            if progress >= 20:
+                victims = ctx.cluster.kill_second_mid_task(whole_node=True)
+            if victims:
                 print(f"killed the second node: raylet and {len(victims) - 1} processes under it", flush=True)
             time.sleep(0.05)
     finally:
