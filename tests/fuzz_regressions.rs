@@ -204,6 +204,27 @@ fn a_tile_claiming_a_huge_image_is_refused_before_merging() {
     assert!(err.contains("at most 16384 pixels a side"), "{err}");
 }
 
+/// tile_exr, memory: 758 bytes of tile EXR (tests/fuzz_cases/tile_exr/tile_window_past_its_bytes.exr) whose data
+/// window claims 16384 pixels a side (within kelvin's cap) while its chunks are missing; reading it filled 2.9 GB
+/// of pixels before the decoder found the missing bytes. The pixels are now allocated zeroed, pages the read never
+/// touches. The process's peak memory (nextest runs each test in a process of its own) says so.
+#[test]
+fn a_tile_whose_chunks_are_missing_costs_no_memory_for_its_claimed_pixels() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_cases/tile_exr/tile_window_past_its_bytes.exr");
+    let err = kelvin::render::film_io::read_exr_tile(&path).unwrap_err().to_string();
+    assert!(err.contains("missing bytes"), "{err}");
+    #[cfg(target_os = "linux")]
+    {
+        let status = std::fs::read_to_string("/proc/self/status").unwrap();
+        let peak_kb: u64 = status
+            .lines()
+            .find_map(|l| l.strip_prefix("VmHWM:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+            .expect("VmHWM in /proc/self/status");
+        assert!(peak_kb < 1 << 20, "peak memory {peak_kb} kB after refusing a 758-byte tile");
+    }
+}
+
 /// Every file under tests/fuzz_cases/<target>/ goes through its target's path without a panic.
 #[test]
 fn saved_fuzz_cases_replay_without_panics() {

@@ -224,14 +224,11 @@ pub struct Tile {
 pub fn merge_tiles(tiles: &[Tile]) -> Result<(u32, u32, Vec<Vec3>), TileError> {
     let first = tiles.first().ok_or(TileError::NoTiles)?;
     let (width, height) = (first.width, first.height);
-    // The full image is allocated from what the first tile claims: a few bytes could claim gigapixels.
+    // The full image is allocated from what the tiles claim: a few bytes could claim gigapixels.
     if width > MAX_SIDE || height > MAX_SIDE {
         return Err(TileError::TooLarge { tile: first.name.clone(), width, height });
     }
-    const NONE: u32 = u32::MAX;
-    let mut owner = vec![NONE; width as usize * height as usize];
-    let mut pixels = vec![Vec3::ZERO; owner.len()];
-    for (t, tile) in tiles.iter().enumerate() {
+    for tile in tiles {
         if (tile.width, tile.height) != (width, height) {
             return Err(TileError::ImageSize {
                 tile: tile.name.clone(),
@@ -249,33 +246,66 @@ pub fn merge_tiles(tiles: &[Tile]) -> Result<(u32, u32, Vec<Vec3>), TileError> {
         if tile.pixels.len() != crop.pixels() {
             return Err(TileError::PixelCount { tile: tile.name.clone(), len: tile.pixels.len(), crop });
         }
-        for (row, src) in (crop.y0..crop.y1).zip(tile.pixels.chunks(crop.width() as usize)) {
-            let start = row as usize * width as usize + crop.x0 as usize;
-            let span = start..start + crop.width() as usize;
-            if let Some(i) = owner[span.clone()].iter().position(|&o| o != NONE) {
-                return Err(TileError::Overlap {
-                    tile: tile.name.clone(),
-                    other: tiles[owner[start + i] as usize].name.clone(),
-                    x: crop.x0 + i as u32,
-                    y: row,
-                });
-            }
-            owner[span.clone()].fill(t as u32);
-            pixels[span].copy_from_slice(src);
-        }
     }
-    // Uncovered pixels: their count, bounding box and first one.
-    let mut gap: Option<(u64, Crop, (u32, u32))> = None;
-    for (i, _) in owner.iter().enumerate().filter(|(_, o)| **o == NONE) {
-        let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
-        let (count, b, _) = gap.get_or_insert((0, Crop { x0: x, y0: y, x1: x + 1, y1: y + 1 }, (x, y)));
-        *count += 1;
-        (b.x0, b.y0, b.x1, b.y1) = (b.x0.min(x), b.y0.min(y), b.x1.max(x + 1), b.y1.max(y + 1));
+    // Gaps and overlaps come from the crops alone, before the image is allocated, so that a small
+    // tile claiming a huge image costs no more than its own pixels.
+    let (gap, overlap) = cover(tiles, width, height);
+    if let Some((t, other, x, y)) = overlap {
+        return Err(TileError::Overlap { tile: tiles[t].name.clone(), other: tiles[other].name.clone(), x, y });
     }
     if let Some((count, region, (x, y))) = gap {
         return Err(TileError::Gap { count, width, height, region, x, y });
     }
+    let mut pixels = vec![Vec3::ZERO; width as usize * height as usize];
+    for tile in tiles {
+        let crop = tile.crop;
+        for (row, src) in (crop.y0..crop.y1).zip(tile.pixels.chunks(crop.width() as usize)) {
+            let start = row as usize * width as usize + crop.x0 as usize;
+            pixels[start..start + crop.width() as usize].copy_from_slice(src);
+        }
+    }
     Ok((width, height, pixels))
+}
+
+/// How the tiles' crops cover a `width` x `height` image: the uncovered pixels (their count,
+/// bounding box and first one in row-major order), and the first pixel in row-major order that two
+/// tiles cover (the later tile's index, the earlier's, x, y); None for none. Swept over bands of
+/// rows that the same crops cross, without a per-pixel map.
+#[allow(clippy::type_complexity)]
+fn cover(
+    tiles: &[Tile],
+    width: u32,
+    height: u32,
+) -> (Option<(u64, Crop, (u32, u32))>, Option<(usize, usize, u32, u32)>) {
+    let mut edges: Vec<u32> = tiles.iter().flat_map(|t| [t.crop.y0, t.crop.y1]).chain([0, height]).collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let (mut gap, mut overlap): (Option<(u64, Crop, (u32, u32))>, _) = (None, None);
+    for band in edges.windows(2) {
+        let (y0, y1) = (band[0], band[1]);
+        let mut spans: Vec<(u32, u32, usize)> = (tiles.iter().enumerate())
+            .filter(|(_, t)| t.crop.y0 <= y0 && y1 <= t.crop.y1)
+            .map(|(i, t)| (t.crop.x0, t.crop.x1, i))
+            .collect();
+        spans.sort_unstable();
+        // Left to right: what lies between the covered reach and the next span is uncovered; a span
+        // that starts before the reach overlaps the span that reached there.
+        let (mut reach, mut reacher) = (0, usize::MAX);
+        for (x0, x1, t) in spans.into_iter().chain([(width, width, usize::MAX)]) {
+            if x0 > reach {
+                let (count, region, _) = gap.get_or_insert((0, Crop { x0: reach, y0, x1: x0, y1 }, (reach, y0)));
+                *count += (x0 - reach) as u64 * (y1 - y0) as u64;
+                (region.x0, region.y0) = (region.x0.min(reach), region.y0.min(y0));
+                (region.x1, region.y1) = (region.x1.max(x0), region.y1.max(y1));
+            } else if x0 < reach && overlap.is_none() {
+                overlap = Some((t.max(reacher), t.min(reacher), x0, y0));
+            }
+            if x1 > reach {
+                (reach, reacher) = (x1, t);
+            }
+        }
+    }
+    (gap, overlap)
 }
 
 #[cfg(test)]
@@ -319,5 +349,70 @@ mod tests {
         other.width = 6;
         assert!(matches!(merge_tiles(&[tile("a", a), other]), Err(TileError::ImageSize { .. })));
         assert!(err.to_string().contains("3 pixels"), "{err}");
+    }
+
+    #[test]
+    fn a_small_tile_claiming_the_largest_image_is_refused_for_its_gap() {
+        // The fuzzed case: a 758-byte tile of a 16384-wide image made the merge allocate 2.9 GB
+        // before it found the gap. The gap is now found from the crops alone.
+        let crop = Crop { x0: 100, y0: 7, x1: 102, y1: 8 };
+        let small = Tile { name: "small".into(), width: MAX_SIDE, height: MAX_SIDE, crop, pixels: vec![Vec3::ONE; 2] };
+        let err = merge_tiles(&[small]).unwrap_err();
+        let region = Crop::full(MAX_SIDE, MAX_SIDE);
+        let count = MAX_SIDE as u64 * MAX_SIDE as u64 - 2;
+        assert_eq!(err, TileError::Gap { count, width: MAX_SIDE, height: MAX_SIDE, region, x: 0, y: 0 });
+    }
+
+    #[test]
+    fn gaps_swept_by_bands_match_a_pixel_by_pixel_map() {
+        // Every tiling of a 5x3 image by the grids below, with each subset of one or two tiles left
+        // out, against an independent per-pixel cover map.
+        let (w, h) = (5u32, 3u32);
+        for (xs, ys) in [(vec![0, 2, 5], vec![0, 1, 3]), (vec![0, 1, 4, 5], vec![0, 3]), (vec![0, 5], vec![0, 2, 3])] {
+            let crops: Vec<Crop> = ys
+                .windows(2)
+                .flat_map(|y| xs.windows(2).map(move |x| Crop { x0: x[0], y0: y[0], x1: x[1], y1: y[1] }))
+                .collect();
+            for drop in 0..(1usize << crops.len()) {
+                if drop.count_ones() > 2 {
+                    continue;
+                }
+                let kept: Vec<Tile> = (0..crops.len())
+                    .filter(|i| drop & (1 << i) == 0)
+                    .map(|i| Tile { name: format!("t{i}"), width: w, height: h, crop: crops[i], pixels: vec![] })
+                    .collect();
+                let uncovered: Vec<(u32, u32)> = (0..h)
+                    .flat_map(|y| (0..w).map(move |x| (x, y)))
+                    .filter(|&(x, y)| {
+                        !kept.iter().any(|t| (t.crop.x0..t.crop.x1).contains(&x) && (t.crop.y0..t.crop.y1).contains(&y))
+                    })
+                    .collect();
+                let expected = uncovered.first().map(|&first| {
+                    let b = uncovered.iter().fold(Crop { x0: w, y0: h, x1: 0, y1: 0 }, |b, &(x, y)| Crop {
+                        x0: b.x0.min(x),
+                        y0: b.y0.min(y),
+                        x1: b.x1.max(x + 1),
+                        y1: b.y1.max(y + 1),
+                    });
+                    (uncovered.len() as u64, b, first)
+                });
+                assert_eq!(cover(&kept, w, h), (expected, None), "grid {xs:?} x {ys:?} without {drop:b}");
+                // One more tile over part of the image: its first doubly covered pixel, by the same map.
+                let mut over = kept.clone();
+                let extra = Crop { x0: 1, y0: 1, x1: 4, y1: 3 };
+                over.push(Tile { name: "extra".into(), width: w, height: h, crop: extra, pixels: vec![] });
+                let covers = |t: &Tile, (x, y): (u32, u32)| {
+                    (t.crop.x0..t.crop.x1).contains(&x) && (t.crop.y0..t.crop.y1).contains(&y)
+                };
+                let twice = (0..h)
+                    .flat_map(|y| (0..w).map(move |x| (x, y)))
+                    .find(|&p| over.iter().filter(|t| covers(t, p)).count() > 1);
+                let found = cover(&over, w, h).1;
+                assert_eq!(found.map(|(_, _, x, y)| (x, y)), twice, "grid {xs:?} x {ys:?} without {drop:b}");
+                if let Some((t, other, x, y)) = found {
+                    assert!(t > other && covers(&over[t], (x, y)) && covers(&over[other], (x, y)));
+                }
+            }
+        }
     }
 }
