@@ -6,6 +6,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::lanes::{LANES, U32x16, Vec3x16};
+use crate::light::area::TriangleLanes;
 use crate::light::point::PointLanes;
 use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
@@ -170,11 +171,9 @@ pub fn sample_direct_lighting(
         spp: settings.samples_per_point.max(1),
         reservoirs: &[],
     };
-    // Point lights sampled one per entry (or resampled from candidates) in RGB f32 go through
-    // the lane kernel.
-    let lane_kernel = settings.color_mode == ColorMode::Rgb
-        && settings.light_precision == LightPrecision::F32
-        && !table.points.is_empty();
+    // In RGB f32, entries are sampled in blocks of lanes: the light choice, and the Sample_Li of
+    // point and triangle lights, run as lane kernels; other kinds one lane at a time.
+    let lane_kernel = settings.color_mode == ColorMode::Rgb && settings.light_precision == LightPrecision::F32;
     let lanes =
         lane_kernel && matches!(settings.selection, LightSelection::OneSampled | LightSelection::Resampled { .. });
     // ReSTIR builds every entry's final reservoir first; the entries are then written from them.
@@ -451,8 +450,9 @@ impl Sampling<'_> {
 
     /// Samples entries `e..e + LANES` (or to the chunk's end) of the chunk starting at global
     /// entry `first` under `LightSelection::OneSampled` (or `Resampled`, through
-    /// `resampled_block`), RGB and f32: random numbers and point lights in lanes, lights of other
-    /// kinds one at a time. Same entries as [`Self::entry`], bit for bit. Returns the number of
+    /// `resampled_block`), RGB and f32: random numbers, light choice, point and triangle lights in
+    /// lanes, lights of other kinds (and triangles the f32 kernel leaves to the f64 reference) one
+    /// at a time. Same entries as [`Self::entry`], bit for bit. Returns the number of
     /// shadow rays.
     #[inline(always)]
     fn lane_block(&self, first: usize, e: usize, cols: &mut EntryColumns) -> usize {
@@ -467,6 +467,7 @@ impl Sampling<'_> {
         // forwarding stalls on every read.
         let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
         let (mut rows, mut points) = ([0u32; LANES], 0);
+        let (mut area_rows, mut areas) = ([0u32; LANES], 0u32);
         // `sample_lanes` leaves slots without a finite position unchosen (as `entry`).
         let choices = self.sampler.sample_lanes(&p, &normal, &u, (1u32 << n) - 1);
         for l in 0..n {
@@ -477,17 +478,29 @@ impl Sampling<'_> {
             (light[l], pmf[l], chosen[l]) = (id, choices.pmf[l], true);
             if id.kind == LightKind::Point {
                 (rows[l], points) = (id.row, points + 1);
+            } else if id.kind == LightKind::Area {
+                (area_rows[l], areas) = (id.row, areas | 1 << l);
             }
         }
         // Blocks where no entry chose a point light (scenes lit by other kinds) skip the kernel;
         // lanes that chose none sample row 0, which exists (see `sample_direct_lighting`).
         // `if`, not `bool::then`: a closure would keep the kernel out of the wide code.
         let lit = if points > 0 { Some(self.table.points.sample_li_rgb_lanes(U32x16(rows), &p)) } else { None };
+        let triangles = if areas != 0 {
+            Some(TriangleLanes::sample(&self.table.area.items, &area_rows, areas, &p, [u1, u2]))
+        } else {
+            None
+        };
         let mut traced = 0;
         for l in 0..n {
             let chosen = chosen[l].then_some((light[l], pmf[l]));
-            traced += match (&lit, chosen) {
-                (Some(lit), Some(c)) if c.0.kind == LightKind::Point => self.write_point(cols, e + l, c, lit, l),
+            traced += match (&lit, &triangles, chosen) {
+                (Some(lit), _, Some(c)) if c.0.kind == LightKind::Point => self.write_point(cols, e + l, c, lit, l),
+                (_, Some(tri), Some((id, pmf))) if id.kind == LightKind::Area && tri.done(l) => {
+                    let ls = self.table.area.items[id.row as usize].light.sample_li_from_lane(tri, l, ColorQuery::Rgb);
+                    let sampled = ls.filter(|ls| ls.pdf > 0.0 && ls.radiance.is_finite());
+                    self.write(cols, e + l, id, sampled.map(|ls| (ls, pmf, self.table.flags(id))))
+                }
                 _ => {
                     let u = Vec2::new(u1[l], u2[l]);
                     let sampled = chosen.and_then(|c| {

@@ -16,8 +16,10 @@
 //!   arrays stalls on store-to-load forwarding, and a `match` per lane keeps a loop scalar.
 
 pub mod math;
+mod real;
 mod types;
 
+pub use real::{Real, Vector};
 pub use types::{F32x16, Mask16, U32x16, Vec3x16};
 
 /// Values per lane array: one AVX-512 register of f32.

@@ -224,8 +224,9 @@ pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<Vec3>), ImageIoError> 
     Ok((size.width(), size.height(), pixels))
 }
 
-type ExrRgb =
-    exr::image::Image<exr::image::Layer<exr::image::SpecificChannels<(usize, Vec<[f32; 3]>), exr::prelude::RgbChannels>>>;
+type ExrRgb = exr::image::Image<
+    exr::image::Layer<exr::image::SpecificChannels<(usize, Vec<[f32; 3]>), exr::prelude::RgbChannels>>,
+>;
 
 /// Most pixels an EXR read back may hold: a 16384 x 16384 image (kelvin's largest).
 const MAX_READ_PIXELS: usize = 1 << 28;

@@ -4,6 +4,7 @@
 
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI, TAU};
 
+use crate::lanes::Real;
 use glam::{Vec2, Vec3};
 
 use super::ONE_MINUS_EPSILON;
@@ -66,14 +67,17 @@ pub fn uniform_disk_pdf() -> f32 {
 /// Uniform barycentrics `[b0, b1, b2]` over a triangle by Heitz's (2019) low-distortion map ("A
 /// Low-Distortion Map Between Triangle and Square"), as pbrt-v4 uses. Pdf: [`uniform_triangle_pdf`].
 pub fn sample_uniform_triangle(u: Vec2) -> [f32; 3] {
-    let (b0, b1) = if u.x < u.y {
-        let b0 = u.x / 2.0;
-        (b0, u.y - b0)
-    } else {
-        let b1 = u.y / 2.0;
-        (u.x - b1, b1)
-    };
-    [b0, b1, 1.0 - b0 - b1]
+    sample_uniform_triangle_of(u.x, u.y)
+}
+
+/// [`sample_uniform_triangle`] over [`Real`]: one point (`f32`) or a lane each (`F32x16`).
+#[inline(always)]
+pub fn sample_uniform_triangle_of<F: Real>(u0: F, u1: F) -> [F; 3] {
+    let below = u0.lt(u1);
+    let (half0, half1) = (u0 / 2.0, u1 / 2.0);
+    let b0 = F::select(below, half0, u0 - half1);
+    let b1 = F::select(below, u1 - half0, half1);
+    [b0, b1, F::splat(1.0) - b0 - b1]
 }
 
 /// The unit-square point that [`sample_uniform_triangle`] maps to barycentrics `b`.

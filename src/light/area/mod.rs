@@ -6,6 +6,7 @@
 //! per shape or triangle. Sampling lives in [`shapes`].
 
 mod fast;
+mod lanes;
 pub mod shapes;
 
 use std::f32::consts::PI;
@@ -19,6 +20,7 @@ use super::{Amount, ColorQuery, Emitter, LiSample, LightBounds, LightError, Ligh
 use crate::geometry::Transform;
 use crate::spectrum::{SampledSpectrum, Spectrum};
 
+pub use lanes::TriangleLanes;
 pub use shapes::{
     AreaShape, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA, SPHERE_NEAR_MARGIN, SamplingStrategy, ShapeSample,
     SurfacePoint,
