@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::lanes::{LANES, U32x16, Vec3x16};
-use crate::light::area::TriangleLanes;
+use crate::light::area::TriangleLightLanes;
 use crate::light::point::PointLanes;
 use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
@@ -491,7 +491,7 @@ impl Sampling<'_> {
         // `if`, not `bool::then`: a closure would keep the kernel out of the wide code.
         let lit = if points > 0 { Some(self.table.points.sample_li_rgb_lanes(U32x16(rows), &p)) } else { None };
         let triangles = if areas != 0 {
-            Some(TriangleLanes::sample(&self.table.area.items, &area_rows, areas, &p, [u1, u2]))
+            Some(TriangleLightLanes::sample(&self.table.area.items, &area_rows, areas, &p, [u1, u2]))
         } else {
             None
         };

@@ -14,7 +14,8 @@ use glam::Vec2;
 
 use super::{EntryColumns, NO_LIGHT, Sampled, Sampling};
 use crate::lanes::{F32x16, LANES, U32x16};
-use crate::light::{LiSample, LightFlags, LightId, LightKind, LightSampleContext};
+use crate::light::area::TriangleLightLanes;
+use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext};
 use crate::rng::SampleStream;
 
 /// A reservoir's kept sample: the light, its primary-sample-space point `u` (what Sample_Li
@@ -177,13 +178,26 @@ impl Sampling<'_> {
             let u = F32x16(std::array::from_fn(|l| rng[l].next_f32()));
             let choices = self.sampler.sample_lanes(&block.p, &block.normal, &u, (1u32 << n) - 1);
             let (mut rows, mut points) = ([0u32; LANES], 0);
+            // Area lights draw their u here (each lane's stream in the order `evaluate_at`'s caller
+            // below would), for the triangle kernel.
+            let (mut area_rows, mut areas, mut area_u) = ([0u32; LANES], 0u32, [F32x16::ZERO; 2]);
             for l in 0..n {
-                if choices.chosen & (1 << l) != 0 && choices.light[l].kind == LightKind::Point {
-                    (rows[l], points) = (choices.light[l].row, points + 1);
+                let id = choices.light[l];
+                if choices.chosen & (1 << l) != 0 && id.kind == LightKind::Point {
+                    (rows[l], points) = (id.row, points + 1);
+                } else if choices.chosen & (1 << l) != 0 && id.kind == LightKind::Area {
+                    let u = rng[l].next_2d();
+                    (area_rows[l], areas, area_u[0][l], area_u[1][l]) = (id.row, areas | 1 << l, u.x, u.y);
                 }
             }
             let lit =
                 if points > 0 { Some(self.table.points.sample_li_rgb_lanes(U32x16(rows), &block.p)) } else { None };
+            let items = &self.table.area.items;
+            let triangles = if areas != 0 {
+                Some(TriangleLightLanes::sample(items, &area_rows, areas, &block.p, area_u))
+            } else {
+                None
+            };
             for l in 0..n {
                 if choices.chosen & (1 << l) == 0 {
                     continue;
@@ -192,6 +206,19 @@ impl Sampling<'_> {
                 let (sampled, u) = match &lit {
                     Some(lit) if chosen.0.kind == LightKind::Point => {
                         (lit.li_sample(l).map(|ls| (ls, chosen.1, LightKind::Point.flags())), Vec2::ZERO)
+                    }
+                    _ if areas & (1 << l) != 0 => {
+                        let u = Vec2::new(area_u[0][l], area_u[1][l]);
+                        let sampled = match &triangles {
+                            Some(tri) if tri.done(l) => {
+                                let ls =
+                                    items[chosen.0.row as usize].light.sample_li_from_lane(tri, l, ColorQuery::Rgb);
+                                let ls = ls.filter(|ls| ls.pdf > 0.0 && ls.radiance.is_finite());
+                                ls.map(|ls| (ls, chosen.1, self.table.flags(chosen.0)))
+                            }
+                            _ => self.evaluate_at(block.point[l], &ctx[l], chosen, u),
+                        };
+                        (sampled, u)
                     }
                     _ => {
                         let u = self.unless_delta(chosen.0, rng[l].next_2d());

@@ -11,7 +11,7 @@ use crate::light::table::AreaRow;
 use crate::light::{ColorQuery, LiSample};
 
 /// The kernel's samples of a block's triangle lights, and the lanes it ran for.
-pub struct TriangleLanes {
+pub struct TriangleLightLanes {
     /// The kernel's result per lane.
     pub sample: TriangleSample<F32x16>,
     /// Lanes whose light is a triangle the kernel takes (as [`AreaShape::sample_fast_with`]
@@ -19,7 +19,7 @@ pub struct TriangleLanes {
     pub taken: Mask16,
 }
 
-impl TriangleLanes {
+impl TriangleLightLanes {
     /// Samples light `rows[row[l]]` from `p` at `u` for each lane `l` set in `lanes` (bit `l`)
     /// whose light is a triangle.
     #[inline(always)]
@@ -52,10 +52,10 @@ impl TriangleLanes {
 }
 
 impl ResolvedArea {
-    /// Sample_Li from lane `l` of `lanes` (a lane [`TriangleLanes::done`] with), as
+    /// Sample_Li from lane `l` of `lanes` (a lane [`TriangleLightLanes::done`] with), as
     /// [`ResolvedArea::sample_li`] gives it.
     #[inline]
-    pub fn sample_li_from_lane(&self, lanes: &TriangleLanes, l: usize, query: ColorQuery) -> Option<LiSample> {
+    pub fn sample_li_from_lane(&self, lanes: &TriangleLightLanes, l: usize, query: ColorQuery) -> Option<LiSample> {
         let (s, AreaShape::Triangle { uv, .. }) = (&lanes.sample, self.shape) else { return None };
         if !s.ok.test(l) {
             return None;
@@ -112,7 +112,8 @@ mod tests {
             }
             let lanes = 0xffff & !(1 << 11); // a lane the block did not choose a triangle for
             for &level in Level::ALL {
-                let Some(got) = at_level(level, || TriangleLanes::sample(&rows, &row_of, lanes, &p, [u0, u1])) else {
+                let Some(got) = at_level(level, || TriangleLightLanes::sample(&rows, &row_of, lanes, &p, [u0, u1]))
+                else {
                     continue;
                 };
                 for l in 0..LANES {

@@ -20,7 +20,7 @@ use super::{Amount, ColorQuery, Emitter, LiSample, LightBounds, LightError, Ligh
 use crate::geometry::Transform;
 use crate::spectrum::{SampledSpectrum, Spectrum};
 
-pub use lanes::TriangleLanes;
+pub use lanes::TriangleLightLanes;
 pub use shapes::{
     AreaShape, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA, SPHERE_NEAR_MARGIN, SamplingStrategy, ShapeSample,
     SurfacePoint,
