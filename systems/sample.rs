@@ -500,8 +500,10 @@ impl Sampling<'_> {
             let chosen = chosen[l].then_some((light[l], pmf[l]));
             traced += match (&lit, &triangles, chosen) {
                 (Some(lit), _, Some(c)) if c.0.kind == LightKind::Point => self.write_point(cols, e + l, c, lit, l),
-                (_, Some(tri), Some((id, pmf))) if id.kind == LightKind::Area && tri.done(l) => {
-                    let ls = self.table.area.items[id.row as usize].light.sample_li_from_lane(tri, l, ColorQuery::Rgb);
+                (_, Some(tri), Some((id, pmf))) if id.kind == LightKind::Area && tri.taken.test(l) => {
+                    let light = &self.table.area.items[id.row as usize].light;
+                    let (ctx, u) = (self.context(point[l]), Vec2::new(u1[l], u2[l]));
+                    let ls = tri.sample_li(light, l, &ctx, u, ColorQuery::Rgb).flatten();
                     let sampled = ls.filter(|ls| ls.pdf > 0.0 && ls.radiance.is_finite());
                     self.write(cols, e + l, id, sampled.map(|ls| (ls, pmf, self.table.flags(id))))
                 }

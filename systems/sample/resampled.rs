@@ -209,14 +209,13 @@ impl Sampling<'_> {
                     }
                     _ if areas & (1 << l) != 0 => {
                         let u = Vec2::new(area_u[0][l], area_u[1][l]);
-                        let sampled = match &triangles {
-                            Some(tri) if tri.done(l) => {
-                                let ls =
-                                    items[chosen.0.row as usize].light.sample_li_from_lane(tri, l, ColorQuery::Rgb);
-                                let ls = ls.filter(|ls| ls.pdf > 0.0 && ls.radiance.is_finite());
-                                ls.map(|ls| (ls, chosen.1, self.table.flags(chosen.0)))
-                            }
-                            _ => self.evaluate_at(block.point[l], &ctx[l], chosen, u),
+                        let light = &items[chosen.0.row as usize].light;
+                        let lane = triangles.as_ref().and_then(|t| t.sample_li(light, l, &ctx[l], u, ColorQuery::Rgb));
+                        let sampled = match lane {
+                            Some(ls) => ls
+                                .filter(|ls| ls.pdf > 0.0 && ls.radiance.is_finite())
+                                .map(|ls| (ls, chosen.1, self.table.flags(chosen.0))),
+                            None => self.evaluate_at(block.point[l], &ctx[l], chosen, u),
                         };
                         (sampled, u)
                     }

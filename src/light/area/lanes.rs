@@ -8,7 +8,9 @@ use super::fast::{TriangleSample, sample_triangle};
 use super::shapes::{AreaShape, ShapeSample, SurfacePoint};
 use crate::lanes::{F32x16, LANES, Mask16, Vec3x16};
 use crate::light::table::AreaRow;
-use crate::light::{ColorQuery, LiSample};
+use glam::Vec2;
+
+use crate::light::{ColorQuery, LiSample, LightSampleContext};
 
 /// The kernel's samples of a block's triangle lights, and the lanes it ran for.
 pub struct TriangleLightLanes {
@@ -48,6 +50,27 @@ impl TriangleLightLanes {
     #[inline(always)]
     pub fn done(&self, l: usize) -> bool {
         self.taken.test(l) && !self.sample.reference.test(l)
+    }
+
+    /// [`ResolvedArea::sample_li`] of lane `l`'s light from `ctx` at `u` (those of the block), as
+    /// the kernel left it: its sample, or the f64 reference's where its bounds call for it (as
+    /// `sample_li` falls back, without running the f32 kernel again); None for a lane not taken.
+    #[inline]
+    pub fn sample_li(
+        &self,
+        light: &ResolvedArea,
+        l: usize,
+        ctx: &LightSampleContext,
+        u: Vec2,
+        query: ColorQuery,
+    ) -> Option<Option<LiSample>> {
+        if !self.taken.test(l) {
+            None
+        } else if self.sample.reference.test(l) {
+            Some(light.sample_li_f64(ctx, u, query))
+        } else {
+            Some(light.sample_li_from_lane(self, l, query))
+        }
     }
 }
 
@@ -135,10 +158,11 @@ mod tests {
                         continue;
                     }
                     assert_eq!(got.done(l), !scalar.reference, "lane {l} at {level:?} from {}", ctx.p);
+                    // Sampled in the lane, or by the f64 reference where the scalar call falls back to it.
+                    let lane = got.sample_li(light, l, &ctx, u, ColorQuery::Rgb).expect("a lane taken");
+                    let want = light.sample_li(&ctx, u, ColorQuery::Rgb);
+                    assert_eq!(format!("{lane:?}"), format!("{want:?}"), "lane {l} at {level:?} from {}", ctx.p);
                     if got.done(l) {
-                        let lane = light.sample_li_from_lane(&got, l, ColorQuery::Rgb);
-                        let want = light.sample_li(&ctx, u, ColorQuery::Rgb);
-                        assert_eq!(format!("{lane:?}"), format!("{want:?}"), "lane {l} at {level:?} from {}", ctx.p);
                         done += 1;
                     } else {
                         referred += 1;
