@@ -19,7 +19,7 @@ pub mod math;
 mod real;
 mod types;
 
-pub use real::{Real, Vector};
+pub use real::{Real, Real3, Vector};
 pub use types::{F32x16, Mask16, U32x16, Vec3x16};
 
 /// Values per lane array: one AVX-512 register of f32.

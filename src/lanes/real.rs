@@ -1,13 +1,15 @@
 //! One kernel for one value and for `LANES` values: [`Real`] and [`Vector`] are implemented by
 //! `f32` and glam's `Vec3` (masks are `bool`) and by [`F32x16`] and [`Vec3x16`] (masks are
-//! [`Mask16`]), so a kernel written over them is a single implementation that scalar callers run
-//! at one value and lane kernels at sixteen, with the same operations in the same order and so
-//! the same bits. Branches become masks: a kernel computes every step and selects, and says with
-//! a mask where its result holds.
+//! [`Mask16`]), and `Real` by glam's `Vec4` too (four values, `BVec4A`), so a kernel written over
+//! them is a single implementation that scalar callers run at one value and lane kernels at four
+//! or sixteen, with the same operations in the same order and so the same bits. `max` and `min`
+//! are SSE's (`a > b ? a : b`, `a < b ? a : b`) for every type, NaN operands included. Branches
+//! become masks: a kernel computes every step and selects, and says with a mask where its result
+//! holds.
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
-use glam::Vec3;
+use glam::{BVec4A, Vec3, Vec4};
 
 use super::{F32x16, Mask16, Vec3x16};
 
@@ -24,14 +26,14 @@ pub trait Real:
     + Mul<f32, Output = Self>
     + Div<f32, Output = Self>
 {
-    /// A comparison's result: `bool`, or [`Mask16`].
+    /// A comparison's result: `bool`, `BVec4A` or [`Mask16`].
     type Mask: Copy + BitAnd<Output = Self::Mask> + BitOr<Output = Self::Mask> + Not<Output = Self::Mask>;
-    /// Vectors of these numbers.
-    type Vector: Vector<Real = Self>;
     fn splat(v: f32) -> Self;
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
+    /// `self < o ? self : o` per value (SSE `minps`).
     fn min(self, o: Self) -> Self;
+    /// `self > o ? self : o` per value (SSE `maxps`).
     fn max(self, o: Self) -> Self;
     fn lt(self, o: Self) -> Self::Mask;
     fn le(self, o: Self) -> Self::Mask;
@@ -42,13 +44,30 @@ pub trait Real:
     fn select(mask: Self::Mask, yes: Self, no: Self) -> Self;
     /// A mask of one value everywhere.
     fn mask(v: bool) -> Self::Mask;
+    /// Whether `mask` holds everywhere.
+    fn all(mask: Self::Mask) -> bool;
+    /// Whether `mask` holds somewhere.
+    fn any(mask: Self::Mask) -> bool;
+}
+
+/// A [`Real`] with 3-vectors of its own: `f32` (`Vec3`) and [`F32x16`] ([`Vec3x16`]).
+pub trait Real3: Real {
+    type Vector: Vector<Real = Self>;
+}
+
+impl Real3 for f32 {
+    type Vector = Vec3;
+}
+
+impl Real3 for F32x16 {
+    type Vector = Vec3x16;
 }
 
 /// Vectors of three [`Real`]s: glam's `Vec3`, or [`Vec3x16`].
 pub trait Vector:
     Copy + Add<Output = Self> + Sub<Output = Self> + Neg<Output = Self> + Mul<Self::Real, Output = Self>
 {
-    type Real: Real<Vector = Self>;
+    type Real: Real;
     fn zero() -> Self;
     fn dot(self, o: Self) -> Self::Real;
     fn cross(self, o: Self) -> Self;
@@ -74,7 +93,6 @@ pub trait Vector:
 
 impl Real for f32 {
     type Mask = bool;
-    type Vector = Vec3;
     #[inline(always)]
     fn splat(v: f32) -> Self {
         v
@@ -89,11 +107,11 @@ impl Real for f32 {
     }
     #[inline(always)]
     fn min(self, o: Self) -> Self {
-        f32::min(self, o)
+        if self < o { self } else { o }
     }
     #[inline(always)]
     fn max(self, o: Self) -> Self {
-        f32::max(self, o)
+        if self > o { self } else { o }
     }
     #[inline(always)]
     fn lt(self, o: Self) -> bool {
@@ -122,6 +140,14 @@ impl Real for f32 {
     #[inline(always)]
     fn mask(v: bool) -> bool {
         v
+    }
+    #[inline(always)]
+    fn all(mask: bool) -> bool {
+        mask
+    }
+    #[inline(always)]
+    fn any(mask: bool) -> bool {
+        mask
     }
 }
 
@@ -155,7 +181,6 @@ impl Vector for Vec3 {
 
 impl Real for F32x16 {
     type Mask = Mask16;
-    type Vector = Vec3x16;
     #[inline(always)]
     fn splat(v: f32) -> Self {
         F32x16::splat(v)
@@ -204,6 +229,75 @@ impl Real for F32x16 {
     fn mask(v: bool) -> Mask16 {
         Mask16::splat(v)
     }
+    #[inline(always)]
+    fn all(mask: Mask16) -> bool {
+        mask.all()
+    }
+    #[inline(always)]
+    fn any(mask: Mask16) -> bool {
+        mask.any()
+    }
+}
+
+/// A wide light-BVH node's four clusters (see `light_sampler::importance_lanes`).
+impl Real for Vec4 {
+    type Mask = BVec4A;
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        Vec4::splat(v)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Vec4::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Vec4::abs(self)
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        Vec4::min(self, o)
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        Vec4::max(self, o)
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> BVec4A {
+        self.cmplt(o)
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> BVec4A {
+        self.cmple(o)
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> BVec4A {
+        self.cmpgt(o)
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> BVec4A {
+        self.cmpge(o)
+    }
+    #[inline(always)]
+    fn is_finite(self) -> BVec4A {
+        self.is_finite_mask()
+    }
+    #[inline(always)]
+    fn select(mask: BVec4A, yes: Self, no: Self) -> Self {
+        Vec4::select(mask, yes, no)
+    }
+    #[inline(always)]
+    fn mask(v: bool) -> BVec4A {
+        BVec4A::splat(v)
+    }
+    #[inline(always)]
+    fn all(mask: BVec4A) -> bool {
+        mask.all()
+    }
+    #[inline(always)]
+    fn any(mask: BVec4A) -> bool {
+        mask.any()
+    }
 }
 
 impl Vector for Vec3x16 {
@@ -231,5 +325,32 @@ impl Vector for Vec3x16 {
     #[inline(always)]
     fn select(mask: Mask16, yes: Self, no: Self) -> Self {
         Vec3x16::select(mask, yes, no)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_value_four_and_sixteen_agree_on_min_max_and_comparisons_with_nan_and_signed_zeros() {
+        let values = [f32::NAN, -0.0, 0.0, 1.0, -1.0, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE / 2.0];
+        let pairs: Vec<(f32, f32)> = values.iter().flat_map(|&a| values.iter().map(move |&b| (a, b))).collect();
+        for chunk in pairs.chunks(16) {
+            let (mut a, mut b) = (F32x16::ZERO, F32x16::ZERO);
+            for (l, &(x, y)) in chunk.iter().enumerate() {
+                (a[l], b[l]) = (x, y);
+            }
+            let (max16, min16, lt16) = (Real::max(a, b), Real::min(a, b), Real::lt(a, b));
+            for (l, &(x, y)) in chunk.iter().enumerate() {
+                let (x4, y4) = (Vec4::splat(x), Vec4::splat(y));
+                let max = [Real::max(x, y), max16[l], Real::max(x4, y4).x].map(f32::to_bits);
+                let min = [Real::min(x, y), min16[l], Real::min(x4, y4).x].map(f32::to_bits);
+                assert!(max.iter().all(|&m| m == max[0]), "max({x}, {y}): {max:x?}");
+                assert!(min.iter().all(|&m| m == min[0]), "min({x}, {y}): {min:x?}");
+                assert_eq!(Real::lt(x, y), lt16.test(l), "{x} < {y}");
+                assert_eq!(Real::lt(x, y), <Vec4 as Real>::all(Real::lt(x4, y4)), "{x} < {y}");
+            }
+        }
     }
 }

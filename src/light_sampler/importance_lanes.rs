@@ -1,141 +1,12 @@
 //! The light BVH's importance formula ([`super::importance::ClusterQuery::importance`], the
 //! scalar reference) written once over lane types: a wide node's four clusters seen from one
-//! point ([`Vec4`]), or one cluster seen from `LANES` points ([`F32x16`], for batches of
+//! point (`glam::Vec4`), or one cluster seen from `LANES` points (`lanes::F32x16`, for batches of
 //! shading points in `BvhSampler::sample_lanes`). Both lane types round every operation as the
 //! other does (IEEE +, -, *, /, sqrt; `max` / `min` with SSE's operand order), so a point's
 //! importances, and so its choices and pmfs, are the same bits whichever form computed them.
 
-use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Sub};
-
-use glam::{BVec4A, Vec4};
-
 use super::importance::{MAX_IMPORTANCE, MIN_DISTANCE_SQUARED};
-use crate::lanes::{F32x16, Mask16};
-
-/// What the importance formula needs of a lane type.
-pub(super) trait Lanes:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
-{
-    type Mask: Copy + BitOr<Output = Self::Mask> + BitAnd<Output = Self::Mask>;
-    fn splat(v: f32) -> Self;
-    fn sqrt(self) -> Self;
-    fn abs(self) -> Self;
-    /// `self > other ? self : other` lane by lane (SSE `maxps`).
-    fn max(self, other: Self) -> Self;
-    /// `self < other ? self : other` lane by lane (SSE `minps`).
-    fn min(self, other: Self) -> Self;
-    fn gt(self, other: Self) -> Self::Mask;
-    fn ge(self, other: Self) -> Self::Mask;
-    fn lt(self, other: Self) -> Self::Mask;
-    fn le(self, other: Self) -> Self::Mask;
-    fn select(mask: Self::Mask, yes: Self, no: Self) -> Self;
-    fn all(mask: Self::Mask) -> bool;
-    fn any(mask: Self::Mask) -> bool;
-}
-
-impl Lanes for Vec4 {
-    type Mask = BVec4A;
-    #[inline(always)]
-    fn splat(v: f32) -> Self {
-        Vec4::splat(v)
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        Vec4::sqrt(self)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        Vec4::abs(self)
-    }
-    #[inline(always)]
-    fn max(self, other: Self) -> Self {
-        Vec4::max(self, other)
-    }
-    #[inline(always)]
-    fn min(self, other: Self) -> Self {
-        Vec4::min(self, other)
-    }
-    #[inline(always)]
-    fn gt(self, other: Self) -> BVec4A {
-        self.cmpgt(other)
-    }
-    #[inline(always)]
-    fn ge(self, other: Self) -> BVec4A {
-        self.cmpge(other)
-    }
-    #[inline(always)]
-    fn lt(self, other: Self) -> BVec4A {
-        self.cmplt(other)
-    }
-    #[inline(always)]
-    fn le(self, other: Self) -> BVec4A {
-        self.cmple(other)
-    }
-    #[inline(always)]
-    fn select(mask: BVec4A, yes: Self, no: Self) -> Self {
-        Vec4::select(mask, yes, no)
-    }
-    #[inline(always)]
-    fn all(mask: BVec4A) -> bool {
-        mask.all()
-    }
-    #[inline(always)]
-    fn any(mask: BVec4A) -> bool {
-        mask.any()
-    }
-}
-
-impl Lanes for F32x16 {
-    type Mask = Mask16;
-    #[inline(always)]
-    fn splat(v: f32) -> Self {
-        F32x16::splat(v)
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        F32x16::sqrt(self)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        F32x16::abs(self)
-    }
-    #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        F32x16::max(self, o)
-    }
-    #[inline(always)]
-    fn min(self, o: Self) -> Self {
-        F32x16::min(self, o)
-    }
-    #[inline(always)]
-    fn gt(self, o: Self) -> Mask16 {
-        F32x16::gt(self, o)
-    }
-    #[inline(always)]
-    fn ge(self, o: Self) -> Mask16 {
-        F32x16::ge(self, o)
-    }
-    #[inline(always)]
-    fn lt(self, o: Self) -> Mask16 {
-        F32x16::lt(self, o)
-    }
-    #[inline(always)]
-    fn le(self, o: Self) -> Mask16 {
-        F32x16::le(self, o)
-    }
-    #[inline(always)]
-    fn select(mask: Mask16, yes: Self, no: Self) -> Self {
-        F32x16::select(mask, yes, no)
-    }
-    #[inline(always)]
-    fn all(mask: Mask16) -> bool {
-        mask.all()
-    }
-    #[inline(always)]
-    fn any(mask: Mask16) -> bool {
-        mask.any()
-    }
-}
+use crate::lanes::Real;
 
 /// Cluster bounds as lanes (see `WideNode`): box corners, emission axis, power, bounding-sphere
 /// radius, cone cosines and sine, and 1 for two-sided clusters.
@@ -156,7 +27,7 @@ pub(super) struct ClusterLanes<V> {
 /// normal is not zero): `ClusterQuery::importance` lane by lane (see there for the model and its
 /// sources).
 #[inline(always)]
-pub(super) fn importance<V: Lanes>(c: &ClusterLanes<V>, p: [V; 3], n: [V; 3], has_n: V::Mask) -> V {
+pub(super) fn importance<V: Real>(c: &ClusterLanes<V>, p: [V; 3], n: [V; 3], has_n: V::Mask) -> V {
     let s = V::splat;
     let (zero, one) = (s(0.0), s(1.0));
     let [px, py, pz] = p;

@@ -18,7 +18,7 @@
 
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
-use crate::lanes::{Real, Vector};
+use crate::lanes::{Real, Real3, Vector};
 
 /// Largest relative error of the distance to the plane (and so of solid angles and area-sampling
 /// densities) that the f32 kernel accepts: 2e-5, well under the 1e-4 at which a sample's density
@@ -86,7 +86,7 @@ pub struct EdgeTest<F: Real> {
 /// and solid-angle sampling need from the point. `F` is `f32` (one point) or `F32x16` (a lane
 /// each).
 #[derive(Clone, Copy, Debug)]
-pub struct TriangleView<F: Real> {
+pub struct TriangleView<F: Real3> {
     r0: F::Vector,
     r1: F::Vector,
     l: [F; 3],
@@ -114,7 +114,7 @@ pub struct TriangleView<F: Real> {
     cross_len: F,
 }
 
-impl<F: Real> TriangleView<F> {
+impl<F: Real3> TriangleView<F> {
     /// The triangle `v` seen from `p`, given `cross` = (v1 - v0) x (v2 - v0) to f32 precision
     /// (the caller's f64 value rounded), and where it holds: not where the distance to the plane
     /// would carry a relative error above [`MAX_REL_ERROR`] (the point in or near the plane) or
@@ -248,7 +248,7 @@ impl<F: Real> TriangleView<F> {
 /// Arvo's sampler in f32 (see `SphericalTriangle::sample` in the f64 reference for the
 /// derivation of the half-angle form).
 #[derive(Clone, Copy, Debug)]
-pub struct SphericalTriangleF32<F: Real> {
+pub struct SphericalTriangleF32<F: Real3> {
     a: F::Vector,
     b: F::Vector,
     toward_c: F::Vector,
@@ -259,7 +259,7 @@ pub struct SphericalTriangleF32<F: Real> {
     area: F,
 }
 
-impl<F: Real> SphericalTriangleF32<F> {
+impl<F: Real3> SphericalTriangleF32<F> {
     /// The unit direction that `u` maps to, as the f64 reference maps it (to ~1e-5 of the
     /// triangle's size where [`TriangleView::spherical`] holds).
     #[inline(always)]

@@ -15,7 +15,7 @@ use glam::{Vec2, Vec3};
 use super::shapes::{
     AreaShape, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA, ShapeSample, SurfacePoint, finite_sample,
 };
-use crate::lanes::{Real, Vector};
+use crate::lanes::{Real3, Vector};
 use crate::sampling::sample_uniform_triangle_of;
 use crate::sampling::spherical_f32::{MAX_REL_ERROR, TriangleView};
 
@@ -29,7 +29,7 @@ enum Fast {
 /// angle (`spherical`: true for solid-angle sampling), and where that is `known`: not where the
 /// f32 bound straddles a band edge.
 #[inline(always)]
-fn spherical_strategy<F: Real>(view: &TriangleView<F>) -> (F::Mask, F::Mask) {
+fn spherical_strategy<F: Real3>(view: &TriangleView<F>) -> (F::Mask, F::Mask) {
     let (lo, hi) = (view.solid_angle - view.solid_angle_error, view.solid_angle + view.solid_angle_error);
     let spherical = lo.gt(F::splat(BAND_LO)) & hi.lt(F::splat(BAND_HI));
     let area = hi.lt(F::splat(MIN_SPHERICAL_SAMPLE_AREA * (1.0 - f32::EPSILON)))
@@ -94,7 +94,7 @@ const BAND_HI: f32 = MAX_SPHERICAL_SAMPLE_AREA * (1.0 - f32::EPSILON);
 /// `reference` holds, the f64 reference must decide; elsewhere a sample where `ok` holds (unit
 /// `wi` toward point `p`, at barycentrics `b`, density `pdf`) and none where it does not.
 #[derive(Clone, Copy, Debug)]
-pub struct TriangleSample<F: Real> {
+pub struct TriangleSample<F: Real3> {
     /// Unit direction toward `p`.
     pub wi: F::Vector,
     /// The sampled point on the triangle.
@@ -114,7 +114,7 @@ pub struct TriangleSample<F: Real> {
 /// Both strategies are computed and the one that applies is selected, so that it runs as one
 /// lane kernel; [`AreaShape::sample_fast_with`] runs it at one value.
 #[inline(always)]
-pub fn sample_triangle<F: Real>(
+pub fn sample_triangle<F: Real3>(
     v: [F::Vector; 3],
     normal: F::Vector,
     area: F,
