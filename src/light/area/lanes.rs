@@ -1,15 +1,16 @@
 //! Triangle lights' Sample_Li for a block of lanes: the chosen rows' triangles gathered into lane
 //! columns and sampled by the f32 kernel [`sample_triangle`], the one that scalar callers run at
 //! one value, so a lane gives the bits of the scalar call. The radiance (sides, texture) is looked
-//! up per lane afterwards; lanes the kernel leaves to the f64 reference take the scalar path.
+//! up per lane afterwards; lanes whose error bounds the kernel refuses go to the f64 reference, as
+//! the scalar call does.
+
+use glam::Vec2;
 
 use super::ResolvedArea;
 use super::fast::{TriangleSample, sample_triangle};
 use super::shapes::{AreaShape, ShapeSample, SurfacePoint};
 use crate::lanes::{F32x16, LANES, Mask16, Vec3x16};
 use crate::light::table::AreaRow;
-use glam::Vec2;
-
 use crate::light::{ColorQuery, LiSample, LightSampleContext};
 
 /// The kernel's samples of a block's triangle lights, and the lanes it ran for.
