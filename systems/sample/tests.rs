@@ -40,15 +40,19 @@ fn slot_without_point_gets_no_light() {
 /// (r^2 underflows to 0), one 1e30 m away (r^2 overflows) and one at NaN (no light may be
 /// chosen), plus a batch length that is no multiple of the lane count. With point lights
 /// only, whole blocks go through the point kernel; one light (every lane the same row) and
-/// three (rows differ between lanes) take its two ways of reading the light. The schedule runs
+/// three (rows differ between lanes) take its two ways of reading the light. With emissive
+/// triangles only (a scene without point lights), blocks go through the triangle kernel: a large
+/// triangle just above the points (solid-angle sampling; points within 1e-4 of its plane, which
+/// the f32 bounds leave to the f64 reference) and a tiny far one (area sampling). The schedule runs
 /// twice, on two orders of the points, so that a column the lane path fails to write keeps
 /// the first run's value.
 #[test]
 fn lane_path_matches_entry_by_entry() {
     use crate::shading::LightSamplerKind::{Bvh, Power, Uniform};
     use crate::shading::LightSelection::{OneSampled, Resampled};
-    // (samples per point, sampler, lights: 6 of four kinds and a disk light, 3 points, or 1
-    // point; selection: one sampled light, or resampled from candidates)
+    // (samples per point, sampler, lights: 6 of four kinds and a disk light, 3 points, 1
+    // point, or 0: two emissive triangles; selection: one sampled light, or resampled from
+    // candidates)
     let runs = [
         (1, Power, 6, OneSampled),
         (3, Power, 6, OneSampled),
@@ -60,19 +64,34 @@ fn lane_path_matches_entry_by_entry() {
         (1, Bvh, 6, Resampled { candidates: 4 }),
         (2, Power, 6, Resampled { candidates: 3 }),
         (1, Uniform, 3, Resampled { candidates: 5 }),
+        (1, Power, 0, OneSampled),
+        (2, Bvh, 0, OneSampled),
+        (1, Uniform, 0, Resampled { candidates: 4 }),
     ];
     for (samples_per_point, light_sampler, lights, selection) in runs {
-        let points_only = lights <= 3;
+        let (points_only, triangles_only, mixed) = ((1..=3).contains(&lights), lights == 0, lights == 6);
         let mut world = World::new();
         let mut schedule = Schedule::default();
         crate::systems::LightingPlugin::build(&mut world, &mut schedule);
         let at = |x, y, z| Transform::from_translation(Vec3::new(x, y, z));
-        world.spawn((PointLight::candela(1e4), at(0.0, 2.0, 0.0)));
+        if triangles_only {
+            let big = [Vec3::new(-3.0, 2.5, -3.0), Vec3::new(3.0, 2.5, -3.0), Vec3::new(0.0, 2.5, 3.0)];
+            // Beside the points, not above (the big one would shade it), and bright enough to be chosen.
+            let tiny = big.map(|v| v * 0.01 + Vec3::new(30.0, 1.0, 20.0));
+            for (triangle, nits) in [(big, 1e3), (tiny, 1e8)] {
+                let mesh = crate::geometry::Mesh::from_triangles(&[triangle]).unwrap();
+                let light =
+                    crate::light::AreaLight { two_sided: true, amount: Amount::Nits(nits), ..Default::default() };
+                world.spawn((light, mesh, at(0.0, 0.0, 0.0)));
+            }
+        } else {
+            world.spawn((PointLight::candela(1e4), at(0.0, 2.0, 0.0)));
+        }
         if lights > 1 {
             world.spawn((PointLight { casts_shadows: false, ..PointLight::candela(5e3) }, at(1.0, 1.0, 1.0)));
             world.spawn((PointLight::candela(3e3), at(-3.0, 0.5, 2.0)));
         }
-        if !points_only {
+        if mixed {
             let spot = SpotLight { amount: Amount::Candela(1e4), ..Default::default() };
             world.spawn((spot, at(0.0, 3.0, 0.0).looking_to(Vec3::NEG_Y, Vec3::Z)));
             world.spawn((DistantLight { amount: Amount::Lux(1.0), ..Default::default() }, Transform::default()));
@@ -103,6 +122,9 @@ fn lane_path_matches_entry_by_entry() {
                     batch.push(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y, 201, 0);
                 }
                 let p = Vec3::new(rng.f32() * 8.0 - 4.0, rng.f32() * 2.0, rng.f32() * 8.0 - 4.0);
+                // Every seventh point within 1e-4 of the big triangle's plane (y = 2.5).
+                let near_plane = triangles_only && i % 7 == 0;
+                let p = if near_plane { Vec3::new(p.x * 0.5, 2.5 - 1e-4 * rng.f32(), p.z * 0.5) } else { p };
                 batch.push(p, Vec3::Y, i, i % 5);
             }
         }
@@ -169,15 +191,31 @@ fn lane_path_matches_entry_by_entry() {
         let surface = [ShadowTarget::Surface];
         assert_eq!(written(&rays.target_normal, &surface), written(&target_normal, &surface));
         // The mix reached every path: point lights in lanes, other kinds, failed samples.
-        assert!(light.iter().any(|l| l.kind == LightKind::Point));
+        assert!(triangles_only || light.iter().any(|l| l.kind == LightKind::Point));
         assert!(points_only || light.iter().any(|l| l.kind != LightKind::Point));
-        assert!(ray_kind.contains(&ShadowTarget::Point));
+        assert!(triangles_only || ray_kind.contains(&ShadowTarget::Point));
+        if triangles_only {
+            // Both triangles sampled, with rays to their surfaces, and points the f32 bounds refuse.
+            let area_lights: Vec<u32> = light.iter().filter(|l| l.kind == LightKind::Area).map(|l| l.row).collect();
+            // (The BVH sampler, ranking by distance, leaves the far one to the others.)
+            let both = area_lights.contains(&0) && area_lights.contains(&1);
+            assert!(both || light_sampler == Bvh, "{light_sampler:?}: rows {area_lights:?}");
+            assert!(ray_kind.contains(&ShadowTarget::Surface));
+            let lanes = crate::light::area::TriangleLightLanes::sample(
+                &table.area.items,
+                &[0; LANES],
+                u32::MAX >> (32 - LANES),
+                &Vec3x16::splat(Vec3::new(0.0, 2.5 - 5e-5, 0.0)),
+                [crate::lanes::F32x16::splat(0.3); 2],
+            );
+            assert!(lanes.sample.reference.all(), "a point 5e-5 under the plane is the reference's");
+        }
         // (Resampling keeps the strong lights: the weak disk need not survive.)
-        let every_kind = !points_only && selection == OneSampled;
+        let every_kind = mixed && selection == OneSampled;
         assert!(!every_kind || ray_kind.contains(&ShadowTarget::Infinity));
         assert!(!every_kind || ray_kind.contains(&ShadowTarget::Surface));
         // (The power sampler's choices for the point at a light include that light.)
         let at_light = (0..m).any(|e| batch.pixel[e / k] == 0 && pdf[e] == 0.0 && light[e].kind == LightKind::Point);
-        assert!(at_light || light_sampler != Power, "at the light");
+        assert!(at_light || light_sampler != Power || triangles_only, "at the light");
     }
 }
