@@ -413,7 +413,7 @@ fn f32_hit_agrees_with_f64_reference_on_hard_triangles() {
             };
             let (fast, reference) = (shape.hit_fast(p, wi), shape.hit(p, wi));
             total += 1;
-            by_f32 += view.is_some_and(|t| t.edge_test(wi).inside || t.edge_test(wi).outside) as usize;
+            by_f32 += view.map(|t| t.edge_test(wi)).is_some_and(|e| e.inside || e.outside) as usize;
             match (fast, reference) {
                 (Some(f), Some(r)) => {
                     hits += 1;

@@ -42,8 +42,6 @@ pub trait Real:
     fn is_finite(self) -> Self::Mask;
     /// `yes` where `mask` holds, else `no`.
     fn select(mask: Self::Mask, yes: Self, no: Self) -> Self;
-    /// A mask of one value everywhere.
-    fn mask(v: bool) -> Self::Mask;
     /// Whether `mask` holds everywhere.
     fn all(mask: Self::Mask) -> bool;
     /// Whether `mask` holds somewhere.
@@ -138,10 +136,6 @@ impl Real for f32 {
         if mask { yes } else { no }
     }
     #[inline(always)]
-    fn mask(v: bool) -> bool {
-        v
-    }
-    #[inline(always)]
     fn all(mask: bool) -> bool {
         mask
     }
@@ -226,10 +220,6 @@ impl Real for F32x16 {
         F32x16::select(mask, yes, no)
     }
     #[inline(always)]
-    fn mask(v: bool) -> Mask16 {
-        Mask16::splat(v)
-    }
-    #[inline(always)]
     fn all(mask: Mask16) -> bool {
         mask.all()
     }
@@ -285,10 +275,6 @@ impl Real for Vec4 {
     #[inline(always)]
     fn select(mask: BVec4A, yes: Self, no: Self) -> Self {
         Vec4::select(mask, yes, no)
-    }
-    #[inline(always)]
-    fn mask(v: bool) -> BVec4A {
-        BVec4A::splat(v)
     }
     #[inline(always)]
     fn all(mask: BVec4A) -> bool {
