@@ -67,6 +67,10 @@ pub trait Vector:
 {
     type Real: Real;
     fn zero() -> Self;
+    /// `v` in every value.
+    fn splat(v: Vec3) -> Self;
+    fn new(x: Self::Real, y: Self::Real, z: Self::Real) -> Self;
+    fn xyz(self) -> [Self::Real; 3];
     fn dot(self, o: Self) -> Self::Real;
     fn cross(self, o: Self) -> Self;
     fn length(self) -> Self::Real;
@@ -150,6 +154,18 @@ impl Vector for Vec3 {
     #[inline(always)]
     fn zero() -> Self {
         Vec3::ZERO
+    }
+    #[inline(always)]
+    fn splat(v: Vec3) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn new(x: f32, y: f32, z: f32) -> Self {
+        Vec3::new(x, y, z)
+    }
+    #[inline(always)]
+    fn xyz(self) -> [f32; 3] {
+        self.to_array()
     }
     #[inline(always)]
     fn dot(self, o: Self) -> f32 {
@@ -291,6 +307,18 @@ impl Vector for Vec3x16 {
     #[inline(always)]
     fn zero() -> Self {
         Vec3x16::ZERO
+    }
+    #[inline(always)]
+    fn splat(v: Vec3) -> Self {
+        Vec3x16::splat(v)
+    }
+    #[inline(always)]
+    fn new(x: F32x16, y: F32x16, z: F32x16) -> Self {
+        Vec3x16 { x, y, z }
+    }
+    #[inline(always)]
+    fn xyz(self) -> [F32x16; 3] {
+        [self.x, self.y, self.z]
     }
     #[inline(always)]
     fn dot(self, o: Self) -> F32x16 {

@@ -17,8 +17,9 @@ use super::camera_pass::{CameraColumns, FoundSurface, write_found_surfaces};
 use super::material::Material;
 use super::normal_map::apply_normal_maps;
 use super::renderer::{RenderStats, Strategy, to_rgb};
-use super::shade::{Bounce, BounceRules, Continuation, Materials, ShadeContext};
+use super::shade::{Bounce, BounceRules, BsdfRay, Continuation, Materials, ShadeContext};
 use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
+use crate::lanes::LANES;
 use crate::light::ColorQuery;
 use crate::rng::mix64;
 use crate::shading::{RunReport, Settings, ShadingBatch};
@@ -204,14 +205,26 @@ impl Paths {
         self.hits.clear();
         self.hits.par_extend(self.continuations.par_iter().with_min_len(64).map(|(_, c)| bvh.closest_hit(&c.ray)));
         let wavelengths = &self.wavelengths;
+        // In blocks of `LANES` rays, whose light is found together (see `found_by_bsdf_rays`).
         self.found.clear();
-        self.found.par_extend(self.continuations.par_iter().zip(&self.hits).with_min_len(64).map(|((p, c), hit)| {
+        self.found.resize(self.continuations.len(), SampledSpectrum::default());
+        let blocks =
+            (self.found.par_chunks_mut(LANES), self.continuations.par_chunks(LANES), self.hits.par_chunks(LANES));
+        blocks.into_par_iter().with_min_len(4).for_each(|(found, continuations, hits)| {
             if !rules.direct {
-                return SampledSpectrum::default();
+                return;
             }
-            let query = wavelengths.get(*p as usize).map_or(ColorQuery::Rgb, ColorQuery::Spectral);
-            c.beta.mul(ctx.found_by_bsdf_ray(&c.from, c.wi, c.bsdf_pdf, hit.as_ref(), query))
-        }));
+            let ray = |k: usize| {
+                let (p, c) = &continuations[k];
+                let query = wavelengths.get(*p as usize).map_or(ColorQuery::Rgb, ColorQuery::Spectral);
+                BsdfRay { from: c.from, wi: c.wi, bsdf_pdf: c.bsdf_pdf, hit: hits[k].as_ref(), query }
+            };
+            let rays: [BsdfRay; LANES] = std::array::from_fn(|k| ray(k.min(continuations.len() - 1)));
+            ctx.found_by_bsdf_rays(&rays[..continuations.len()], found);
+            for (f, (_, c)) in found.iter_mut().zip(continuations) {
+                *f = c.beta.mul(*f);
+            }
+        });
         self.next.clear();
         let (mut path, mut beta) = (std::mem::take(&mut self.path), std::mem::take(&mut self.beta));
         path.clear();

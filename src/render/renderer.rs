@@ -384,41 +384,30 @@ impl DirectJob<'_> {
         let shade = ShadeContext::new(world, self.columns, self.materials, self.seed, self.strategy);
         let len = shade.batch.len();
         let bsdf_sampling = shade.bsdf_sampling();
-        let shade_one = |k: usize| shade.shade_direct(k, bsdf_sampling);
-        // Where the lane kernel may apply (`shade_lanes.rs`), blocks of the common case go
-        // through it; elsewhere samples are shaded one at a time. Either way the tasks count
-        // their BSDF rays as they go (a pass of its own cost a parallel region per batch), and
-        // write every contribution, so that column is only resized (no serial fill in steady
-        // state).
+        // Blocks of `LANES` samples: where the lane kernel may apply (`shade_lanes.rs`), it shades
+        // the block; elsewhere its samples are shaded one at a time and their BSDF rays' light
+        // found together. Either way the tasks count their BSDF rays as they go (a pass of its
+        // own cost a parallel region per batch), and write every contribution, so that column is
+        // only resized (no serial fill in steady state).
         let spectral = !shade.batch.wavelengths.is_empty();
         let lanes = !spectral && !bsdf_sampling && !super::shade_lanes::turned_off();
         let shade_chunk = |c: usize, out: &mut [Vec3]| -> usize {
             let first = c * RAY_CHUNK;
-            if !lanes {
-                let mut traced = 0;
-                for (i, out) in out.iter_mut().enumerate() {
-                    let (rgb, t) = shade_one(first + i);
-                    (*out, traced) = (rgb, traced + t as usize);
+            let (mut b, mut traced) = (0, 0);
+            while b < out.len() {
+                let end = (b + LANES).min(out.len());
+                let block = &mut out[b..end];
+                let lane_kernel = lanes
+                    && crate::lanes::widest(
+                        #[inline(always)]
+                        || shade.shade_lanes(first + b, block),
+                    );
+                if !lane_kernel {
+                    traced += shade.shade_direct_block(first + b, block, bsdf_sampling);
                 }
-                return traced;
+                b = end;
             }
-            crate::lanes::widest(
-                #[inline(always)]
-                || {
-                    let (mut b, mut traced) = (0, 0);
-                    while b < out.len() {
-                        let end = (b + LANES).min(out.len());
-                        if !shade.shade_lanes(first + b, &mut out[b..end]) {
-                            for (i, out) in out[b..end].iter_mut().enumerate() {
-                                let (rgb, t) = shade_one(first + b + i);
-                                (*out, traced) = (rgb, traced + t as usize);
-                            }
-                        }
-                        b = end;
-                    }
-                    traced
-                },
-            )
+            traced
         };
         contributions.resize(len, Vec3::ZERO);
         let chunks = contributions.par_chunks_mut(RAY_CHUNK).enumerate();

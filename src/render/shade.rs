@@ -11,7 +11,8 @@ use super::camera_pass::{CameraColumns, SampleSurface};
 use super::material::Material;
 use super::renderer::{Strategy, to_rgb};
 use crate::geometry::{Hit, SceneBvh, ShadowOffset, SurfacePoint};
-use crate::light::{ColorQuery, LightId, LightSampleContext, LightTable};
+use crate::lanes::{LANES, Vec3x16};
+use crate::light::{ColorQuery, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::{Pattern, SampleStream};
 use crate::sampling::Frame;
@@ -221,15 +222,67 @@ impl<'a> ShadeContext<'a> {
         hit: Option<&Hit>,
         query: ColorQuery,
     ) -> SampledSpectrum {
-        let pmf = |id| self.light_samples * if self.all_lights { 1.0 } else { self.sampler.pmf(from, id) };
         match hit {
             Some(h) => self.emitted(h, -wi, query).map_or(SampledSpectrum::default(), |(id, le)| {
-                le.scale(self.strategy.bsdf_weight(bsdf_pdf, pmf(id) * self.table.pdf_li(id, from, wi)))
+                le.scale(self.bsdf_weight(from, id, bsdf_pdf, self.table.pdf_li(id, from, wi)))
             }),
             None => self.escape_ids.iter().fold(SampledSpectrum::default(), |acc, &id| {
                 let Some((le, pdf)) = self.table.le_and_pdf_li(id, from, wi, query) else { return acc };
-                acc.add(le.scale(self.strategy.bsdf_weight(bsdf_pdf, pmf(id) * pdf)))
+                acc.add(le.scale(self.bsdf_weight(from, id, bsdf_pdf, pdf)))
             }),
+        }
+    }
+
+    /// The MIS weight of a BSDF sample (solid-angle pdf `bsdf_pdf`) that found light `id`, whose
+    /// `pdf_li` there is `pdf_li`, against the light samples drawn from `from`.
+    #[inline]
+    fn bsdf_weight(&self, from: &LightSampleContext, id: LightId, bsdf_pdf: f32, pdf_li: f32) -> f32 {
+        let pmf = self.light_samples * if self.all_lights { 1.0 } else { self.sampler.pmf(from, id) };
+        self.strategy.bsdf_weight(bsdf_pdf, pmf * pdf_li)
+    }
+
+    /// [`Self::found_by_bsdf_ray`] of up to `LANES` rays into `out`, the same bits: in RGB, the
+    /// rays that escaped look up each image light with its lane kernel (whose gathers overlap),
+    /// other lights one ray at a time.
+    pub(super) fn found_by_bsdf_rays(&self, rays: &[BsdfRay], out: &mut [SampledSpectrum]) {
+        debug_assert!(rays.len() <= LANES && out.len() == rays.len());
+        let (mut escaped, mut wi, mut rgb) = (0u32, Vec3x16::ZERO, true);
+        for (l, (r, out)) in rays.iter().zip(out.iter_mut()).enumerate() {
+            *out = SampledSpectrum::default();
+            match r.hit {
+                Some(_) => *out = self.found_by_bsdf_ray(&r.from, r.wi, r.bsdf_pdf, r.hit, r.query),
+                None => {
+                    (escaped, rgb) = (escaped | 1 << l, rgb && matches!(r.query, ColorQuery::Rgb));
+                    wi.set_lane(l, r.wi);
+                }
+            }
+        }
+        if escaped == 0 {
+            return;
+        }
+        let lanes = |mask: u32| (0..rays.len()).filter(move |l| mask & 1 << l != 0);
+        let kernel = rgb && !escape_kernel_off();
+        for &id in &self.escape_ids {
+            if id.kind == LightKind::ImageInfinite && kernel {
+                let image = &self.table.image_infinite().items[id.row as usize];
+                let mis = self.table.mis_compensation();
+                let found = crate::lanes::widest(
+                    #[inline(always)]
+                    || image.le_and_pdf_rgb_lanes(&wi, escaped, mis),
+                );
+                for l in lanes(found.lit) {
+                    let (r, le) = (&rays[l], found.le.lane(l));
+                    let le = SampledSpectrum([le.x, le.y, le.z, 0.0]);
+                    out[l] = out[l].add(le.scale(self.bsdf_weight(&r.from, id, r.bsdf_pdf, found.pdf[l])));
+                }
+            } else {
+                for l in lanes(escaped) {
+                    let r = &rays[l];
+                    if let Some((le, pdf)) = self.table.le_and_pdf_li(id, &r.from, r.wi, r.query) {
+                        out[l] = out[l].add(le.scale(self.bsdf_weight(&r.from, id, r.bsdf_pdf, pdf)));
+                    }
+                }
+            }
         }
     }
 
@@ -239,29 +292,74 @@ impl<'a> ShadeContext<'a> {
         self.escape_ids.iter().fold(SampledSpectrum::default(), |acc, &id| acc.add(self.table.le(id, dir, query)))
     }
 
-    /// Direct light at camera sample `j`, in RGB, and whether a ray was traced: emission, the
-    /// light system's samples weighted by MIS, plus one BSDF sample toward non-delta lights.
-    pub(super) fn shade_direct(&self, j: usize, bsdf_sampling: bool) -> (Vec3, bool) {
-        let wavelengths = self.batch.wavelengths.get(j);
-        if self.columns.escaped(j) {
-            return (to_rgb(self.escaped(j), wavelengths), false);
+    /// Direct light at camera samples `first..first + out.len()` (at most `LANES`), in RGB:
+    /// emission, the light system's samples weighted by MIS, plus one BSDF sample each toward
+    /// non-delta lights, whose rays' light is found together. Returns the number of rays traced.
+    pub(super) fn shade_direct_block(&self, first: usize, out: &mut [Vec3], bsdf_sampling: bool) -> usize {
+        debug_assert!(out.len() <= LANES);
+        let mut l = [SampledSpectrum::default(); LANES];
+        // The BSDF samples traced: their lanes, samples, shading normals and hits.
+        let mut traced = 0;
+        let (mut lane, mut sampled, mut hits) = ([0usize; LANES], [None; LANES], [None; LANES]);
+        for (i, l) in l.iter_mut().enumerate().take(out.len()) {
+            let j = first + i;
+            if self.columns.escaped(j) {
+                *l = self.escaped(j);
+                continue;
+            }
+            let (surface, bsdf) = self.surface_and_bsdf(j);
+            *l = self.emitted_toward_viewer(j, &surface).add(self.light_samples(j, &bsdf));
+            if bsdf_sampling && let Some((bs, ray)) = self.sample_bsdf(j, &bsdf, &mut self.stream(j, BSDF_DIMENSION)) {
+                (lane[traced], sampled[traced], hits[traced]) =
+                    (i, Some((bs, bsdf.frame.z)), self.bvh.closest_hit(&ray));
+                traced += 1;
+            }
         }
-        let (surface, bsdf) = self.surface_and_bsdf(j);
-        let mut l = self.emitted_toward_viewer(j, &surface).add(self.light_samples(j, &bsdf));
-        let mut traced = false;
-        if bsdf_sampling && let Some((bs, ray)) = self.sample_bsdf(j, &bsdf, &mut self.stream(j, BSDF_DIMENSION)) {
-            traced = true;
-            let found = self.found_by_bsdf_ray(
-                &self.context(j),
-                bs.wi,
-                bs.pdf,
-                self.bvh.closest_hit(&ray).as_ref(),
-                self.query(j),
-            );
-            l = l.add(bs.f.mul(found).scale(bs.wi.dot(bsdf.frame.z).abs() / bs.pdf));
+        let ray = |k: usize| {
+            let (j, (bs, _)) = (first + lane[k], sampled[k].expect("a traced sample"));
+            BsdfRay { from: self.context(j), wi: bs.wi, bsdf_pdf: bs.pdf, hit: hits[k].as_ref(), query: self.query(j) }
+        };
+        let mut found = [SampledSpectrum::default(); LANES];
+        if traced > 0 {
+            let rays: [BsdfRay; LANES] = std::array::from_fn(|k| ray(k.min(traced - 1)));
+            self.found_by_bsdf_rays(&rays[..traced], &mut found[..traced]);
         }
-        (to_rgb(l, wavelengths), traced)
+        for k in 0..traced {
+            let (bs, z) = sampled[k].expect("a traced sample");
+            let l = &mut l[lane[k]];
+            *l = l.add(bs.f.mul(found[k]).scale(bs.wi.dot(z).abs() / bs.pdf));
+        }
+        for (i, out) in out.iter_mut().enumerate() {
+            *out = to_rgb(l[i], self.batch.wavelengths.get(first + i));
+        }
+        traced
     }
+}
+
+/// Test switch: image lights' escape lookups one ray at a time, to compare with the kernel.
+#[cfg(test)]
+static ESCAPE_KERNEL_OFF: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+#[inline(always)]
+fn escape_kernel_off() -> bool {
+    #[cfg(test)]
+    return ESCAPE_KERNEL_OFF.load(std::sync::atomic::Ordering::Relaxed);
+    #[cfg(not(test))]
+    false
+}
+
+/// A traced BSDF ray, as [`ShadeContext::found_by_bsdf_rays`] reads it.
+#[derive(Clone, Copy)]
+pub(super) struct BsdfRay<'a> {
+    /// The surface it left, as the light sampler saw it.
+    pub(super) from: LightSampleContext,
+    /// Unit direction.
+    pub(super) wi: Vec3,
+    /// Solid-angle density of the BSDF sample.
+    pub(super) bsdf_pdf: f32,
+    /// What it hit; None when it escaped.
+    pub(super) hit: Option<&'a Hit>,
+    pub(super) query: ColorQuery<'a>,
 }
 
 /// What the path tracer's shading of one surface gives: the light to add to the path's radiance
@@ -342,5 +440,76 @@ impl ShadeContext<'_> {
         let next =
             finite.then_some(Continuation { ray, wi: bs.wi, beta: next_beta, from: self.context(j), bsdf_pdf: bs.pdf });
         Bounce { radiance, next }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use bevy_ecs::prelude::*;
+    use glam::{Vec2, Vec3};
+
+    use crate::geometry::{Rectangle, Transform};
+    use crate::light::{Amount, AreaLight, ImageInfiniteLight, UniformInfiniteLight};
+    use crate::render::camera::Camera;
+    use crate::render::material::Material;
+    use crate::render::path::PathDepth;
+    use crate::render::renderer::{Integrator, RenderOptions, render};
+    use crate::scene::image::RgbImage;
+    use crate::shading::Settings;
+    use crate::systems::LightingPlugin;
+
+    /// A floor under a turned sky map with a bright sun, a uniform sky, and an emissive panel that
+    /// BSDF rays hit, seen with the horizon in view: blocks mix rays that escape with rays that hit.
+    fn pixels(integrator: Integrator) -> Vec<Vec3> {
+        let mut world = World::new();
+        let mut schedule = Schedule::default();
+        world.insert_resource(Settings::default());
+        LightingPlugin::build(&mut world, &mut schedule);
+        let up = Transform::default().looking_to(Vec3::NEG_Y, Vec3::Z);
+        world.spawn((Rectangle { half_size: Vec2::splat(5.0) }, up, Material::lambertian(Vec3::new(0.5, 0.3, 0.8))));
+        let panel =
+            Transform::from_translation(Vec3::new(1.0, 1.0, -1.0)).looking_to(Vec3::new(-1.0, -1.0, 1.0), Vec3::Y);
+        world.spawn((
+            Rectangle { half_size: Vec2::splat(0.5) },
+            panel,
+            AreaLight { amount: Amount::Nits(20.0), ..Default::default() },
+        ));
+        let (w, h) = (32, 16);
+        let mut sky: Vec<Vec3> =
+            (0..w * h).map(|i| Vec3::new(0.3, 0.4 + (i % w) as f32 * 0.01, 0.9 - (i / w) as f32 * 0.04)).collect();
+        sky[3 * w + 7] = Vec3::splat(2e3);
+        let map = ImageInfiniteLight::new(Arc::new(RgbImage { width: w, height: h, pixels: sky }));
+        let turn = Transform { rotation: glam::Quat::from_rotation_y(0.7), ..Transform::IDENTITY };
+        world.spawn((map, turn));
+        world.spawn((UniformInfiniteLight { amount: Amount::Nits(0.2), ..Default::default() }, Transform::IDENTITY));
+        let eye = Vec3::new(0.0, 1.0, 4.0);
+        world.spawn((
+            Camera { yfov: 1.2 },
+            Transform::from_translation(eye).looking_to(Vec3::new(0.0, -0.3, -1.0), Vec3::Y),
+        ));
+        let opts = RenderOptions { width: 24, height: 16, spp: 4, integrator, ..Default::default() };
+        render(&mut world, &mut schedule, &opts, |_| {}).0.pixels()
+    }
+
+    #[test]
+    fn escape_kernel_matches_one_ray_at_a_time_bit_for_bit_in_both_integrators() {
+        use std::sync::atomic::Ordering::Relaxed;
+        let path = Integrator::Path(PathDepth { max_depth: 3, roulette_depth: 1 });
+        for integrator in [Integrator::Direct, path] {
+            let kernel = pixels(integrator);
+            super::ESCAPE_KERNEL_OFF.store(true, Relaxed);
+            let one_at_a_time = pixels(integrator);
+            super::ESCAPE_KERNEL_OFF.store(false, Relaxed);
+            // The sky fills the top of the image; the floor is lit.
+            let bright = kernel.iter().filter(|p| p.min_element() > 0.0).count();
+            assert!(bright > kernel.len() * 3 / 4 && kernel.iter().all(|p| p.is_finite()), "{bright} lit pixels");
+            let differs = kernel
+                .iter()
+                .zip(&one_at_a_time)
+                .position(|(a, b)| a.to_array().map(f32::to_bits) != b.to_array().map(f32::to_bits));
+            assert_eq!(differs, None, "{integrator:?}: first differing pixel");
+        }
     }
 }

@@ -16,8 +16,9 @@
 //! or (for sampling, [`TriangleView::spherical`]) an arc or Arvo's sine denominator so
 //! ill-conditioned that the map would move by more than ~1e-5 of the triangle's size.
 
-use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+use std::f32::consts::PI;
 
+use crate::lanes::math::{ATAN_REL_ERROR, atan2_pos, sin_cos_0_pi};
 use crate::lanes::{Real, Real3, Vector};
 
 /// Largest relative error of the distance to the plane (and so of solid angles and area-sampling
@@ -29,45 +30,7 @@ pub const MAX_REL_ERROR: f32 = 2e-5;
 /// arcs and of Arvo's denominator sin(alpha - A'/2): ~100 * 6 eps ~ 1e-4 of the triangle's size.
 const MAX_CONDITION: f32 = 100.0;
 
-/// Relative error bound of [`atan2_pos`] (Cephes `atanf`: 1.9e-7, plus the range reduction).
-const ATAN_REL_ERROR: f32 = 4e-7;
-
 const EPS: f32 = f32::EPSILON;
-
-/// atan2(y, x) for y >= 0, in [0, pi]: octant reduction and the Cephes `atanf` polynomial
-/// (Moshier 1989), relative error < 4e-7 (tested against f64).
-#[inline(always)]
-pub fn atan2_pos<F: Real>(y: F, x: F) -> F {
-    let zero = F::splat(0.0);
-    let ax = x.abs();
-    let low = y.le(ax);
-    let (num, den) = (F::select(low, y, ax), F::select(low, ax, y));
-    let z = F::select(den.gt(zero), num / den, zero);
-    // atan on [0, 1]: around 1 through atan(z) = pi/4 + atan((z - 1) / (z + 1)).
-    let high = z.gt(F::splat(0.414_213_57));
-    let (base, z) = (F::select(high, F::splat(FRAC_PI_4), zero), F::select(high, (z - 1.0) / (z + 1.0), z));
-    let z2 = z * z;
-    let poly = (((z2 * 8.053_744_5e-2 - 1.387_768_6e-1) * z2 + 1.997_771_1e-1) * z2 - 3.333_295e-1) * z2 * z + z;
-    let r = base + poly;
-    let r = F::select(low, r, F::splat(FRAC_PI_2) - r);
-    F::select(x.lt(zero), F::splat(PI) - r, r)
-}
-
-/// (sin x, cos x) for x in [0, pi]: Taylor polynomials of x/2 (terms to x^11 and x^12, whose
-/// remainders at pi/2 are 6e-8 and 7e-9) and the double-angle formulas, which keep sin's
-/// relative accuracy near 0. Errors < 3e-7, absolute, and relative for sin on [0, pi/2]
-/// (tested); near pi, x itself carries more.
-#[inline(always)]
-pub fn sin_cos_0_pi<F: Real>(x: F) -> (F, F) {
-    let one = F::splat(1.0);
-    let h = x * 0.5;
-    let h2 = h * h;
-    let s = h * (one - h2 / 6.0 * (one - h2 / 20.0 * (one - h2 / 42.0 * (one - h2 / 72.0 * (one - h2 / 110.0)))));
-    let c = one
-        - h2 / 2.0 * (one - h2 / 12.0 * (one - h2 / 30.0 * (one - h2 / 56.0 * (one - h2 / 90.0 * (one - h2 / 132.0)))));
-    // cos x from whichever of sin, cos (x/2) is under 1/sqrt 2, halving its error.
-    (s * 2.0 * c, F::select(h.lt(F::splat(FRAC_PI_4)), one - s * 2.0 * s, c * 2.0 * c - 1.0))
-}
 
 /// Where a direction goes relative to the triangle, as far as f32 rounding can tell, per value:
 /// at most one of `inside` and `outside` holds; neither means within rounding of an edge (or of
@@ -277,43 +240,5 @@ impl<F: Real3> SphericalTriangleF32<F> {
         let sin_theta = s * 2.0 * (one - s * s).max(zero).sqrt();
         let tangent = (c_p - self.b * c_p.dot(self.b)).normalize_or_zero();
         (self.b * cos_theta + tangent * sin_theta).normalize()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn atan2_pos_is_within_its_bound_of_f64() {
-        let mut worst = 0.0f64;
-        for i in 0..200_000 {
-            // Angles over [0, pi], densest near the ends, at radii 1e-20 to 1e20.
-            let t = i as f64 / 200_000.0;
-            let theta = std::f64::consts::PI * t * t * (3.0 - 2.0 * t);
-            let r = 10f64.powf(40.0 * ((i * 7919) % 1000) as f64 / 1000.0 - 20.0);
-            let (y, x) = ((r * theta.sin()) as f32, (r * theta.cos()) as f32);
-            let exact = (y as f64).atan2(x as f64);
-            if exact > 0.0 {
-                worst = worst.max((atan2_pos(y, x) as f64 - exact).abs() / exact);
-            }
-        }
-        assert!(worst < ATAN_REL_ERROR as f64, "{worst}");
-    }
-
-    #[test]
-    fn sin_cos_0_pi_is_within_3e_7_of_f64() {
-        for i in 0..=100_000 {
-            let x = (PI * i as f32 / 100_000.0).min(PI);
-            let (s, c) = sin_cos_0_pi(x);
-            let (se, ce) = (x as f64).sin_cos();
-            let sin_tol = if x <= std::f32::consts::FRAC_PI_2 { 3e-7 * se } else { 3e-7 };
-            assert!((s as f64 - se).abs() <= sin_tol, "sin {x}");
-            assert!((c as f64 - ce).abs() <= 3e-7, "cos {x}");
-        }
-        // Tiny arguments keep sin's relative accuracy.
-        for x in [1e-30f32, 1e-10, 1e-5, 3e-3] {
-            assert!(((sin_cos_0_pi(x).0 as f64) / (x as f64).sin() - 1.0).abs() < 3e-7);
-        }
     }
 }

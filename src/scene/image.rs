@@ -41,6 +41,9 @@ use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
+use crate::lanes::math::atan2_pos;
+use crate::lanes::{F32x16, LANES, Real3, U32x16, Vec3x16, Vector};
+
 /// The largest image accepted, in pixels (2^28, e.g. 23170 x 23170; 3 GiB as linear f32 RGB).
 pub const MAX_PIXELS: usize = 1 << 28;
 
@@ -264,6 +267,40 @@ impl RgbImage {
         if out.is_finite() { out } else { px(c0, r0) }
     }
 
+    /// [`Self::bilinear`] at a lane each, the same bits, for `u` in [0, 1) and `v` in [0, 1] (as
+    /// [`lat_long_of`] gives them); lanes outside that read some pixel of the image.
+    #[inline(always)]
+    pub fn bilinear_lanes(&self, u: F32x16, v: F32x16) -> Vec3x16 {
+        // Pixel counts are at most `MAX_PIXELS` (2^28): indices fit in i32.
+        let (w, h) = (self.width as i32, self.height as i32);
+        let fx = u * self.width as f32 - 0.5;
+        let fy = v * self.height as f32 - 0.5;
+        let (mut tx, mut ty) = (F32x16::ZERO, F32x16::ZERO);
+        let mut index = [[0u32; LANES]; 4];
+        for l in 0..LANES {
+            let (x0, y0) = (floor(fx[l]), floor(fy[l]));
+            (tx[l], ty[l]) = (fx[l] - x0, fy[l] - y0);
+            // x0 is in [-1, w - 1] for u in [0, 1): one wrap, no remainder (which does not vectorise).
+            let x = x0 as i32;
+            let c0 = (if x < 0 { x + w } else { x }).clamp(0, w - 1);
+            let c1 = if c0 + 1 == w { 0 } else { c0 + 1 };
+            let y = y0 as i32;
+            let (r0, r1) = (y.clamp(0, h - 1) * w, y.saturating_add(1).clamp(0, h - 1) * w);
+            index[0][l] = (r0 + c0) as u32;
+            index[1][l] = (r0 + c1) as u32;
+            index[2][l] = (r1 + c0) as u32;
+            index[3][l] = (r1 + c1) as u32;
+        }
+        let px = |i: usize| Vec3x16::gather(&self.pixels, U32x16(index[i]));
+        let (p00, p10, p01, p11) = (px(0), px(1), px(2), px(3));
+        // glam's lerp: a (1 - s) + b s.
+        let one = F32x16::splat(1.0);
+        let top = p00 * (one - tx) + p10 * tx;
+        let bottom = p01 * (one - tx) + p11 * tx;
+        let out = top * (one - ty) + bottom * ty;
+        Vec3x16::select(out.is_finite(), out, p00)
+    }
+
     /// Sum of all pixels' luminance divided by the pixel count (an unweighted mean, not solid-angle weighted).
     pub fn mean_luminance(&self) -> f64 {
         let sum: f64 = self.pixels.iter().map(|p| p.dot(LUMINANCE_WEIGHTS) as f64).sum();
@@ -295,16 +332,26 @@ pub fn lat_long_direction(uv: Vec2) -> Vec3 {
 /// The lat-long `uv` (u in [0, 1), v in [0, 1], v = 0 at the top) of direction `dir`, the inverse of
 /// [`lat_long_direction`]. `dir` need not be normalised; at the poles (and for a zero `dir`) u is 0.5.
 pub fn direction_to_lat_long(dir: Vec3) -> Vec2 {
+    Vec2::from(lat_long_of::<f32>(dir))
+}
+
+/// [`direction_to_lat_long`] written once over [`Real3`], for one direction or a lane each (the
+/// same bits): atan2 as a polynomial (`lanes::math::atan2_pos`, relative error 4e-7), not libm.
+#[inline(always)]
+pub fn lat_long_of<F: Real3>(dir: F::Vector) -> [F; 2] {
     let d = dir.normalize_or_zero();
-    if d == Vec3::ZERO {
-        return Vec2::new(0.5, 0.5);
-    }
-    // atan2 rather than acos(y): acos loses precision near the poles in f32.
-    let theta = (d.x * d.x + d.z * d.z).sqrt().atan2(d.y);
-    let phi = d.z.atan2(d.x); // in [-pi, pi]
-    let u = 0.5 + phi / TAU;
-    // atan2 may return exactly +pi, giving u = 1; keep u in [0, 1) so it indexes the first column.
-    Vec2::new(if u >= 1.0 { u - 1.0 } else { u }, theta / PI)
+    let [x, y, z] = d.xyz();
+    // A zero `dir` stays zero; any other is unit.
+    let none = d.dot(d).lt(F::splat(0.5));
+    // The polar angle from its sine and cosine keeps its precision near the poles (acos(y) would not).
+    let theta = atan2_pos((x * x + z * z).sqrt(), y);
+    let phi = atan2_pos(z.abs(), x);
+    let phi = F::select(z.lt(F::splat(0.0)), -phi, phi);
+    let u = phi / TAU + 0.5;
+    // phi = +pi gives u = 1: keep u in [0, 1) so it indexes the first column.
+    let u = F::select(u.ge(F::splat(1.0)), u - 1.0, u);
+    let half = F::splat(0.5);
+    [F::select(none, half, u), F::select(none, half, theta / PI)]
 }
 
 /// Loads an image file; the format comes from the extension (see the module docs for the checks made).

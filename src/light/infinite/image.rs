@@ -6,14 +6,15 @@ use std::f64::consts::PI as PI64;
 use std::sync::Arc;
 
 use bevy_ecs::component::Component;
-use glam::{DVec3, Quat, Vec2, Vec3};
+use glam::{DVec3, Mat3, Quat, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions, clean_texel};
+use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions, clean_texel, clean_texel_of};
 use super::{ColorQuery, Emitter, LiSample, LightError, LightFlags, LightSampleContext, SceneSphere, far_distance};
 use crate::geometry::Transform;
+use crate::lanes::{F32x16, LANES, Vec3x16, Vector};
 use crate::light::Amount;
-use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage, direction_to_lat_long};
+use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage, lat_long_of};
 use crate::spectrum::{SampledSpectrum, Spectrum};
 
 /// An environment map around the scene, turned by its entity's `Transform` rotation.
@@ -216,7 +217,46 @@ impl ResolvedImageInfinite {
 
     /// The lat-long coordinates of world direction `wi` in the image.
     fn image_uv(&self, wi: Vec3) -> Vec2 {
-        direction_to_lat_long(self.rotation.inverse() * wi)
+        Vec2::from(lat_long_of::<f32>(to_image(&self.to_image_rows(), wi)))
+    }
+
+    /// The rows of the world-to-image rotation: the scalar lookups and the lane kernel turn
+    /// directions with the same products.
+    fn to_image_rows(&self) -> [Vec3; 3] {
+        let m = Mat3::from_quat(self.rotation.inverse()).transpose();
+        [m.x_axis, m.y_axis, m.z_axis]
+    }
+
+    /// [`Self::le_and_pdf`] in RGB for the lanes of `wi` in `active` (bit `l` for lane `l`), with
+    /// the same bits: per lane the radiance's RGB and the density, and in `lit` the lanes where
+    /// the radiance is not black (the others' densities are 0, not looked up).
+    #[inline(always)]
+    pub fn le_and_pdf_rgb_lanes(&self, wi: &Vec3x16, active: u32, mis: bool) -> ImageLanes {
+        let [u, v] = lat_long_of::<F32x16>(to_image(&self.to_image_rows(), *wi));
+        let texel = match self.lookup {
+            EnvLookup::Bilinear => clean_texel_of(self.image.bilinear_lanes(u, v)),
+            EnvLookup::Nearest => {
+                let mut t = Vec3x16::ZERO;
+                for l in 0..LANES {
+                    t.set_lane(l, texel_at(&self.image, self.lookup, Vec2::new(u[l], v[l])));
+                }
+                t
+            }
+        };
+        // Emitter::eval_tinted in RGB: the emitter's RGB times the texel.
+        let rgb = self.emitter.rgb;
+        let le = Vec3x16 { x: texel.x * rgb.x, y: texel.y * rgb.y, z: texel.z * rgb.z };
+        let zero = F32x16::ZERO;
+        let black = le.x.eq(zero) & le.y.eq(zero) & le.z.eq(zero);
+        // The densities one lane at a time: short independent lookups, whose loads overlap.
+        let (mut pdf, mut lit) = ([0.0f32; LANES], 0);
+        for (l, pdf) in pdf.iter_mut().enumerate() {
+            if active & 1 << l != 0 && !black.test(l) {
+                *pdf = self.tables.pdf_solid_angle(Vec2::new(u[l], v[l]), mis);
+                lit |= 1 << l;
+            }
+        }
+        ImageLanes { le, pdf, lit }
     }
 
     fn pdf(&self, wi: Vec3, mis: bool) -> f32 {
@@ -258,6 +298,24 @@ impl ResolvedImageInfinite {
     pub fn luminous_phi(&self) -> f32 {
         self.luminous_phi
     }
+}
+
+/// What [`ResolvedImageInfinite::le_and_pdf_rgb_lanes`] finds per lane.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageLanes {
+    /// Radiance, linear sRGB (zero outside `lit`).
+    pub le: Vec3x16,
+    /// Solid-angle density of the chosen table (zero outside `lit`).
+    pub pdf: [f32; LANES],
+    /// Lanes asked for whose radiance is not black.
+    pub lit: u32,
+}
+
+/// World direction `wi` in the image's frame: the rows' dot products with it.
+#[inline(always)]
+fn to_image<V: Vector>(rows: &[Vec3; 3], wi: V) -> V {
+    let [a, b, c] = rows.map(V::splat);
+    V::new(a.dot(wi), b.dot(wi), c.dot(wi))
 }
 
 /// The clean texel value at `uv` with the given lookup.
@@ -341,6 +399,91 @@ mod tests {
                     + (-t1 * t1.cos() + t1.sin() + t0 * t0.cos() - t0.sin())
                     + t1 * (1.0 + t1.cos());
                 assert!((m - exact).abs() < 1e-9, "h {h}: {m} vs {exact}");
+            }
+        }
+    }
+
+    /// A 64 x 32 map with a sun, a black band, negative and NaN texels, turned off every axis.
+    fn hard_map_light(lookup: EnvLookup) -> ResolvedImageInfinite {
+        let (w, h) = (64, 32);
+        let mut pixels: Vec<Vec3> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f32, (i / w) as f32);
+                Vec3::new(0.2 + 0.1 * (x * 0.3).sin(), 0.3 + 0.01 * y, 0.5 + 0.2 * (y * 0.7).cos())
+            })
+            .collect();
+        pixels[10 * w + 20] = Vec3::splat(1e6);
+        pixels[20 * w..22 * w].fill(Vec3::ZERO);
+        pixels[5 * w + 3] = Vec3::new(-1.0, 0.5, 0.5);
+        pixels[7 * w + 63] = Vec3::new(f32::NAN, 1.0, 1.0);
+        let light = ImageInfiniteLight {
+            lookup,
+            ..ImageInfiniteLight::new(Arc::new(RgbImage { width: w, height: h, pixels }))
+        };
+        let turn = glam::Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.0);
+        let transform = Transform { rotation: turn, ..Transform::IDENTITY };
+        light.resolve(&transform, SceneSphere { center: Vec3::ZERO, radius: 5.0 }).unwrap()
+    }
+
+    #[test]
+    fn le_and_pdf_lanes_give_the_scalar_bits_at_every_level_and_in_the_hard_cases() {
+        let mut dirs: Vec<Vec3> = (0..2000)
+            .map(|i| {
+                let (a, b) = (i as f32 * 0.618_034, i as f32 * 0.754_877_7);
+                let (z, phi) = (1.0 - 2.0 * a.fract(), std::f32::consts::TAU * b.fract());
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                Vec3::new(r * phi.cos(), z, r * phi.sin())
+            })
+            .collect();
+        // Non-unit lengths, the zero vector, the poles and the seam (x < 0, z = +-0 and tiny), in
+        // the image's own frame so that they land there whatever the rotation.
+        dirs.extend([Vec3::ZERO, Vec3::new(1e-30, 0.0, 0.0), Vec3::X * 1e3, Vec3::new(0.3, -0.2, 0.1) * 1e-3]);
+        let light = hard_map_light(EnvLookup::Bilinear);
+        let to_world = light.rotation;
+        for local in [
+            Vec3::Y,
+            -Vec3::Y,
+            -Vec3::X,
+            Vec3::new(-1.0, 0.0, -0.0),
+            Vec3::new(-1.0, 0.0, 1e-7),
+            Vec3::new(-1.0, 0.0, -1e-7),
+            Vec3::new(-1.0, 1e-6, 0.0),
+        ] {
+            dirs.push(to_world * local);
+        }
+        for lookup in [EnvLookup::Bilinear, EnvLookup::Nearest] {
+            let light = hard_map_light(lookup);
+            for mis in [false, true] {
+                let want: Vec<Option<(SampledSpectrum, f32)>> =
+                    dirs.iter().map(|&d| light.le_and_pdf(d, ColorQuery::Rgb, mis)).collect();
+                assert!(want.iter().any(|w| w.is_none()) && want.iter().filter(|w| w.is_some()).count() > 1000);
+                for level in crate::lanes::Level::ALL {
+                    let Some(got) = crate::lanes::at_level(*level, || {
+                        dirs.chunks(LANES)
+                            .flat_map(|chunk| {
+                                let mut wi = Vec3x16::ZERO;
+                                for (l, &d) in chunk.iter().enumerate() {
+                                    wi.set_lane(l, d);
+                                }
+                                let active = (1u32 << chunk.len()) - 1;
+                                let got = light.le_and_pdf_rgb_lanes(&wi, active, mis);
+                                assert_eq!(got.lit & !active, 0);
+                                (0..chunk.len()).map(move |l| {
+                                    let le = got.le.lane(l);
+                                    (got.lit & 1 << l != 0)
+                                        .then_some((SampledSpectrum([le.x, le.y, le.z, 0.0]), got.pdf[l]))
+                                })
+                            })
+                            .collect::<Vec<_>>()
+                    }) else {
+                        continue;
+                    };
+                    for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+                        let bits =
+                            |v: &Option<(SampledSpectrum, f32)>| v.map(|(s, p)| (s.0.map(f32::to_bits), p.to_bits()));
+                        assert_eq!(bits(g), bits(w), "{level:?} {lookup:?} mis {mis}: direction {i} {:?}", dirs[i]);
+                    }
+                }
             }
         }
     }

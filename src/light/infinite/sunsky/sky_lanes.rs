@@ -28,7 +28,7 @@ impl SkyModel {
         let w = Vec3x16 { x: sin_t * *cos_phi, y: F32x16::splat(cos_t), z: sin_t * *sin_phi };
         let sun_lanes = Vec3x16::splat(sun);
         let cos_g = w.dot(sun_lanes).map(|v| v.clamp(-1.0, 1.0));
-        let gamma = math::atan2_upper(w.cross(sun_lanes).length(), cos_g);
+        let gamma = math::atan2_pos(w.cross(sun_lanes).length(), cos_g);
         for ch in 0..3 {
             let [_, _, c, d, e, f, g, i, h] = self.rgb[ch].params;
             let glow = math::exp(e * gamma);

@@ -36,6 +36,7 @@ use std::f64::consts::PI as PI64;
 
 use glam::{Vec2, Vec3};
 
+use crate::lanes::{Real, Vector};
 use crate::sampling::PiecewiseConstant2D;
 use crate::scene::image::{RgbImage, direction_to_lat_long, lat_long_direction};
 
@@ -110,7 +111,15 @@ impl std::fmt::Debug for EnvMapTables {
 
 /// A texel as the light uses it: negative channels clamped to 0, a non-finite texel black.
 pub fn clean_texel(t: Vec3) -> Vec3 {
-    if t.is_finite() { t.max(Vec3::ZERO) } else { Vec3::ZERO }
+    clean_texel_of(t)
+}
+
+/// [`clean_texel`] for one texel or a lane each (the same bits).
+#[inline(always)]
+pub fn clean_texel_of<V: Vector>(t: V) -> V {
+    let zero = V::Real::splat(0.0);
+    let [x, y, z] = t.xyz();
+    V::select(t.is_finite(), V::new(x.max(zero), y.max(zero), z.max(zero)), V::zero())
 }
 
 /// Solid angle of row `j` of `n` lat-long rows over 2 pi: cos theta0 - cos theta1, written as
