@@ -5,7 +5,7 @@ use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::lanes::{LANES, U32x16, Vec3x16};
+use crate::lanes::{F32x16, LANES, U32x16, Vec3x16};
 use crate::light::area::TriangleLightLanes;
 use crate::light::point::PointLanes;
 use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
@@ -171,13 +171,13 @@ pub fn sample_direct_lighting(
         spp: settings.samples_per_point.max(1),
         reservoirs: &[],
     };
-    // In RGB f32, scenes with point or area lights are sampled in blocks of lanes: the light
-    // choice, and the Sample_Li of point and triangle lights, run as lane kernels; other kinds one
-    // lane at a time. Scenes with neither sample one entry at a time, which was faster there (a
+    // In RGB f32, scenes with point, area or image lights are sampled in blocks of lanes: the
+    // light choice, and the Sample_Li of point, triangle and image lights, run as lane kernels;
+    // other kinds one lane at a time. Scenes with neither sample one entry at a time, which was faster there (a
     // lone directional light: 9% of the whole render).
     let lane_kernel = settings.color_mode == ColorMode::Rgb
         && settings.light_precision == LightPrecision::F32
-        && (!table.points.is_empty() || !table.area.items.is_empty());
+        && (!table.points.is_empty() || !table.area.items.is_empty() || !table.image_infinite().items.is_empty());
     let lanes =
         lane_kernel && matches!(settings.selection, LightSelection::OneSampled | LightSelection::Resampled { .. });
     // ReSTIR builds every entry's final reservoir first; the entries are then written from them.
@@ -454,8 +454,8 @@ impl Sampling<'_> {
 
     /// Samples entries `e..e + LANES` (or to the chunk's end) of the chunk starting at global
     /// entry `first` under `LightSelection::OneSampled` (or `Resampled`, through
-    /// `resampled_block`), RGB and f32: random numbers, light choice, point and triangle lights in
-    /// lanes, lights of other kinds (and triangles the f32 kernel leaves to the f64 reference) one
+    /// `resampled_block`), RGB and f32: random numbers, light choice, point, triangle and image
+    /// lights in lanes, lights of other kinds (and triangles the f32 kernel leaves to the f64 reference) one
     /// at a time. Same entries as [`Self::entry`], bit for bit. Returns the number of
     /// shadow rays.
     #[inline(always)]
@@ -471,7 +471,7 @@ impl Sampling<'_> {
         // forwarding stalls on every read.
         let (mut light, mut pmf, mut chosen) = ([NO_LIGHT; LANES], [0.0f32; LANES], [false; LANES]);
         let (mut rows, mut points) = ([0u32; LANES], 0);
-        let (mut area_rows, mut areas) = ([0u32; LANES], 0u32);
+        let (mut area_rows, mut areas, mut images) = ([0u32; LANES], 0u32, 0u32);
         // `sample_lanes` leaves slots without a finite position unchosen (as `entry`).
         let choices = self.sampler.sample_lanes(&p, &normal, &u, (1u32 << n) - 1);
         for l in 0..n {
@@ -484,6 +484,8 @@ impl Sampling<'_> {
                 (rows[l], points) = (id.row, points + 1);
             } else if id.kind == LightKind::Area {
                 (area_rows[l], areas) = (id.row, areas | 1 << l);
+            } else if id.kind == LightKind::ImageInfinite {
+                images |= 1 << l;
             }
         }
         // Blocks where no entry chose a point light (scenes lit by other kinds) skip the kernel;
@@ -495,10 +497,15 @@ impl Sampling<'_> {
         } else {
             None
         };
+        let skies = self.image_lanes(images, &light, &p, [u1, u2]);
         let mut traced = 0;
         for l in 0..n {
             let chosen = chosen[l].then_some((light[l], pmf[l]));
             traced += match (&lit, &triangles, chosen) {
+                (_, _, Some((id, pmf))) if images & 1 << l != 0 => {
+                    let sampled = skies[l].filter(|ls| ls.pdf > 0.0 && ls.radiance.is_finite());
+                    self.write(cols, e + l, id, sampled.map(|ls| (ls, pmf, self.table.flags(id))))
+                }
                 (Some(lit), _, Some(c)) if c.0.kind == LightKind::Point => self.write_point(cols, e + l, c, lit, l),
                 (_, Some(tri), Some((id, pmf))) if id.kind == LightKind::Area && tri.taken.test(l) => {
                     let light = &self.table.area.items[id.row as usize].light;
@@ -517,6 +524,33 @@ impl Sampling<'_> {
             } as usize;
         }
         traced
+    }
+}
+
+impl Sampling<'_> {
+    /// Sample_Li of the image lights that the lanes in `images` chose (`light`), from points `p`
+    /// at `u`: one lane kernel call per image light among them.
+    #[inline(always)]
+    fn image_lanes(
+        &self,
+        images: u32,
+        light: &[LightId; LANES],
+        p: &Vec3x16,
+        u: [F32x16; 2],
+    ) -> [Option<LiSample>; LANES] {
+        let mut out = [None; LANES];
+        let mut left = images;
+        while left != 0 {
+            let row = light[left.trailing_zeros() as usize].row;
+            let same = (0..LANES).filter(|&l| left & 1 << l != 0 && light[l].row == row).fold(0, |m, l| m | 1 << l);
+            let image = &self.table.image_infinite().items[row as usize];
+            let found = image.sample_li_rgb_lanes(p, u, same, self.table.mis_compensation());
+            for l in (0..LANES).filter(|&l| same & 1 << l != 0) {
+                out[l] = found[l];
+            }
+            left &= !same;
+        }
+        out
     }
 }
 

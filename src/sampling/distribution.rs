@@ -10,6 +10,7 @@
 //! as often as the f32 grid allows.)
 
 use super::SamplingError;
+use crate::lanes::LANES;
 
 /// A piecewise-constant density over [min, max] proportional to |f| on equal-width bins.
 ///
@@ -61,7 +62,7 @@ impl Edges<'_> {
     }
 
     /// The number of edges at or below `u`.
-    fn count_up_to(&self, u: f64) -> usize {
+    pub(super) fn count_up_to(&self, u: f64) -> usize {
         match self {
             Edges::Wide(c) => c.partition_point(|&x| x <= u),
             Edges::Narrow(c) => c.partition_point(|&x| x as f64 <= u),
@@ -261,10 +262,15 @@ impl Bins<'_> {
 
     /// As [`PiecewiseConstant1D::sample`].
     pub fn sample(&self, u: f32) -> (f32, f32, usize) {
-        // u < 1 keeps us inside a bin of positive width: cdf[o] <= u < cdf[o + 1].
-        let u = (u as f64).clamp(0.0, 1.0 - f64::EPSILON / 2.0);
+        let u = search_key(u);
+        self.sample_in(self.edges.count_up_to(u), u)
+    }
+
+    /// [`Self::sample`] of key `u` ([`search_key`]) given the number of edges at or below it.
+    #[inline(always)]
+    pub(super) fn sample_in(&self, count: usize, u: f64) -> (f32, f32, usize) {
         let n = self.len();
-        let offset = (self.edges.count_up_to(u) - 1).min(n - 1);
+        let offset = (count - 1).min(n - 1);
         let (c0, c1) = (self.edges.at(offset), self.edges.at(offset + 1));
         let du = if c1 > c0 { ((u - c0) / (c1 - c0)).clamp(0.0, 1.0) } else { 0.0 };
         let x = self.min as f64 + (offset as f64 + du) / n as f64 * self.width();
@@ -295,6 +301,36 @@ impl Bins<'_> {
         let (c0, c1) = (self.edges.at(o), self.edges.at(o + 1));
         Some((c0 + delta * (c1 - c0)) as f32)
     }
+}
+
+/// The key a sample `u` is searched for among a CDF's edges: u < 1 keeps it inside a bin of
+/// positive width (cdf[o] <= u < cdf[o + 1]).
+#[inline(always)]
+pub(super) fn search_key(u: f32) -> f64 {
+    (u as f64).clamp(0.0, 1.0 - f64::EPSILON / 2.0)
+}
+
+/// The number of `edges[start[l]..start[l] + len]` at or below `key[l]`, per lane (sorted edges),
+/// as `partition_point` counts them: the lanes' binary searches in lock step, so that their
+/// loads are in flight together rather than one dependent chain after another.
+#[inline(always)]
+pub(super) fn count_up_to_lanes<T: Copy + Into<f64>>(
+    edges: &[T],
+    start: &[usize; LANES],
+    len: usize,
+    key: &[f64; LANES],
+) -> [usize; LANES] {
+    let mut base = *start;
+    let mut size = len;
+    while size > 1 {
+        let half = size / 2;
+        for l in 0..LANES {
+            let mid = base[l] + half;
+            base[l] = if edges[mid].into() <= key[l] { mid } else { base[l] };
+        }
+        size -= half;
+    }
+    std::array::from_fn(|l| base[l] - start[l] + usize::from(len > 0 && edges[base[l]].into() <= key[l]))
 }
 
 pub(super) fn valid_domain(min: f32, max: f32) -> bool {

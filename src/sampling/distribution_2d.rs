@@ -10,7 +10,8 @@ use glam::Vec2;
 use rayon::prelude::*;
 
 use super::SamplingError;
-use super::distribution::{Bins, Edges, PiecewiseConstant1D, normalise, valid_domain};
+use super::distribution::{Bins, Edges, PiecewiseConstant1D, count_up_to_lanes, normalise, search_key, valid_domain};
+use crate::lanes::LANES;
 
 /// A piecewise-constant density over a rectangle (by default [0, 1]^2) proportional to |f| on an
 /// `nu` x `nv` grid: a marginal over v of row integrals, and one conditional over u per row.
@@ -269,6 +270,30 @@ impl PiecewiseConstant2D {
         (Vec2::new(x, y), pdf_u * pdf_v, [iu, iv])
     }
 
+    /// [`Self::sample`] at a lane each, the same results: the lanes' searches of the marginal,
+    /// then of their rows, run in lock step (rows kept in f64 are searched one lane at a time).
+    #[inline(always)]
+    pub fn sample_lanes(&self, u: &[Vec2; LANES]) -> [(Vec2, f32, [usize; 2]); LANES] {
+        let (marginal, nu) = (self.marginal.bins(), self.nu);
+        let key_v: [f64; LANES] = std::array::from_fn(|l| search_key(u[l].y));
+        let edges = self.marginal.cdf();
+        let counts = count_up_to_lanes(edges, &[0; LANES], edges.len(), &key_v);
+        let ys: [(f32, f32, usize); LANES] = std::array::from_fn(|l| marginal.sample_in(counts[l], key_v[l]));
+        let key_u: [f64; LANES] = std::array::from_fn(|l| search_key(u[l].x));
+        let start = std::array::from_fn(|l| ys[l].2.min(self.nv - 1) * (nu + 1));
+        let counts = count_up_to_lanes(&self.cdf, &start, nu + 1, &key_u);
+        std::array::from_fn(|l| {
+            let (y, pdf_v, iv) = ys[l];
+            let row = self.row(iv);
+            let count = match row.edges {
+                Edges::Wide(_) => row.edges.count_up_to(key_u[l]),
+                Edges::Narrow(_) => counts[l],
+            };
+            let (x, pdf_u, iu) = row.sample_in(count, key_u[l]);
+            (Vec2::new(x, y), pdf_u * pdf_v, [iu, iv])
+        })
+    }
+
     /// Density at `p`, the one [`Self::sample`] returns there; 0 outside the domain.
     pub fn pdf(&self, p: Vec2) -> f32 {
         let marginal = self.marginal.bins();
@@ -288,5 +313,46 @@ impl PiecewiseConstant2D {
         let (iv, _) = self.marginal.bins().offset_of(p.y)?;
         let u = self.row(iv).invert(p.x)?;
         Some(Vec2::new(u, v))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// The lanes' lock-step searches give `sample`'s results for every u: random ones, u on the
+    /// CDF's edges (ties go to the bin above, as `partition_point` counts), 0 and the last f32
+    /// below 1, in a table with zero bins, a zero row and a sun row kept in f64.
+    #[test]
+    fn sample_lanes_matches_sample_on_edges_zero_rows_and_wide_rows() {
+        let (nu, nv) = (96, 40);
+        let mut rng = SplitMix64::new(5);
+        let mut f: Vec<f32> = (0..nu * nv).map(|i| if i % 5 == 0 { 0.0 } else { rng.f32() + 0.01 }).collect();
+        f[7 * nu..8 * nu].fill(0.0);
+        f[10 * nu + 40] = 1e12;
+        let d = PiecewiseConstant2D::new(&f, nu, nv);
+        assert_eq!(d.wide_rows(), 1);
+        let mut us: Vec<Vec2> = (0..4000).map(|_| Vec2::new(rng.f32(), rng.f32())).collect();
+        let edges: Vec<f32> = d.marginal().cdf().iter().map(|&c| c as f32).collect();
+        let row_edges: Vec<f32> = d.cdf[..nu + 1].to_vec();
+        for (i, &v) in edges.iter().enumerate() {
+            us.push(Vec2::new(row_edges[i % row_edges.len()], v));
+        }
+        us.extend([Vec2::ZERO, Vec2::splat(1.0 - f32::EPSILON / 2.0), Vec2::new(0.5, 10.5 / nv as f32), Vec2::ONE]);
+        // Every lane of the sun's row, searched in f64.
+        us.extend((0..LANES).map(|l| Vec2::new(l as f32 / LANES as f32, d.marginal().cdf()[10] as f32 + 1e-7)));
+        for chunk in us.chunks(LANES) {
+            let u: [Vec2; LANES] = std::array::from_fn(|l| chunk[l % chunk.len()]);
+            for (l, got) in d.sample_lanes(&u).iter().enumerate() {
+                let want = d.sample(u[l]);
+                assert_eq!(
+                    (got.0.to_array().map(f32::to_bits), got.1.to_bits(), got.2),
+                    (want.0.to_array().map(f32::to_bits), want.1.to_bits(), want.2),
+                    "u {:?}",
+                    u[l]
+                );
+            }
+        }
     }
 }

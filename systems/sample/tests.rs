@@ -67,9 +67,13 @@ fn lane_path_matches_entry_by_entry() {
         (1, Power, 0, OneSampled),
         (2, Bvh, 0, OneSampled),
         (1, Uniform, 0, Resampled { candidates: 4 }),
+        (1, Power, 7, OneSampled),
+        (2, Bvh, 7, OneSampled),
     ];
     for (samples_per_point, light_sampler, lights, selection) in runs {
         let (points_only, triangles_only, mixed) = ((1..=3).contains(&lights), lights == 0, lights == 6);
+        let sky_only = lights == 7;
+        let no_points = triangles_only || sky_only;
         let mut world = World::new();
         let mut schedule = Schedule::default();
         crate::systems::LightingPlugin::build(&mut world, &mut schedule);
@@ -84,10 +88,20 @@ fn lane_path_matches_entry_by_entry() {
                     crate::light::AreaLight { two_sided: true, amount: Amount::Nits(nits), ..Default::default() };
                 world.spawn((light, mesh, at(0.0, 0.0, 0.0)));
             }
-        } else {
+        } else if !sky_only {
             world.spawn((PointLight::candela(1e4), at(0.0, 2.0, 0.0)));
         }
-        if lights > 1 {
+        if mixed || sky_only {
+            // A turned sky map with a sun and a black band (black radiance at some sampled directions).
+            let (w, h) = (32, 16);
+            let mut sky: Vec<Vec3> = (0..w * h).map(|i| Vec3::new(0.2, 0.3 + (i % w) as f32 * 0.02, 0.8)).collect();
+            sky[4 * w + 9] = Vec3::splat(1e4);
+            sky[10 * w..11 * w].fill(Vec3::ZERO);
+            let image = std::sync::Arc::new(crate::scene::image::RgbImage { width: w, height: h, pixels: sky });
+            let turn = Transform { rotation: glam::Quat::from_rotation_x(0.4), ..Transform::IDENTITY };
+            world.spawn((crate::light::ImageInfiniteLight::new(image), turn));
+        }
+        if (2..=6).contains(&lights) {
             world.spawn((PointLight { casts_shadows: false, ..PointLight::candela(5e3) }, at(1.0, 1.0, 1.0)));
             world.spawn((PointLight::candela(3e3), at(-3.0, 0.5, 2.0)));
         }
@@ -170,9 +184,9 @@ fn lane_path_matches_entry_by_entry() {
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         let vec_bits = |v: &[Vec3]| v.iter().flat_map(|x| x.to_array()).map(f32::to_bits).collect::<Vec<_>>();
         let spectrum_bits = |v: &[SampledSpectrum]| v.iter().flat_map(|x| x.0).map(f32::to_bits).collect::<Vec<_>>();
-        // The schedule traced the shadow rays; the disk can block a resampled sample of the sky.
+        // The schedule traced the shadow rays; the disk can block a sample of the skies.
         let blocked = lit.occluded.clone();
-        assert!(selection != OneSampled || blocked.iter().all(|&b| !b), "no shadow falls on these samples");
+        assert!(selection != OneSampled || mixed || blocked.iter().all(|&b| !b), "no shadow falls on these samples");
         for e in (0..m).filter(|&e| blocked[e]) {
             radiance[e] = SampledSpectrum::default();
         }
@@ -191,9 +205,14 @@ fn lane_path_matches_entry_by_entry() {
         let surface = [ShadowTarget::Surface];
         assert_eq!(written(&rays.target_normal, &surface), written(&target_normal, &surface));
         // The mix reached every path: point lights in lanes, other kinds, failed samples.
-        assert!(triangles_only || light.iter().any(|l| l.kind == LightKind::Point));
+        assert!(no_points || light.iter().any(|l| l.kind == LightKind::Point));
         assert!(points_only || light.iter().any(|l| l.kind != LightKind::Point));
-        assert!(triangles_only || ray_kind.contains(&ShadowTarget::Point));
+        assert!(no_points || ray_kind.contains(&ShadowTarget::Point));
+        if sky_only || (mixed && selection == OneSampled) {
+            assert!(
+                light.iter().any(|l| l.kind == LightKind::ImageInfinite) && ray_kind.contains(&ShadowTarget::Infinity)
+            );
+        }
         if triangles_only {
             // Both triangles sampled, with rays to their surfaces, and points the f32 bounds refuse.
             let area_lights: Vec<u32> = light.iter().filter(|l| l.kind == LightKind::Area).map(|l| l.row).collect();
@@ -216,6 +235,6 @@ fn lane_path_matches_entry_by_entry() {
         assert!(!every_kind || ray_kind.contains(&ShadowTarget::Surface));
         // (The power sampler's choices for the point at a light include that light.)
         let at_light = (0..m).any(|e| batch.pixel[e / k] == 0 && pdf[e] == 0.0 && light[e].kind == LightKind::Point);
-        assert!(at_light || light_sampler != Power || triangles_only, "at the light");
+        assert!(at_light || light_sampler != Power || no_points, "at the light");
     }
 }

@@ -211,8 +211,50 @@ impl ResolvedImageInfinite {
             return None;
         }
         let radiance = self.emitter.eval_tinted(query, texel_at(&self.image, self.lookup, uv));
-        let p_light = ctx.p + wi * far_distance(self.scene, ctx.p);
-        Some(LiSample { radiance, wi, pdf, p_light, n_light: Vec3::ZERO })
+        Some(LiSample { radiance, wi, pdf, p_light: self.beyond_scene(ctx.p, wi), n_light: Vec3::ZERO })
+    }
+
+    /// The point a shadow ray from `p` along `wi` aims at: past the scene's bounds.
+    #[inline(always)]
+    fn beyond_scene(&self, p: Vec3, wi: Vec3) -> Vec3 {
+        p + wi * far_distance(self.scene, p)
+    }
+
+    /// [`Self::sample_li`] (`mis`: [`Self::sample_li_mis`]) in RGB from the points `p` of the
+    /// lanes in `active`, at `u`, the same samples: the table's searches in lock step, the lookups
+    /// of the directions found as in [`Self::le_and_pdf_rgb_lanes`]. None where the scalar call
+    /// gives None (and in lanes not asked for).
+    #[inline(always)]
+    pub fn sample_li_rgb_lanes(
+        &self,
+        p: &Vec3x16,
+        u: [F32x16; 2],
+        active: u32,
+        mis: bool,
+    ) -> [Option<LiSample>; LANES] {
+        let u: [Vec2; LANES] = std::array::from_fn(|l| Vec2::new(u[0][l], u[1][l]));
+        let found = self.tables.sample_direction_lanes(&u, mis);
+        let (mut wi, mut asked) = (Vec3x16::ZERO, 0);
+        for (l, found) in found.iter().enumerate() {
+            if let (Some((local, _)), true) = (found, active & 1 << l != 0) {
+                wi.set_lane(l, (self.rotation * *local).normalize());
+                asked |= 1 << l;
+            }
+        }
+        let (le, [u, v]) = self.le_rgb_lanes(&wi);
+        std::array::from_fn(|l| {
+            if asked & 1 << l == 0 {
+                return None;
+            }
+            // As in `sample`: a density of 0 fails; black radiance does not.
+            let pdf = self.tables.pdf_solid_angle(Vec2::new(u[l], v[l]), mis);
+            if !(pdf > 0.0) {
+                return None;
+            }
+            let (wi, le) = (wi.lane(l), le.lane(l));
+            let radiance = SampledSpectrum([le.x, le.y, le.z, 0.0]);
+            Some(LiSample { radiance, wi, pdf, p_light: self.beyond_scene(p.lane(l), wi), n_light: Vec3::ZERO })
+        })
     }
 
     /// The lat-long coordinates of world direction `wi` in the image.
@@ -232,6 +274,23 @@ impl ResolvedImageInfinite {
     /// the radiance is not black (the others' densities are 0, not looked up).
     #[inline(always)]
     pub fn le_and_pdf_rgb_lanes(&self, wi: &Vec3x16, active: u32, mis: bool) -> ImageLanes {
+        let (le, [u, v]) = self.le_rgb_lanes(wi);
+        let zero = F32x16::ZERO;
+        let black = le.x.eq(zero) & le.y.eq(zero) & le.z.eq(zero);
+        // The densities one lane at a time: short independent lookups, whose loads overlap.
+        let (mut pdf, mut lit) = ([0.0f32; LANES], 0);
+        for (l, pdf) in pdf.iter_mut().enumerate() {
+            if active & 1 << l != 0 && !black.test(l) {
+                *pdf = self.tables.pdf_solid_angle(Vec2::new(u[l], v[l]), mis);
+                lit |= 1 << l;
+            }
+        }
+        ImageLanes { le, pdf, lit }
+    }
+
+    /// The radiance (RGB) along each lane's direction, and where the direction falls in the image.
+    #[inline(always)]
+    fn le_rgb_lanes(&self, wi: &Vec3x16) -> (Vec3x16, [F32x16; 2]) {
         let [u, v] = lat_long_of::<F32x16>(to_image(&self.to_image_rows(), *wi));
         let texel = match self.lookup {
             EnvLookup::Bilinear => clean_texel_of(self.image.bilinear_lanes(u, v)),
@@ -245,18 +304,7 @@ impl ResolvedImageInfinite {
         };
         // Emitter::eval_tinted in RGB: the emitter's RGB times the texel.
         let rgb = self.emitter.rgb;
-        let le = Vec3x16 { x: texel.x * rgb.x, y: texel.y * rgb.y, z: texel.z * rgb.z };
-        let zero = F32x16::ZERO;
-        let black = le.x.eq(zero) & le.y.eq(zero) & le.z.eq(zero);
-        // The densities one lane at a time: short independent lookups, whose loads overlap.
-        let (mut pdf, mut lit) = ([0.0f32; LANES], 0);
-        for (l, pdf) in pdf.iter_mut().enumerate() {
-            if active & 1 << l != 0 && !black.test(l) {
-                *pdf = self.tables.pdf_solid_angle(Vec2::new(u[l], v[l]), mis);
-                lit |= 1 << l;
-            }
-        }
-        ImageLanes { le, pdf, lit }
+        (Vec3x16 { x: texel.x * rgb.x, y: texel.y * rgb.y, z: texel.z * rgb.z }, [u, v])
     }
 
     fn pdf(&self, wi: Vec3, mis: bool) -> f32 {

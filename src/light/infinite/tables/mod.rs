@@ -36,7 +36,7 @@ use std::f64::consts::PI as PI64;
 
 use glam::{Vec2, Vec3};
 
-use crate::lanes::{Real, Vector};
+use crate::lanes::{LANES, Real, Vector};
 use crate::sampling::PiecewiseConstant2D;
 use crate::scene::image::{RgbImage, direction_to_lat_long, lat_long_direction};
 
@@ -177,7 +177,20 @@ impl EnvMapTables {
     /// density; None for a black map.
     pub fn sample_direction(&self, u: Vec2, mis: bool) -> Option<(Vec3, f32)> {
         let dist = self.distribution(mis)?;
-        let (uv, pdf_uv, [_, row]) = dist.sample(u);
+        self.direction_in(dist.sample(u))
+    }
+
+    /// [`Self::sample_direction`] at a lane each, the same results (the table's searches in
+    /// lock step: see [`PiecewiseConstant2D::sample_lanes`]).
+    #[inline(always)]
+    pub fn sample_direction_lanes(&self, u: &[Vec2; LANES], mis: bool) -> [Option<(Vec3, f32)>; LANES] {
+        let Some(dist) = self.distribution(mis) else { return [None; LANES] };
+        dist.sample_lanes(u).map(|s| self.direction_in(s))
+    }
+
+    /// The direction and solid-angle density of table sample `(uv, pdf_uv, [_, row])`.
+    #[inline(always)]
+    fn direction_in(&self, (uv, pdf_uv, [_, row]): (Vec2, f32, [usize; 2])) -> Option<(Vec3, f32)> {
         let nv = self.resolution[1];
         let t = uv.y as f64 * nv as f64 - row as f64;
         let v = (theta_in_row(t, row, nv) / PI64) as f32;
