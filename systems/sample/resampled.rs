@@ -181,6 +181,8 @@ impl Sampling<'_> {
             // Area lights draw their u here (each lane's stream in the order `evaluate_at`'s caller
             // below would), for the triangle kernel.
             let (mut area_rows, mut areas, mut area_u) = ([0u32; LANES], 0u32, [F32x16::ZERO; 2]);
+            // Image lights too, for theirs; both share `area_u`.
+            let mut images = 0u32;
             for l in 0..n {
                 let id = choices.light[l];
                 if choices.chosen & (1 << l) != 0 && id.kind == LightKind::Point {
@@ -188,6 +190,9 @@ impl Sampling<'_> {
                 } else if choices.chosen & (1 << l) != 0 && id.kind == LightKind::Area {
                     let u = rng[l].next_2d();
                     (area_rows[l], areas, area_u[0][l], area_u[1][l]) = (id.row, areas | 1 << l, u.x, u.y);
+                } else if choices.chosen & (1 << l) != 0 && id.kind == LightKind::ImageInfinite {
+                    let u = rng[l].next_2d();
+                    (images, area_u[0][l], area_u[1][l]) = (images | 1 << l, u.x, u.y);
                 }
             }
             let lit =
@@ -198,6 +203,7 @@ impl Sampling<'_> {
             } else {
                 None
             };
+            let skies = self.image_lanes(images, &choices.light, &block.p, area_u);
             for l in 0..n {
                 if choices.chosen & (1 << l) == 0 {
                     continue;
@@ -218,6 +224,13 @@ impl Sampling<'_> {
                             None => self.evaluate_at(block.point[l], &ctx[l], chosen, u),
                         };
                         (sampled, u)
+                    }
+                    _ if images & (1 << l) != 0 => {
+                        let sampled = skies[l].filter(|ls| ls.pdf > 0.0 && ls.radiance.is_finite());
+                        (
+                            sampled.map(|ls| (ls, chosen.1, self.table.flags(chosen.0))),
+                            Vec2::new(area_u[0][l], area_u[1][l]),
+                        )
                     }
                     _ => {
                         let u = self.unless_delta(chosen.0, rng[l].next_2d());

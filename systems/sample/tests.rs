@@ -69,6 +69,7 @@ fn lane_path_matches_entry_by_entry() {
         (1, Uniform, 0, Resampled { candidates: 4 }),
         (1, Power, 7, OneSampled),
         (2, Bvh, 7, OneSampled),
+        (1, Uniform, 7, Resampled { candidates: 4 }),
     ];
     for (samples_per_point, light_sampler, lights, selection) in runs {
         let (points_only, triangles_only, mixed) = ((1..=3).contains(&lights), lights == 0, lights == 6);
