@@ -351,7 +351,7 @@ impl ResolvedImageInfinite {
 /// What [`ResolvedImageInfinite::le_and_pdf_rgb_lanes`] finds per lane.
 #[derive(Clone, Copy, Debug)]
 pub struct ImageLanes {
-    /// Radiance, linear sRGB (zero outside `lit`).
+    /// Radiance, linear sRGB (meaningful in `lit` lanes only).
     pub le: Vec3x16,
     /// Solid-angle density of the chosen table (zero outside `lit`).
     pub pdf: [f32; LANES],
