@@ -210,21 +210,19 @@ impl Paths {
         self.found.resize(self.continuations.len(), SampledSpectrum::default());
         let blocks =
             (self.found.par_chunks_mut(LANES), self.continuations.par_chunks(LANES), self.hits.par_chunks(LANES));
-        blocks.into_par_iter().with_min_len(4).for_each(|(found, continuations, hits)| {
-            if !rules.direct {
-                return;
-            }
-            let ray = |k: usize| {
-                let (p, c) = &continuations[k];
-                let query = wavelengths.get(*p as usize).map_or(ColorQuery::Rgb, ColorQuery::Spectral);
-                BsdfRay { from: c.from, wi: c.wi, bsdf_pdf: c.bsdf_pdf, hit: hits[k].as_ref(), query }
-            };
-            let rays: [BsdfRay; LANES] = std::array::from_fn(|k| ray(k.min(continuations.len() - 1)));
-            ctx.found_by_bsdf_rays(&rays[..continuations.len()], found);
-            for (f, (_, c)) in found.iter_mut().zip(continuations) {
-                *f = c.beta.mul(*f);
-            }
-        });
+        if rules.direct {
+            blocks.into_par_iter().with_min_len(4).for_each(|(found, continuations, hits)| {
+                let ray = |k: usize| {
+                    let (p, c) = &continuations[k];
+                    let query = wavelengths.get(*p as usize).map_or(ColorQuery::Rgb, ColorQuery::Spectral);
+                    BsdfRay { from: c.from, wi: c.wi, bsdf_pdf: c.bsdf_pdf, hit: hits[k].as_ref(), query }
+                };
+                ctx.found_by_bsdf_rays(ray, found);
+                for (f, (_, c)) in found.iter_mut().zip(continuations) {
+                    *f = c.beta.mul(*f);
+                }
+            });
+        }
         self.next.clear();
         let (mut path, mut beta) = (std::mem::take(&mut self.path), std::mem::take(&mut self.beta));
         path.clear();

@@ -241,11 +241,15 @@ impl<'a> ShadeContext<'a> {
         self.strategy.bsdf_weight(bsdf_pdf, pmf * pdf_li)
     }
 
-    /// [`Self::found_by_bsdf_ray`] of up to `LANES` rays into `out`, the same bits: in RGB, the
-    /// rays that escaped look up each image light with its lane kernel (whose gathers overlap),
-    /// other lights one ray at a time.
-    pub(super) fn found_by_bsdf_rays(&self, rays: &[BsdfRay], out: &mut [SampledSpectrum]) {
-        debug_assert!(rays.len() <= LANES && out.len() == rays.len());
+    /// [`Self::found_by_bsdf_ray`] of rays `ray(0..out.len())` (at most `LANES`) into `out`, the
+    /// same bits: in RGB, the rays that escaped look up each image light with its lane kernel
+    /// (whose gathers overlap), other lights one ray at a time.
+    pub(super) fn found_by_bsdf_rays<'r>(&self, ray: impl Fn(usize) -> BsdfRay<'r>, out: &mut [SampledSpectrum]) {
+        let n = out.len();
+        debug_assert!((1..=LANES).contains(&n));
+        // Lanes past `n` repeat the last ray; only the first `n` are read.
+        let rays: [BsdfRay; LANES] = std::array::from_fn(|k| ray(k.min(n - 1)));
+        let rays = &rays[..n];
         let (mut escaped, mut wi, mut rgb) = (0u32, Vec3x16::ZERO, true);
         for (l, (r, out)) in rays.iter().zip(out.iter_mut()).enumerate() {
             *out = SampledSpectrum::default();
@@ -321,8 +325,7 @@ impl<'a> ShadeContext<'a> {
         };
         let mut found = [SampledSpectrum::default(); LANES];
         if traced > 0 {
-            let rays: [BsdfRay; LANES] = std::array::from_fn(|k| ray(k.min(traced - 1)));
-            self.found_by_bsdf_rays(&rays[..traced], &mut found[..traced]);
+            self.found_by_bsdf_rays(ray, &mut found[..traced]);
         }
         for k in 0..traced {
             let (bs, z) = sampled[k].expect("a traced sample");

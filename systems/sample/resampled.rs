@@ -178,32 +178,30 @@ impl Sampling<'_> {
             let u = F32x16(std::array::from_fn(|l| rng[l].next_f32()));
             let choices = self.sampler.sample_lanes(&block.p, &block.normal, &u, (1u32 << n) - 1);
             let (mut rows, mut points) = ([0u32; LANES], 0);
-            // Area lights draw their u here (each lane's stream in the order `evaluate_at`'s caller
-            // below would), for the triangle kernel.
-            let (mut area_rows, mut areas, mut area_u) = ([0u32; LANES], 0u32, [F32x16::ZERO; 2]);
-            // Image lights too, for theirs; both share `area_u`.
-            let mut images = 0u32;
+            // Area and image lights draw their u here (each lane's stream in the order
+            // `evaluate_at`'s caller below would), for their kernels.
+            let (mut area_rows, mut areas, mut images, mut kernel_u) = ([0u32; LANES], 0u32, 0u32, [F32x16::ZERO; 2]);
             for l in 0..n {
                 let id = choices.light[l];
                 if choices.chosen & (1 << l) != 0 && id.kind == LightKind::Point {
                     (rows[l], points) = (id.row, points + 1);
                 } else if choices.chosen & (1 << l) != 0 && id.kind == LightKind::Area {
                     let u = rng[l].next_2d();
-                    (area_rows[l], areas, area_u[0][l], area_u[1][l]) = (id.row, areas | 1 << l, u.x, u.y);
+                    (area_rows[l], areas, kernel_u[0][l], kernel_u[1][l]) = (id.row, areas | 1 << l, u.x, u.y);
                 } else if choices.chosen & (1 << l) != 0 && id.kind == LightKind::ImageInfinite {
                     let u = rng[l].next_2d();
-                    (images, area_u[0][l], area_u[1][l]) = (images | 1 << l, u.x, u.y);
+                    (images, kernel_u[0][l], kernel_u[1][l]) = (images | 1 << l, u.x, u.y);
                 }
             }
             let lit =
                 if points > 0 { Some(self.table.points.sample_li_rgb_lanes(U32x16(rows), &block.p)) } else { None };
             let items = &self.table.area.items;
             let triangles = if areas != 0 {
-                Some(TriangleLightLanes::sample(items, &area_rows, areas, &block.p, area_u))
+                Some(TriangleLightLanes::sample(items, &area_rows, areas, &block.p, kernel_u))
             } else {
                 None
             };
-            let skies = self.image_lanes(images, &choices.light, &block.p, area_u);
+            let skies = self.image_lanes(images, &choices.light, &block.p, kernel_u);
             for l in 0..n {
                 if choices.chosen & (1 << l) == 0 {
                     continue;
@@ -214,23 +212,17 @@ impl Sampling<'_> {
                         (lit.li_sample(l).map(|ls| (ls, chosen.1, LightKind::Point.flags())), Vec2::ZERO)
                     }
                     _ if areas & (1 << l) != 0 => {
-                        let u = Vec2::new(area_u[0][l], area_u[1][l]);
+                        let u = Vec2::new(kernel_u[0][l], kernel_u[1][l]);
                         let light = &items[chosen.0.row as usize].light;
                         let lane = triangles.as_ref().and_then(|t| t.sample_li(light, l, &ctx[l], u, ColorQuery::Rgb));
                         let sampled = match lane {
-                            Some(ls) => ls
-                                .filter(|ls| ls.pdf > 0.0 && ls.radiance.is_finite())
-                                .map(|ls| (ls, chosen.1, self.table.flags(chosen.0))),
+                            Some(ls) => self.accept(chosen, ls),
                             None => self.evaluate_at(block.point[l], &ctx[l], chosen, u),
                         };
                         (sampled, u)
                     }
                     _ if images & (1 << l) != 0 => {
-                        let sampled = skies[l].filter(|ls| ls.pdf > 0.0 && ls.radiance.is_finite());
-                        (
-                            sampled.map(|ls| (ls, chosen.1, self.table.flags(chosen.0))),
-                            Vec2::new(area_u[0][l], area_u[1][l]),
-                        )
+                        (self.accept(chosen, skies[l]), Vec2::new(kernel_u[0][l], kernel_u[1][l]))
                     }
                     _ => {
                         let u = self.unless_delta(chosen.0, rng[l].next_2d());

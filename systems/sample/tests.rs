@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::geometry::Transform;
+use crate::lanes::Vec3x16;
 use crate::light::{Amount, DistantLight, PointLight, SpotLight, UniformInfiniteLight};
 use crate::rng::SplitMix64;
 
@@ -43,16 +44,18 @@ fn slot_without_point_gets_no_light() {
 /// three (rows differ between lanes) take its two ways of reading the light. With emissive
 /// triangles only (a scene without point lights), blocks go through the triangle kernel: a large
 /// triangle just above the points (solid-angle sampling; points within 1e-4 of its plane, which
-/// the f32 bounds leave to the f64 reference) and a tiny far one (area sampling). The schedule runs
+/// the f32 bounds leave to the f64 reference) and a tiny far one (area sampling). With an image
+/// light (alone, or among the mix), its lanes go through the image kernel: a turned map with a
+/// sun and a black band, so that some sampled directions carry no radiance. The schedule runs
 /// twice, on two orders of the points, so that a column the lane path fails to write keeps
 /// the first run's value.
 #[test]
 fn lane_path_matches_entry_by_entry() {
     use crate::shading::LightSamplerKind::{Bvh, Power, Uniform};
     use crate::shading::LightSelection::{OneSampled, Resampled};
-    // (samples per point, sampler, lights: 6 of four kinds and a disk light, 3 points, 1
-    // point, or 0: two emissive triangles; selection: one sampled light, or resampled from
-    // candidates)
+    // (samples per point, sampler, lights: 6 of four kinds with a disk light and an image light, 3
+    // points, 1 point, 0: two emissive triangles, or 7: an image light alone; selection: one
+    // sampled light, or resampled from candidates)
     let runs = [
         (1, Power, 6, OneSampled),
         (3, Power, 6, OneSampled),
