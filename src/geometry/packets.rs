@@ -145,7 +145,6 @@ impl SceneBvh {
                     let sheared = ShearedRay::new(&ray);
                     let mut best = (st.prim[l] != NO_PRIM).then(|| Best {
                         t: best_t[l],
-                        prim: st.prim[l],
                         slot: st.slot[l] as usize,
                         b: [st.b[0][l], st.b[1][l], st.b[2][l]],
                     });
@@ -162,7 +161,8 @@ impl SceneBvh {
                     );
                     st.redo |= u32::from(!complete) << l;
                     if let Some(h) = best {
-                        (best_t[l], st.prim[l], st.slot[l], st.local[l]) = (h.t, h.prim, h.slot as u32, best_local);
+                        let prim = self.prim_of_slot(h.slot);
+                        (best_t[l], st.prim[l], st.slot[l], st.local[l]) = (h.t, prim, h.slot as u32, best_local);
                         (st.b[0][l], st.b[1][l], st.b[2][l]) = (h.b[0], h.b[1], h.b[2]);
                     }
                 }
@@ -179,7 +179,7 @@ impl SceneBvh {
             } else if st.prim[l] == NO_PRIM {
                 None
             } else if st.local[l].is_some() {
-                let best = Best { t: best_t[l], prim: st.prim[l], slot: st.slot[l] as usize, b: [0.0; 3] };
+                let best = Best { t: best_t[l], slot: st.slot[l] as usize, b: [0.0; 3] };
                 Some(self.make_hit(&ray(l), best, st.local[l]))
             } else {
                 let attributes = match shared {

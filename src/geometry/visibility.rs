@@ -79,22 +79,24 @@ pub fn closest_hits(bvh: &SceneBvh, rays: &[Ray], out: &mut Vec<Option<Hit>>) {
     });
 }
 
-/// The best hit so far: parameter, input primitive index (tie-breaker), slot, barycentrics.
+/// The best hit so far: parameter, leaf slot, barycentrics.
 #[derive(Clone, Copy)]
 pub(super) struct Best {
     pub(super) t: f32,
-    pub(super) prim: u32,
     pub(super) slot: usize,
     pub(super) b: [f32; 3],
 }
 
-impl Best {
-    pub(super) fn improves_on(&self, other: &Option<Best>) -> bool {
-        other.is_none_or(|o| self.t < o.t || (self.t == o.t && self.prim < o.prim))
-    }
-}
-
 impl SceneBvh {
+    /// Whether `candidate` beats `best`: nearer, or as near with a lower input primitive index
+    /// (the brute-force order). The index is looked up on ties only: it is a load per slot.
+    #[inline(always)]
+    pub(super) fn improves_on(&self, candidate: &Best, best: &Option<Best>) -> bool {
+        best.is_none_or(|o| {
+            candidate.t < o.t || (candidate.t == o.t && self.prim_of_slot(candidate.slot) < self.prim_of_slot(o.slot))
+        })
+    }
+
     /// Whether anything blocks `ray` in (0, t_max]; stops at the first blocker found.
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.occluded_from(ray, GeometryId::NONE)
@@ -233,8 +235,8 @@ impl SceneBvh {
                         None => continue,
                     }
                 };
-                let candidate = Best { t, prim: self.prim_of_slot(slot), slot, b };
-                if candidate.improves_on(best) {
+                let candidate = Best { t, slot, b };
+                if self.improves_on(&candidate, best) {
                     (*best, *best_local, *t_max) = (Some(candidate), None, t);
                 }
             }
@@ -245,8 +247,8 @@ impl SceneBvh {
             lanes &= lanes - 1;
             let slot = block.slot[l] as usize;
             if let Some((t, p)) = self.shape_in_slot(slot).local_hit(ray, *t_max) {
-                let candidate = Best { t, prim: self.prim_of_slot(slot), slot, b: [0.0; 3] };
-                if candidate.improves_on(best) {
+                let candidate = Best { t, slot, b: [0.0; 3] };
+                if self.improves_on(&candidate, best) {
                     (*best, *best_local, *t_max) = (Some(candidate), Some(p), t);
                 }
             }
@@ -289,8 +291,8 @@ impl SceneBvh {
             let slot = self.slot_of(prim);
             // Farther hits cannot win; a tie at t_max still reaches the tie-break below.
             let Some((t, b, local)) = self.slot_hit(slot, ray, &tri_ray, t_max) else { continue };
-            let candidate = Best { t, prim, slot, b };
-            if candidate.improves_on(&best) {
+            let candidate = Best { t, slot, b };
+            if self.improves_on(&candidate, &best) {
                 best = Some(candidate);
                 best_local = local;
                 t_max = t;
@@ -322,7 +324,7 @@ impl SceneBvh {
     pub(super) fn make_hit(&self, ray: &Ray, best: Best, local: Option<DVec3>) -> Hit {
         let leaf = &self.leaf[best.slot];
         if leaf.shape != NO_SHAPE {
-            let (instance, id, material) = self.id_of(best.prim);
+            let (instance, id, material) = self.id_of(self.prim_of_slot(best.slot));
             let shape = &self.shapes[leaf.shape as usize];
             let (sp, uv) = match local.map(|p| shape.hit_at_local(best.t, p)) {
                 Some(h) => (h.point, h.uv),
@@ -331,7 +333,7 @@ impl SceneBvh {
             };
             return Hit { t: best.t, p: sp.p, p_error: sp.p_error, ng: sp.n, ns: sp.n, uv, id, material, instance };
         }
-        self.triangle_attributes(best.prim, best.slot).hit(best.t, best.b)
+        self.triangle_attributes(self.prim_of_slot(best.slot), best.slot).hit(best.t, best.b)
     }
 
     /// What every hit on the triangle in leaf slot `slot` (input primitive `prim`) shares.

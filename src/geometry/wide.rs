@@ -268,82 +268,104 @@ impl WideBvh {
         let far_pad = 1.0 + 2.0 * gamma(3);
         // Left uninitialised: zeroing 4 KB per ray cost more than the traversal of a small scene.
         let mut stack = [const { MaybeUninit::<(u32, f32)>::uninit() }; STACK];
-        stack[0].write((root, 0.0));
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            // SAFETY: entries below `sp` are written (the root above, children below).
-            let (entry, near) = unsafe { stack[sp].assume_init_read() };
-            if near > *t_max * far_pad {
-                continue;
-            }
+        let mut sp = 0;
+        // The entry being visited: a node goes on with its nearest child directly, so a ray that
+        // meets one child of a node does not go through the stack.
+        let mut entry = root;
+        loop {
             if entry & LEAF != 0 {
                 if visit(&self.blocks[(entry & !LEAF) as usize], t_max) {
                     return true;
                 }
-                continue;
-            }
-            let node = &self.nodes[entry as usize];
-            let mut t_near = [0f32; WIDTH];
-            let mut t_far = [0f32; WIDTH];
-            for c in 0..WIDTH {
-                t_near[c] = 0.0;
-                t_far[c] = *t_max;
-            }
-            for a in 0..3 {
-                // Which corner the ray enters the slab at.
-                let (lo, hi) = if neg[a] { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
+            } else {
+                let node = &self.nodes[entry as usize];
+                let mut t_near = [0f32; WIDTH];
+                let mut t_far = [0f32; WIDTH];
                 for c in 0..WIDTH {
-                    // Plain compares, not f32::max / min (whose NaN rules cost extra steps): no
-                    // slab parameter is NaN, since |1/d| is capped and finite boxes have finite
-                    // corners, and an empty child's infinite corners meet a nonzero 1/d.
-                    let (t0, t1) = ((lo[c] - origin[a]) * inv_dir[a], (hi[c] - origin[a]) * inv_dir[a]);
-                    t_near[c] = if t0 > t_near[c] { t0 } else { t_near[c] };
-                    t_far[c] = if t1 < t_far[c] { t1 } else { t_far[c] };
+                    t_near[c] = 0.0;
+                    t_far[c] = *t_max;
                 }
-            }
-            let mut mask = 0u32;
-            for c in 0..WIDTH {
-                mask |= u32::from(t_near[c] <= t_far[c] * far_pad) << c;
-            }
-            if sp + WIDTH > STACK {
-                return false;
-            }
-            if !NEAREST {
-                let mut leaves = mask & leaf_mask(node);
-                mask &= !leaves;
-                while leaves != 0 {
-                    let c = leaves.trailing_zeros() as usize;
-                    leaves &= leaves - 1;
-                    if visit(&self.blocks[(node.child[c] & !LEAF) as usize], t_max) {
-                        return true;
+                for a in 0..3 {
+                    // Which corner the ray enters the slab at.
+                    let (lo, hi) = if neg[a] { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
+                    for c in 0..WIDTH {
+                        // Plain compares, not f32::max / min (whose NaN rules cost extra steps): no
+                        // slab parameter is NaN, since |1/d| is capped and finite boxes have finite
+                        // corners, and an empty child's infinite corners meet a nonzero 1/d.
+                        let (t0, t1) = ((lo[c] - origin[a]) * inv_dir[a], (hi[c] - origin[a]) * inv_dir[a]);
+                        t_near[c] = if t0 > t_near[c] { t0 } else { t_near[c] };
+                        t_far[c] = if t1 < t_far[c] { t1 } else { t_far[c] };
                     }
                 }
-                while mask != 0 {
-                    let c = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    stack[sp].write((node.child[c], t_near[c]));
-                    sp += 1;
+                let mut mask = 0u32;
+                for c in 0..WIDTH {
+                    mask |= u32::from(t_near[c] <= t_far[c] * far_pad) << c;
                 }
-                continue;
+                if sp + WIDTH > STACK {
+                    return false;
+                }
+                if !NEAREST {
+                    let mut leaves = mask & leaf_mask(node);
+                    mask &= !leaves;
+                    while leaves != 0 {
+                        let c = leaves.trailing_zeros() as usize;
+                        leaves &= leaves - 1;
+                        if visit(&self.blocks[(node.child[c] & !LEAF) as usize], t_max) {
+                            return true;
+                        }
+                    }
+                    if mask != 0 {
+                        entry = node.child[mask.trailing_zeros() as usize];
+                        mask &= mask - 1;
+                        while mask != 0 {
+                            let c = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            stack[sp].write((node.child[c], t_near[c]));
+                            sp += 1;
+                        }
+                        continue;
+                    }
+                } else if mask != 0 {
+                    if mask & (mask - 1) == 0 {
+                        entry = node.child[mask.trailing_zeros() as usize];
+                        continue;
+                    }
+                    // Push the hit children farthest first, then go on with the nearest.
+                    let first = sp;
+                    while mask != 0 {
+                        let c = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let item = (node.child[c], t_near[c]);
+                        let mut k = sp;
+                        // SAFETY: entries `first..sp` were written in this loop.
+                        while k > first && unsafe { stack[k - 1].assume_init_ref() }.1 < item.1 {
+                            stack[k] = stack[k - 1];
+                            k -= 1;
+                        }
+                        stack[k].write(item);
+                        sp += 1;
+                    }
+                    sp -= 1;
+                    // SAFETY: written just above.
+                    entry = unsafe { stack[sp].assume_init_read() }.0;
+                    continue;
+                }
             }
-            // Push the hit children farthest first, so the nearest is popped first.
-            let first = sp;
-            while mask != 0 {
-                let c = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let item = (node.child[c], t_near[c]);
-                let mut k = sp;
-                // SAFETY: entries `first..sp` were written in this loop.
-                while k > first && unsafe { stack[k - 1].assume_init_ref() }.1 < item.1 {
-                    stack[k] = stack[k - 1];
-                    k -= 1;
+            // The next entry from the stack that may still hold something nearer than `t_max`.
+            loop {
+                if sp == 0 {
+                    return true;
                 }
-                stack[k].write(item);
-                sp += 1;
+                sp -= 1;
+                // SAFETY: entries below `sp` are written.
+                let (next, near) = unsafe { stack[sp].assume_init_read() };
+                if near > *t_max * far_pad {
+                    continue;
+                }
+                entry = next;
+                break;
             }
         }
-        true
     }
 }
 
