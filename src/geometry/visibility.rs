@@ -80,11 +80,21 @@ pub fn closest_hits(bvh: &SceneBvh, rays: &[Ray], out: &mut Vec<Option<Hit>>) {
 }
 
 /// The best hit so far: parameter, leaf slot, barycentrics.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 pub(super) struct Best {
     pub(super) t: f32,
     pub(super) slot: usize,
     pub(super) b: [f32; 3],
+}
+
+/// A closest hit before its record is built: which primitive and where on it.
+/// [`SceneBvh::hit_instance`] tells what it lies on; [`SceneBvh::hit_record`] builds the [`Hit`]
+/// (the normals, uvs and ids it reads are loads a ray that only looks for emitters can skip).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HitRef {
+    best: Best,
+    /// The object-space point of a shape hit, so that the record need not find it again.
+    local: Option<DVec3>,
 }
 
 impl SceneBvh {
@@ -119,16 +129,31 @@ impl SceneBvh {
 
     /// The nearest hit of `ray` in (0, t_max], or `None`.
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        self.closest_hit_ref(ray).map(|h| self.hit_record(ray, h))
+    }
+
+    /// [`Self::closest_hit`] without its record.
+    pub(crate) fn closest_hit_ref(&self, ray: &Ray) -> Option<HitRef> {
         if !ray.is_valid() || self.leaf.is_empty() {
             return None;
         }
         if self.leaf.len() <= FEW_PRIMITIVES {
-            return self.closest_hit_each(ray);
+            return self.closest_ref_each(ray);
         }
         crate::lanes::widest(
             #[inline(always)]
-            || self.closest_hit_wide(ray),
+            || self.closest_ref_wide(ray),
         )
+    }
+
+    /// The instance (index into the built instances) that `hit` lies on.
+    pub(crate) fn hit_instance(&self, hit: &HitRef) -> u32 {
+        self.id_of(self.prim_of_slot(hit.best.slot)).0
+    }
+
+    /// The record of `hit`, a closest hit of `ray`: what [`Self::closest_hit`] returns.
+    pub(crate) fn hit_record(&self, ray: &Ray, hit: HitRef) -> Hit {
+        self.make_hit(ray, hit.best, hit.local)
     }
 
     /// [`Self::occluded_from`] of a valid ray over the wide tree.
@@ -188,7 +213,7 @@ impl SceneBvh {
 
     /// [`Self::closest_hit`] of a valid ray over the wide tree.
     #[inline(always)]
-    fn closest_hit_wide(&self, ray: &Ray) -> Option<Hit> {
+    fn closest_ref_wide(&self, ray: &Ray) -> Option<HitRef> {
         let sheared = ShearedRay::new(ray);
         let mut best: Option<Best> = None;
         // The object-space point of the best shape hit, so that `make_hit` need not find it again.
@@ -204,9 +229,9 @@ impl SceneBvh {
             },
         );
         if !complete {
-            return self.closest_hit_each(ray);
+            return self.closest_ref_each(ray);
         }
-        best.map(|b| self.make_hit(ray, b, best_local))
+        best.map(|best| HitRef { best, local: best_local })
     }
 
     /// Folds the hits of `block`'s primitives over (0, t_max] into `best` (lowering `t_max`).
@@ -283,6 +308,11 @@ impl SceneBvh {
 
     /// [`Self::closest_hit_brute_force`] for a valid ray.
     pub(super) fn closest_hit_each(&self, ray: &Ray) -> Option<Hit> {
+        self.closest_ref_each(ray).map(|h| self.hit_record(ray, h))
+    }
+
+    /// [`Self::closest_hit_each`] without its record.
+    fn closest_ref_each(&self, ray: &Ray) -> Option<HitRef> {
         let tri_ray = OnceCell::new();
         let mut best: Option<Best> = None;
         let mut best_local = None;
@@ -298,7 +328,7 @@ impl SceneBvh {
                 t_max = t;
             }
         }
-        best.map(|b| self.make_hit(ray, b, best_local))
+        best.map(|best| HitRef { best, local: best_local })
     }
 
     /// The primitive in leaf slot `slot` against `ray` over (0, t_max]: t, barycentrics

@@ -127,6 +127,12 @@ impl<'a> ShadeContext<'a> {
         self.emitted_at(&surface, hit.p, hit.ng, w, query)
     }
 
+    /// Whether a surface of instance `instance` may emit: whether it carries area lights.
+    #[inline(always)]
+    pub(super) fn may_emit(&self, instance: u32) -> bool {
+        self.lights_of_instance.get(instance as usize).is_some_and(|rows| !rows.is_empty())
+    }
+
     /// [`Self::emitted`] at point `p` of `surface`, whose geometric normal is `ng`.
     fn emitted_at(
         &self,
@@ -302,7 +308,10 @@ impl<'a> ShadeContext<'a> {
     pub(super) fn shade_direct_block(&self, first: usize, out: &mut [Vec3], bsdf_sampling: bool) -> usize {
         debug_assert!(out.len() <= LANES);
         let mut l = [SampledSpectrum::default(); LANES];
-        // The BSDF samples traced: their lanes, samples, shading normals and hits.
+        let mut rays_traced = 0;
+        // The BSDF samples that may find light (escaped, or hit an emitter): their lanes, samples,
+        // shading normals and hits. A ray that hits a surface without area lights finds nothing,
+        // so it needs no hit record.
         let mut traced = 0;
         let (mut lane, mut sampled, mut hits) = ([0usize; LANES], [None; LANES], [None; LANES]);
         for (i, l) in l.iter_mut().enumerate().take(out.len()) {
@@ -314,8 +323,13 @@ impl<'a> ShadeContext<'a> {
             let (surface, bsdf) = self.surface_and_bsdf(j);
             *l = self.emitted_toward_viewer(j, &surface).add(self.light_samples(j, &bsdf));
             if bsdf_sampling && let Some((bs, ray)) = self.sample_bsdf(j, &bsdf, &mut self.stream(j, BSDF_DIMENSION)) {
+                rays_traced += 1;
+                let hit = self.bvh.closest_hit_ref(&ray);
+                if hit.is_some_and(|h| !self.may_emit(self.bvh.hit_instance(&h))) {
+                    continue;
+                }
                 (lane[traced], sampled[traced], hits[traced]) =
-                    (i, Some((bs, bsdf.frame.z)), self.bvh.closest_hit(&ray));
+                    (i, Some((bs, bsdf.frame.z)), hit.map(|h| self.bvh.hit_record(&ray, h)));
                 traced += 1;
             }
         }
@@ -335,7 +349,7 @@ impl<'a> ShadeContext<'a> {
         for (i, out) in out.iter_mut().enumerate() {
             *out = to_rgb(l[i], self.batch.wavelengths.get(first + i));
         }
-        traced
+        rays_traced
     }
 }
 

@@ -71,7 +71,7 @@ impl ShadeContext<'_> {
             Some(Some(b)) if !b.has_specular() => b,
             _ => return None,
         };
-        if self.lights_of_instance.get(instance as usize).is_some_and(|rows| !rows.is_empty()) {
+        if self.may_emit(instance) {
             return None;
         }
         Some([bsdf.base.0[0], bsdf.base.0[1], bsdf.base.0[2]])
