@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use kelvin::render::job::{self, IntegratorChoice};
+use kelvin::render::job::{self, IntegratorChoice, SamplerChoice};
 use kelvin::render::path::PathDepth;
 use kelvin::render::renderer::Integrator;
 use kelvin::report::lights::{LightBenchConfig, format_tables, run_light_bench, write_plots};
@@ -57,6 +57,10 @@ struct RenderArgs {
     /// max_depth is one more).
     #[arg(long, default_value_t = PathDepth::DEFAULT.max_depth, value_parser = values::whole(job::DEPTH))]
     max_depth: u32,
+    /// How lights are chosen per sample (RIS and ReSTIR with `kelvin render`'s default
+    /// candidates and neighbours).
+    #[arg(long, value_enum, default_value = "bvh")]
+    light_sampler: SamplerChoice,
     /// After the table, print every row (counts, pass times, warnings) as one line of JSON.
     #[arg(long)]
     json: bool,
@@ -127,6 +131,7 @@ fn render(a: RenderArgs) -> Result<(), CliError> {
             IntegratorChoice::Direct => Integrator::Direct,
             IntegratorChoice::Path => Integrator::Path(PathDepth { max_depth: a.max_depth, ..PathDepth::DEFAULT }),
         },
+        light_sampler: a.light_sampler,
     };
     let rows = run_render_bench(&cfg, |line| eprintln!("{line}")).map_err(|e| e.to_string())?;
     print!("{}", format_table(&rows));

@@ -19,10 +19,11 @@ use std::time::Instant;
 use bevy_ecs::prelude::*;
 use serde::Serialize;
 
+use crate::render::job::{RenderJob, SamplerChoice};
 use crate::render::renderer::{Integrator, PassSeconds, RenderOptions, RenderStats, Strategy, render};
 use crate::render::scene_file::{spawn_env_map, spawn_gltf_file};
 use crate::scene::spawn::SpawnReport;
-use crate::shading::{ColorMode, LightSamplerKind, LightSelection, Settings};
+use crate::shading::{ColorMode, Settings};
 use crate::systems::LightingPlugin;
 
 /// Errors of the suite: a message naming the scene or file.
@@ -121,12 +122,23 @@ impl SuiteScene {
     /// The world and schedule the renderer takes: the suite's settings (RGB, light BVH, one light
     /// per sample), `LightingPlugin`, the file's entities and the environment map if any.
     pub fn world(&self, data_dir: &Path) -> Result<(World, Schedule, SpawnReport), BenchError> {
+        self.world_with(data_dir, SamplerChoice::Bvh)
+    }
+
+    /// [`Self::world`] with lights chosen by `sampler` (RIS and ReSTIR with `kelvin render`'s
+    /// default candidates and neighbours).
+    pub fn world_with(
+        &self,
+        data_dir: &Path,
+        sampler: SamplerChoice,
+    ) -> Result<(World, Schedule, SpawnReport), BenchError> {
         let mut world = World::new();
         let mut schedule = Schedule::default();
+        let job = RenderJob { light_sampler: sampler, ..RenderJob::default() };
         world.insert_resource(Settings {
             color_mode: ColorMode::Rgb,
-            light_sampler: LightSamplerKind::Bvh,
-            selection: LightSelection::OneSampled,
+            light_sampler: job.settings().light_sampler,
+            selection: job.selection(),
             ..Default::default()
         });
         LightingPlugin::build(&mut world, &mut schedule);
@@ -168,6 +180,8 @@ pub struct RenderBenchConfig {
     pub scenes: Vec<String>,
     /// Direct lighting (the default, as Mitsuba's `direct`) or the path tracer (Mitsuba's `path`).
     pub integrator: Integrator,
+    /// How lights are chosen (the light BVH by default).
+    pub light_sampler: SamplerChoice,
 }
 
 impl Default for RenderBenchConfig {
@@ -180,6 +194,7 @@ impl Default for RenderBenchConfig {
             repeat: 3,
             scenes: Vec::new(),
             integrator: Integrator::Direct,
+            light_sampler: SamplerChoice::Bvh,
         }
     }
 }
@@ -220,6 +235,8 @@ pub struct RenderBenchRow {
     pub spp: u32,
     /// The integrator ([`integrator_name`]).
     pub integrator: String,
+    /// How lights were chosen: bvh, uniform, power, ris or restir.
+    pub light_sampler: String,
     /// Rayon worker threads.
     pub threads: usize,
     /// Meshes spawned from the file.
@@ -273,7 +290,7 @@ pub fn run_scene(scene: &SuiteScene, cfg: &RenderBenchConfig) -> Result<RenderBe
     let spp = cfg.spp.unwrap_or_else(|| scene.default_spp(width, height)).max(1);
     let load_start = Instant::now();
     let (mut world, mut schedule, spawned) =
-        scene.world(&cfg.data_dir).map_err(|e| format!("scene {}: {e}", scene.name))?;
+        scene.world_with(&cfg.data_dir, cfg.light_sampler).map_err(|e| format!("scene {}: {e}", scene.name))?;
     let seconds_load = load_start.elapsed().as_secs_f64();
     let (_, setup) = render(&mut world, &mut schedule, &suite_options(width, height, 1, cfg.integrator), |_| {});
     let mut warnings = spawned.warnings.clone();
@@ -300,6 +317,7 @@ pub fn run_scene(scene: &SuiteScene, cfg: &RenderBenchConfig) -> Result<RenderBe
         height,
         spp,
         integrator: integrator_name(cfg.integrator),
+        light_sampler: format!("{:?}", cfg.light_sampler).to_lowercase(),
         threads: rayon::current_num_threads(),
         meshes: spawned.meshes,
         triangles: spawned.triangles,
@@ -346,15 +364,18 @@ pub fn run_render_bench(
 pub fn format_table(rows: &[RenderBenchRow]) -> String {
     use std::fmt::Write;
     let mut s = String::new();
-    let _ =
-        writeln!(s, "| scene | integrator | size | spp | seconds | M samples/s | M shadow rays/s | M BSDF rays/s |");
-    let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|");
+    let _ = writeln!(
+        s,
+        "| scene | integrator | lights | size | spp | seconds | M samples/s | M shadow rays/s | M BSDF rays/s |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---:|---:|---:|---:|---:|");
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {} | {}x{} | {} | {:.3} | {:.2} | {:.2} | {:.2} |",
+            "| {} | {} | {} | {}x{} | {} | {:.3} | {:.2} | {:.2} | {:.2} |",
             r.scene,
             r.integrator,
+            r.light_sampler,
             r.width,
             r.height,
             r.spp,
