@@ -74,6 +74,7 @@ const BAD_OPTIONS: &[(&[&str], &str, &str, &str)] = &[
     (&["bench", "render"], "--scenes", "no-such-scene", "no-such-scene"),
     (&["bench", "render"], "--repeat", "0", "1..=1000"),
     (&["bench", "render"], "--threads", "0", "1..=1024"),
+    (&["bench", "render"], "--light-sampler", "magic", "possible values"),
     (&["bench", "render"], "--integrator", "bidir", "possible values"),
     (&["bench", "render"], "--max-depth", "2000", "0..=1024"),
     (&["bake", "lightmaps"], "--size", "0", "1..=4096"),
