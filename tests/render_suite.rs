@@ -60,34 +60,39 @@ fn the_suite_runs_the_path_tracer_too() {
     assert!(two.bsdf_rays > 0 && two.shadow_rays > direct.shadow_rays, "{} BSDF rays", two.bsdf_rays);
 }
 
-/// The suite measures every light sampler: `world_with` hands the choice to the light system,
-/// and each sampler (all unbiased: ReSTIR with its default weights) renders emissive_strength's
-/// 60 emissive triangles to the same mean brightness within 3% (they agree to 1.2% at 64 spp).
+/// The suite measures every light sampler with both integrators: `world_with` hands the choice
+/// to the light system, and each sampler (all unbiased: ReSTIR with its default weights) renders
+/// emissive_strength's 60 emissive triangles to the light BVH's mean brightness under the same
+/// integrator, within 3% at 64 spp.
 #[test]
 fn the_suite_runs_every_light_sampler_to_the_same_image_mean() {
     use kelvin::render::job::{RenderJob, SamplerChoice};
+    use kelvin::render::path::PathDepth;
     use kelvin::shading::Settings;
     let data = test_data("");
     let scene = suite_scene("emissive_strength").unwrap();
-    let mut means = Vec::new();
-    for sampler in
-        [SamplerChoice::Bvh, SamplerChoice::Uniform, SamplerChoice::Power, SamplerChoice::Ris, SamplerChoice::Restir]
-    {
-        let (mut world, mut schedule, _) = scene.world_with(&data, sampler).unwrap();
-        let job = RenderJob { light_sampler: sampler, ..RenderJob::default() };
-        let settings = world.resource::<Settings>();
-        assert_eq!((settings.light_sampler, settings.selection), (job.settings().light_sampler, job.selection()));
-        let (film, _) = render(&mut world, &mut schedule, &suite_options(24, 24, 64, Integrator::Direct), |_| {});
-        let pixels = film.pixels();
-        means.push(pixels.iter().map(|c| f64::from(c.x + c.y + c.z)).sum::<f64>() / pixels.len() as f64);
-    }
-    assert!(means[0] > 0.0, "lit: {means:?}");
-    for (k, m) in means.iter().enumerate() {
-        assert!(
-            (m / means[0] - 1.0).abs() < 0.03,
-            "sampler {k}: mean {m} against the light BVH's {} (all: {means:?})",
-            means[0]
-        );
+    let samplers =
+        [SamplerChoice::Bvh, SamplerChoice::Uniform, SamplerChoice::Power, SamplerChoice::Ris, SamplerChoice::Restir];
+    let path = Integrator::Path(PathDepth { max_depth: 3, ..PathDepth::DEFAULT });
+    for integrator in [Integrator::Direct, path] {
+        let mut means = Vec::new();
+        for sampler in samplers {
+            let (mut world, mut schedule, _) = scene.world_with(&data, sampler).unwrap();
+            let job = RenderJob { light_sampler: sampler, ..RenderJob::default() };
+            let settings = world.resource::<Settings>();
+            assert_eq!((settings.light_sampler, settings.selection), (job.settings().light_sampler, job.selection()));
+            let (film, _) = render(&mut world, &mut schedule, &suite_options(24, 24, 64, integrator), |_| {});
+            let pixels = film.pixels();
+            means.push(pixels.iter().map(|c| f64::from(c.x + c.y + c.z)).sum::<f64>() / pixels.len() as f64);
+        }
+        assert!(means[0] > 0.0, "{integrator:?} lit: {means:?}");
+        for (k, m) in means.iter().enumerate() {
+            assert!(
+                (m / means[0] - 1.0).abs() < 0.03,
+                "{integrator:?}, sampler {k}: mean {m} against the light BVH's {} (all: {means:?})",
+                means[0]
+            );
+        }
     }
 }
 

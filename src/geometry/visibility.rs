@@ -148,7 +148,7 @@ impl SceneBvh {
 
     /// The instance (index into the built instances) that `hit` lies on.
     pub(crate) fn hit_instance(&self, hit: &HitRef) -> u32 {
-        self.id_of(self.prim_of_slot(hit.best.slot)).0
+        self.prim_instance[self.prim_of_slot(hit.best.slot) as usize]
     }
 
     /// The record of `hit`, a closest hit of `ray`: what [`Self::closest_hit`] returns.
