@@ -249,6 +249,31 @@ impl Mask16 {
     pub fn any(self) -> bool {
         self.0.iter().fold(0, |a, &b| a | b) != 0
     }
+
+    /// Bit `l` set where lane `l` is: `movmskps` per 4 lanes (LLVM does not find it in a loop of
+    /// shifts), SSE being in x86-64's baseline.
+    #[inline(always)]
+    pub fn bits(self) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_mm_loadu_ps, _mm_movemask_ps};
+            let mut bits = 0;
+            for q in 0..LANES / 4 {
+                // SAFETY: SSE is baseline on x86-64; the load reads lanes 4q..4q + 4 of 16.
+                let m = unsafe { _mm_movemask_ps(_mm_loadu_ps(self.0.as_ptr().add(4 * q).cast())) };
+                bits |= (m as u32) << (4 * q);
+            }
+            bits
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        (0..LANES).fold(0, |bits, l| bits | (self.0[l] >> 31) << l)
+    }
+
+    /// The mask with lane `l` set where bit `l` of `bits` is.
+    #[inline(always)]
+    pub fn from_bits(bits: u32) -> Self {
+        Self(each!(0, |l| 0u32.wrapping_sub((bits >> l) & 1)))
+    }
 }
 
 impl Vec3x16 {
@@ -617,6 +642,9 @@ mod tests {
         assert_eq!(odd.to_bools(), std::array::from_fn(|l| l % 2 == 1));
         assert!(odd.any() && !odd.all() && (odd | !odd).all() && !(odd & !odd).any());
         assert!(Mask16::splat(true).all() && !Mask16::splat(false).any());
+        assert_eq!(odd.bits(), 0xaaaa);
+        assert_eq!(Mask16::from_bits(0x8001).to_bools(), std::array::from_fn(|l| l == 0 || l == 15));
+        assert_eq!(Mask16::from_bits(0x1234).bits(), 0x1234);
         assert_eq!(x.gt(F32x16::splat(7.5)), Mask16::from_bools(std::array::from_fn(|l| l > 7)));
         assert_eq!(x.is_finite(), Mask16::splat(true));
         assert_eq!(F32x16::splat(f32::NAN).is_nan(), Mask16::splat(true));

@@ -16,7 +16,7 @@ use std::mem::MaybeUninit;
 use super::{EMPTY, LEAF, MAX_INV_DIR, PrimBlock, STACK, WIDTH, WideBvh};
 use crate::geometry::ray::gamma;
 use crate::geometry::triangle::{EARLY_REJECT_SLACK, t_error_bound};
-use crate::lanes::{LANES, Vec3x16};
+use crate::lanes::{F32x16, LANES, Mask16, Vec3x16};
 
 /// Lane columns: `[axis][lane]`.
 pub(crate) type Columns = Vec3x16;
@@ -27,8 +27,6 @@ pub(crate) type Columns = Vec3x16;
 pub(crate) struct RayPacket {
     pub(crate) origin: Columns,
     inv_dir: Columns,
-    /// Bit l: lane l's direction is negative along the axis.
-    neg: [u32; 3],
     /// Bit l of `by_kz[k]`: lane l's largest direction component is axis k (`ShearedRay::kz`).
     by_kz: [u32; 3],
     /// (Sx, Sy, Sz) of `ShearedRay::new`, in the lane's permuted axes.
@@ -46,7 +44,7 @@ impl RayPacket {
             if i.is_finite() && i.abs() <= MAX_INV_DIR { i } else { MAX_INV_DIR.copysign(d) }
         };
         let (mut inv_dir, mut shear) = (Vec3x16::ZERO, Vec3x16::ZERO);
-        let (mut neg, mut by_kz, mut valid) = ([0u32; 3], [0u32; 3], 0u32);
+        let (mut by_kz, mut valid) = ([0u32; 3], 0u32);
         for l in 0..LANES {
             let d = [dir[0][l], dir[1][l], dir[2][l]];
             let o = [origin[0][l], origin[1][l], origin[2][l]];
@@ -55,7 +53,6 @@ impl RayPacket {
             valid |= u32::from(ok) << l;
             for a in 0..3 {
                 inv_dir[a][l] = inv(d[a]);
-                neg[a] |= u32::from(inv_dir[a][l] < 0.0) << l;
             }
             // As `ShearedRay::new`.
             let a = d.map(f32::abs);
@@ -70,7 +67,7 @@ impl RayPacket {
             let [x, y, z] = permuted(kz);
             (shear[0][l], shear[1][l], shear[2][l]) = (-d[x] / d[z], -d[y] / d[z], 1.0 / d[z]);
         }
-        Self { origin: *origin, inv_dir, neg, by_kz, shear, valid }
+        Self { origin: *origin, inv_dir, by_kz, shear, valid }
     }
 }
 
@@ -236,12 +233,10 @@ impl WideBvh {
             sp -= 1;
             // SAFETY: entries below `sp` are written (the root above, children below).
             let (entry, lanes, near) = unsafe { stack[sp].assume_init_read() };
-            // Lanes still in the packet whose current t_max the subtree's nearest entry is within.
-            let mut mask = 0u32;
-            for l in 0..LANES {
-                mask |= u32::from(near <= t_max[l] * far_pad) << l;
-            }
-            let mask = mask & lanes & active;
+            // Lanes still in the packet whose current t_max the subtree's nearest entry is within
+            // (any-hit queries do not lower t_max, so their children were tested against it).
+            let within = if NEAREST { (F32x16(*t_max) * far_pad).ge(F32x16::splat(near)).bits() } else { !0 };
+            let mask = within & lanes & active;
             if mask == 0 {
                 continue;
             }
@@ -262,32 +257,27 @@ impl WideBvh {
                 continue;
             }
             let node = &self.nodes[entry as usize];
-            let mut in_mask = [false; LANES];
-            for (l, m) in in_mask.iter_mut().enumerate() {
-                *m = (mask >> l) & 1 != 0;
-            }
-            let (mut child_lanes, mut child_near) = ([0u32; WIDTH], [f32::INFINITY; WIDTH]);
+            let in_mask = Mask16::from_bits(mask);
+            let (mut child_lanes, mut child_near) = ([0u32; WIDTH], [0.0; WIDTH]);
             for c in 0..WIDTH {
                 if node.child[c] == EMPTY {
                     continue;
                 }
-                let (mut t_near, mut t_far) = ([0f32; LANES], *t_max);
+                let (mut t_near, mut t_far) = (F32x16::ZERO, F32x16(*t_max));
                 for a in 0..3 {
-                    let (lo, hi) = (node.lo[a][c], node.hi[a][c]);
-                    for l in 0..LANES {
-                        let (t0, t1) = ((lo - o[a][l]) * inv[a][l], (hi - o[a][l]) * inv[a][l]);
-                        let (enter, leave) = if (rays.neg[a] >> l) & 1 != 0 { (t1, t0) } else { (t0, t1) };
-                        t_near[l] = if enter > t_near[l] { enter } else { t_near[l] };
-                        t_far[l] = if leave < t_far[l] { leave } else { t_far[l] };
-                    }
+                    // The slab's entry and exit are the lesser and greater of its two planes' t:
+                    // both finite (capped reciprocals), so no NaN, and the order is the
+                    // direction's sign's.
+                    let t0 = (F32x16::splat(node.lo[a][c]) - o[a]) * inv[a];
+                    let t1 = (F32x16::splat(node.hi[a][c]) - o[a]) * inv[a];
+                    t_near = t0.min(t1).max(t_near);
+                    t_far = t0.max(t1).min(t_far);
                 }
-                let (mut hit, mut near) = (0u32, [f32::INFINITY; LANES]);
-                for l in 0..LANES {
-                    let meets = t_near[l] <= t_far[l] * far_pad;
-                    hit |= u32::from(meets) << l;
-                    near[l] = if meets & in_mask[l] { t_near[l] } else { f32::INFINITY };
+                let meets = t_near.le(t_far * far_pad);
+                child_lanes[c] = meets.bits() & mask;
+                if NEAREST {
+                    child_near[c] = nearest(F32x16::select(meets & in_mask, t_near, F32x16::splat(f32::INFINITY)).0);
                 }
-                (child_lanes[c], child_near[c]) = (hit & mask, nearest(near));
             }
             if sp + WIDTH > STACK {
                 return false;
