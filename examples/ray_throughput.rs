@@ -1,5 +1,8 @@
 //! Traces a file of rays against a glTF file's scene BVH and prints closest-hit and any-hit rays
-//! per second, one ray at a time in parallel batches and as 16-ray packets, as JSON. The rays
+//! per second, one ray at a time in parallel batches and as 16-ray packets, as JSON. Closest hits
+//! are timed twice one ray at a time: with their records (`closest_hits`, an `Option<Hit>` per
+//! ray) and without (`closest_hit_ref`, a hit-or-miss flag per ray, what Mitsuba's
+//! `ray_intersect_preliminary(..).is_valid()` evaluates). The rays
 //! file holds little-endian f32 records (origin xyz, direction xyz, t_max); `bench/mitsuba/rays.py`
 //! writes it and traces the same rays with Mitsuba.
 //! `cargo run --release --example ray_throughput -- SCENE.glb RAYS.f32 [repeats]`
@@ -8,7 +11,7 @@ use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
-use kelvin::geometry::{GeometryId, Hit, Ray, SceneBvh, closest_hits, occluded, ray_columns};
+use kelvin::geometry::{GeometryId, Hit, RAY_CHUNK, Ray, SceneBvh, closest_hits, occluded, ray_columns};
 use kelvin::lanes::{self, LANES};
 use kelvin::systems::LightingPlugin;
 use rayon::prelude::*;
@@ -39,6 +42,17 @@ fn best<T>(repeats: usize, mut run: impl FnMut() -> T) -> (f64, T) {
         best = best.min(t.elapsed().as_secs_f64());
     }
     (best, out)
+}
+
+/// Whether each ray hits something, from `closest_hit_ref` (the closest hit without its record).
+fn closest_refs(bvh: &SceneBvh, rays: &[Ray], out: &mut Vec<bool>) {
+    out.clear();
+    out.resize(rays.len(), false);
+    out.par_chunks_mut(RAY_CHUNK).zip(rays.par_chunks(RAY_CHUNK)).for_each(|(out, rays)| {
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = bvh.closest_hit_ref(r).is_some();
+        }
+    });
 }
 
 fn packet_hits(bvh: &SceneBvh, rays: &[Ray]) -> usize {
@@ -97,23 +111,29 @@ fn main() -> Result<(), String> {
         closest_hits(bvh, &rays, &mut hit_buf);
         hit_buf.iter().filter(|h| h.is_some()).count()
     });
+    let (closest_ref_s, ref_hits) = best(repeats, || {
+        closest_refs(bvh, &rays, &mut occ_buf);
+        occ_buf.iter().filter(|&&h| h).count()
+    });
     let (any_s, blocked) = best(repeats, || {
         occluded(bvh, &rays, &mut occ_buf);
         occ_buf.iter().filter(|&&b| b).count()
     });
     let (closest_packet_s, packet_hit_count) = best(repeats, || packet_hits(bvh, &rays));
     let (any_packet_s, packet_blocked_count) = best(repeats, || packet_blocked(bvh, &rays));
-    if (hits, blocked) != (packet_hit_count, packet_blocked_count) {
+    if (hits, hits, blocked) != (packet_hit_count, ref_hits, packet_blocked_count) {
         return Err(format!(
-            "packets disagree: hits {hits} vs {packet_hit_count}, blocked {blocked} vs {packet_blocked_count}"
+            "queries disagree: hits {hits} vs {packet_hit_count} (packets) and {ref_hits} (without records), \
+             blocked {blocked} vs {packet_blocked_count}"
         ));
     }
     let n = rays.len() as f64;
     println!(
-        "{{\"rays\": {}, \"hits\": {hits}, \"blocked\": {blocked}, \"threads\": {}, \"closest_per_s\": {:.0}, \"any_per_s\": {:.0}, \"closest_packet_per_s\": {:.0}, \"any_packet_per_s\": {:.0}}}",
+        "{{\"rays\": {}, \"hits\": {hits}, \"blocked\": {blocked}, \"threads\": {}, \"closest_per_s\": {:.0}, \"closest_ref_per_s\": {:.0}, \"any_per_s\": {:.0}, \"closest_packet_per_s\": {:.0}, \"any_packet_per_s\": {:.0}}}",
         rays.len(),
         rayon::current_num_threads(),
         n / closest_s,
+        n / closest_ref_s,
         n / any_s,
         n / closest_packet_s,
         n / any_packet_s

@@ -25,7 +25,7 @@ pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};
 pub use transform::{Placement, Transform};
 pub use triangle::MAX_COORDINATE;
-pub use visibility::{Hit, RAY_CHUNK, closest_hits, occluded};
+pub use visibility::{Hit, HitRef, RAY_CHUNK, closest_hits, occluded};
 
 use glam::Vec3;
 use thiserror::Error;

@@ -91,10 +91,17 @@ pub(super) struct Best {
 /// [`SceneBvh::hit_instance`] tells what it lies on; [`SceneBvh::hit_record`] builds the [`Hit`]
 /// (the normals, uvs and ids it reads are loads a ray that only looks for emitters can skip).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct HitRef {
+pub struct HitRef {
     best: Best,
     /// The object-space point of a shape hit, so that the record need not find it again.
     local: Option<DVec3>,
+}
+
+impl HitRef {
+    /// The ray parameter of the hit.
+    pub fn t(&self) -> f32 {
+        self.best.t
+    }
 }
 
 impl SceneBvh {
@@ -133,7 +140,7 @@ impl SceneBvh {
     }
 
     /// [`Self::closest_hit`] without its record.
-    pub(crate) fn closest_hit_ref(&self, ray: &Ray) -> Option<HitRef> {
+    pub fn closest_hit_ref(&self, ray: &Ray) -> Option<HitRef> {
         if !ray.is_valid() || self.leaf.is_empty() {
             return None;
         }
@@ -147,12 +154,12 @@ impl SceneBvh {
     }
 
     /// The instance (index into the built instances) that `hit` lies on.
-    pub(crate) fn hit_instance(&self, hit: &HitRef) -> u32 {
+    pub fn hit_instance(&self, hit: &HitRef) -> u32 {
         self.prim_instance[self.prim_of_slot(hit.best.slot) as usize]
     }
 
     /// The record of `hit`, a closest hit of `ray`: what [`Self::closest_hit`] returns.
-    pub(crate) fn hit_record(&self, ray: &Ray, hit: HitRef) -> Hit {
+    pub fn hit_record(&self, ray: &Ray, hit: HitRef) -> Hit {
         self.make_hit(ray, hit.best, hit.local)
     }
 
