@@ -47,6 +47,12 @@ pub(super) struct Stored {
 
 impl Stored {
     const EMPTY: Self = Self { light: NO_LIGHT, u: Vec2::ZERO, w: 0.0, m: 0.0 };
+
+    /// The light and the bits of u, W and M, for tests that compare reservoirs exactly.
+    #[cfg(test)]
+    pub(super) fn bits(&self) -> (LightId, [u32; 4]) {
+        (self.light, [self.u.x, self.u.y, self.w, self.m].map(f32::to_bits))
+    }
 }
 
 /// A reservoir kept for the next run: its light by entity (and triangle or shape index for
@@ -83,6 +89,12 @@ impl Reservoirs {
     pub fn clear_history(&mut self) {
         self.past.clear();
         self.past_points.clear();
+    }
+
+    /// This run's initial (RIS, then temporal) reservoirs, before spatial reuse.
+    #[cfg(test)]
+    pub(super) fn initial(&self) -> &[Stored] {
+        &self.current
     }
 }
 
