@@ -244,6 +244,14 @@ fn no_light_passes_under_a_wall() {
     for i in (0..256).filter(|i| matches!(i % 16, 7 | 8)) {
         assert_eq!(map.state[i], TexelState::Filled, "texel {i}");
     }
+    // Direct light alone (depth 1) from a point light: no BSDF ray can find light, but the leak
+    // test still traces the first ray, and drops the same samples.
+    let depth = PathDepth { max_depth: 1, ..PathDepth::DEFAULT };
+    let direct = bake(&dir, &doc, &LightmapOptions { size: 16, spp: 32, depth, ..LightmapOptions::default() }, |_| {});
+    assert_eq!(direct.lightmaps[0].leaked_samples, map.leaked_samples);
+    for i in (0..256).filter(|i| matches!(i % 16, 7 | 8)) {
+        assert_eq!(direct.lightmaps[0].state[i], TexelState::Filled, "texel {i} at depth 1");
+    }
 }
 
 /// A box standing on a floor under a uniform sky: a floor point outside the box sees at least half

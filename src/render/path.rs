@@ -120,6 +120,7 @@ impl Paths {
                 last: depth + 1 >= max_depth,
                 roulette: depth + 1 >= roulette_depth,
                 emission: depth == 0 && job.start == Start::Camera,
+                leak_probe: depth == 0 && matches!(job.start, Start::Surfaces { .. }),
                 direct: depth > 0 || !matches!(job.start, Start::Surfaces { direct: false, .. }),
             };
             let light_start = std::time::Instant::now();

@@ -411,6 +411,9 @@ pub(super) struct BounceRules {
     /// Whether the surface's own emission counts (a camera's first surface; no later one, whose
     /// emission the BSDF ray that found it weighs, and no lightmap texel).
     pub(super) emission: bool,
+    /// Whether the surface's BSDF ray is traced even where it can find no light: a bake's first
+    /// ray, whose hit the leak test reads (at depth 1 under delta lights alone, too).
+    pub(super) leak_probe: bool,
     /// Whether light that reaches the surface straight from a light counts: its light samples and
     /// the emitters its BSDF ray finds (false only for a texel baked as bounced light alone).
     pub(super) direct: bool,
@@ -433,8 +436,8 @@ impl ShadeContext<'_> {
         }
         let radiance = beta.mul(l);
         // The last surface's BSDF ray only looks for emitters: none to find (delta lights only, or
-        // light samples alone), none traced.
-        if rules.last && !self.bsdf_sampling() {
+        // light samples alone), none traced, unless the leak test reads it (it then finds nothing).
+        if rules.last && !rules.leak_probe && !self.bsdf_sampling() {
             return Bounce { radiance, next: None };
         }
         let dim = BSDF_DIMENSION + depth * BSDF_DIMENSIONS;
