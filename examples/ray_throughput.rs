@@ -46,13 +46,7 @@ fn best<T>(repeats: usize, mut run: impl FnMut() -> T) -> (f64, T) {
 
 /// Whether each ray hits something, from `closest_hit_ref` (the closest hit without its record).
 fn closest_refs(bvh: &SceneBvh, rays: &[Ray], out: &mut Vec<bool>) {
-    out.clear();
-    out.resize(rays.len(), false);
-    out.par_chunks_mut(RAY_CHUNK).zip(rays.par_chunks(RAY_CHUNK)).for_each(|(out, rays)| {
-        for (o, r) in out.iter_mut().zip(rays) {
-            *o = bvh.closest_hit_ref(r).is_some();
-        }
-    });
+    rays.par_iter().with_min_len(RAY_CHUNK).map(|r| bvh.closest_hit_ref(r).is_some()).collect_into_vec(out);
 }
 
 fn packet_hits(bvh: &SceneBvh, rays: &[Ray]) -> usize {

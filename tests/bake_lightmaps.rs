@@ -275,8 +275,8 @@ fn a_box_on_the_floor_does_not_darken_the_floor_beyond_its_contact() {
     };
     let report = bake_to(PathDepth::DEFAULT);
     let map = &report.lightmaps[0];
-    // Direct light alone (depth 1), where the first ray is also the last, whose hits need no
-    // record to find light: the leak test still reads them, and drops the same samples.
+    // Direct light alone (depth 1), where the first ray is also the last: the leak test still
+    // reads its hits, and drops the same samples.
     let direct = bake_to(PathDepth { max_depth: 1, ..PathDepth::DEFAULT });
     assert!(map.leaked_samples > 0);
     assert_eq!(direct.lightmaps[0].leaked_samples, map.leaked_samples);
