@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
-use kelvin::geometry::{GeometryId, Hit, RAY_CHUNK, Ray, SceneBvh, closest_hits, occluded, ray_columns};
+use kelvin::geometry::{GeometryId, Hit, HitLanes, RAY_CHUNK, Ray, SceneBvh, closest_hits, occluded, ray_columns};
 use kelvin::lanes::{self, LANES};
 use kelvin::systems::LightingPlugin;
 use rayon::prelude::*;
@@ -55,11 +55,11 @@ fn packet_hits(bvh: &SceneBvh, rays: &[Ray]) -> usize {
             lanes::widest(
                 #[inline(always)]
                 || {
-                    let mut hits = 0;
+                    let (mut hits, mut out) = (0, HitLanes::default());
                     for packet in chunk.chunks(LANES) {
                         let (o, d, t) = ray_columns(packet);
-                        let mut sink = |_: usize, hit: Option<Hit>| hits += hit.is_some() as usize;
-                        bvh.closest_hits_packet(&o, &d, &t, packet.len(), &mut sink);
+                        bvh.closest_hits_packet(&o, &d, &t, packet.len(), &mut out);
+                        hits += out.found.bits().count_ones() as usize;
                     }
                     hits
                 },

@@ -127,3 +127,24 @@ fn a_smooth_sphere_seen_from_inside_shades_with_its_smooth_normals() {
         assert!((got / want - 1.0).abs() < 2e-3, "toward {dir}: {got} vs {want}");
     }
 }
+
+/// Hard case: a grazing view of a sheet whose smooth normals lean 60 degrees away from the eye,
+/// so the view is below the shading hemisphere (wo . ns = -0.71) though above the surface. The
+/// camera pass bends the shading normal toward the geometric one until the view's mirror
+/// direction leaves the surface (`bent_shading_normal`); without it the pixel was black. The
+/// figure is the closed form with the bent normal, whose own property `render_bsdf` tests.
+#[test]
+fn a_grazing_view_below_the_smooth_normal_shades_with_the_bent_normal() {
+    let (lean, grazing) = (60f32.to_radians(), 75f32.to_radians());
+    let ns = Vec3::new(lean.sin(), lean.cos(), 0.0);
+    let wo = Vec3::new(-grazing.sin(), grazing.cos(), 0.0);
+    assert!(wo.dot(ns) < -0.7 && wo.y > 0.25, "the view is below the smooth normal, above the sheet");
+    let bent = kelvin::render::bsdf::bent_shading_normal(ns, Vec3::Y, wo);
+    assert!(bent.dot(wo) > 0.0, "the bent normal sees the view");
+    let h = 2.0;
+    let light = Vec3::new(0.0, h, 0.0);
+    let want = RHO / std::f32::consts::PI * CANDELA * bent.dot(Vec3::Y) / (h * h);
+    let got = render_one_pixel(sheet(ns, false), light, 1.5 * wo, -wo);
+    eprintln!("grazing view below the smooth normal: {got:.5} vs {want:.5}");
+    assert!((got / want - 1.0).abs() < 1e-3, "{got} vs {want}");
+}

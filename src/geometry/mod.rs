@@ -5,9 +5,11 @@
 //!   world-space triangle and analytic shape; see `bvh.rs` for the build / refit choices (their
 //!   measured costs: docs/performance.md), `refit.rs` for updates.
 //! - [`occluded`] and [`closest_hits`]: batched any-hit and closest-hit queries (rayon);
-//!   `SceneBvh::closest_hits_packet` and `occluded_packet` answer 16 rays at once (`packets.rs`).
+//!   `SceneBvh::closest_hits_packet` (hits as [`HitLanes`] columns, `hits.rs`) and `occluded_packet`
+//!   answer 16 rays at once (`packets.rs`).
 //! - [`offset_ray_origin`], [`SurfacePoint`]: robust shadow-ray endpoints with stated error bounds.
 pub mod bvh;
+mod hits;
 pub mod mesh;
 mod packets;
 pub mod ray;
@@ -20,7 +22,8 @@ mod wide;
 
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
 pub use mesh::Mesh;
-pub use packets::{HitSink, ray_columns};
+pub use hits::HitLanes;
+pub use packets::ray_columns;
 pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin, triangle_surface_point};
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};
 pub use transform::{Placement, Transform};

@@ -8,10 +8,11 @@ use glam::DVec3;
 use super::bvh::{GeometryId, SceneBvh};
 use super::ray::Ray;
 use super::triangle::ShearedRay;
-use super::visibility::{Best, FEW_PRIMITIVES, Hit, TriangleAttributes};
+use super::hits::{HitLanes, TriangleAttributes, TriangleLanes};
+use super::visibility::{Best, FEW_PRIMITIVES};
 use super::wide::PrimBlock;
 use super::wide::packet::{RayPacket, triangle_lanes};
-use crate::lanes::{F32x16, LANES, Vec3x16};
+use crate::lanes::{F32x16, LANES, Mask16, Vec3x16};
 
 /// No primitive: the `prim` of a lane without a hit.
 const NO_PRIM: u32 = u32::MAX;
@@ -25,20 +26,6 @@ struct Nearest {
     b: Vec3x16,
     local: [Option<DVec3>; LANES],
     redo: u32,
-}
-
-/// Where [`SceneBvh::closest_hits_packet`] hands its hits (a returned array of hits would be
-/// copied once more). Any `FnMut(lane, hit)` is one.
-pub trait HitSink {
-    /// The closest hit of lane `l` (None: the ray hit nothing).
-    fn hit(&mut self, l: usize, hit: Option<Hit>);
-}
-
-impl<F: FnMut(usize, Option<Hit>)> HitSink for F {
-    #[inline(always)]
-    fn hit(&mut self, l: usize, hit: Option<Hit>) {
-        self(l, hit)
-    }
 }
 
 /// Up to `LANES` rays as the lane columns the packet queries take: origins, directions and
@@ -55,22 +42,16 @@ pub fn ray_columns(rays: &[Ray]) -> (Vec3x16, Vec3x16, F32x16) {
 
 impl SceneBvh {
     /// The closest hit of each of the first `n` rays `origin[l] + t dir[l]`, t in (0, `t_max[l]`],
-    /// handed to `out` lane by lane (lanes past `n` are not reported). Run it inside
+    /// written to `out`'s lane columns (lanes past `n` are found nothing). Run it inside
     /// `lanes::widest` so that the lane loops compile to vector code.
     #[inline(always)]
-    pub fn closest_hits_packet(
-        &self,
-        origin: &Vec3x16,
-        dir: &Vec3x16,
-        t_max: &F32x16,
-        n: usize,
-        out: &mut impl HitSink,
-    ) {
+    pub fn closest_hits_packet(&self, origin: &Vec3x16, dir: &Vec3x16, t_max: &F32x16, n: usize, out: &mut HitLanes) {
         let ray = |l: usize| Ray { origin: origin.lane(l), dir: dir.lane(l), t_max: t_max[l] };
+        out.found = Mask16::splat(false);
         if self.leaf.len() <= FEW_PRIMITIVES {
             // No tree walk pays for so few primitives (as `closest_hit`).
             for l in 0..n {
-                out.hit(l, self.closest_hit(&ray(l)));
+                out.set(l, self.closest_hit(&ray(l)));
             }
             return;
         }
@@ -169,30 +150,40 @@ impl SceneBvh {
                 0
             },
         );
-        // Coherent lanes mostly hit one triangle: its shared data is looked up once per run.
-        let mut shared: Option<(u32, TriangleAttributes)> = None;
+        // Triangle hits go to lane columns, their surfaces computed together; coherent lanes mostly
+        // hit one triangle, whose shared data is looked up once per run. The rest are set over.
+        let mut triangles = TriangleLanes::new();
+        let (mut shared, mut others) = (None::<(u32, TriangleAttributes)>, 0u32);
         for l in 0..n {
-            let hit = if rays.valid & (1 << l) == 0 {
-                None
-            } else if !complete || st.redo & (1 << l) != 0 {
+            let unsure = !complete || st.redo & (1 << l) != 0;
+            if rays.valid & (1 << l) == 0 || (!unsure && st.prim[l] == NO_PRIM) {
+                continue;
+            }
+            if unsure || st.local[l].is_some() {
+                others |= 1 << l;
+                continue;
+            }
+            let attributes = match shared {
+                Some((p, a)) if p == st.prim[l] => a,
+                _ => {
+                    let a = self.triangle_attributes(st.prim[l], st.slot[l] as usize);
+                    shared = Some((st.prim[l], a));
+                    a
+                }
+            };
+            triangles.set(l, &attributes, best_t[l], out);
+        }
+        triangles.surfaces(&st.b, out);
+        while others != 0 {
+            let l = others.trailing_zeros() as usize;
+            others &= others - 1;
+            let hit = if !complete || st.redo & (1 << l) != 0 {
                 self.closest_hit_each(&ray(l))
-            } else if st.prim[l] == NO_PRIM {
-                None
-            } else if st.local[l].is_some() {
+            } else {
                 let best = Best { t: best_t[l], slot: st.slot[l] as usize, b: [0.0; 3] };
                 Some(self.make_hit(&ray(l), best, st.local[l]))
-            } else {
-                let attributes = match shared {
-                    Some((p, a)) if p == st.prim[l] => a,
-                    _ => {
-                        let a = self.triangle_attributes(st.prim[l], st.slot[l] as usize);
-                        shared = Some((st.prim[l], a));
-                        a
-                    }
-                };
-                Some(attributes.hit(best_t[l], [st.b[0][l], st.b[1][l], st.b[2][l]]))
             };
-            out.hit(l, hit);
+            out.set(l, hit);
         }
     }
 
@@ -309,7 +300,7 @@ mod tests {
     use glam::{Quat, Vec2, Vec3};
 
     use crate::geometry::{
-        GeometryId, GeometryInstance, GeometryRef, Hit, Mesh, Ray, SceneBvh, Shape, Sphere, Transform,
+        GeometryId, GeometryInstance, GeometryRef, Hit, HitLanes, Mesh, Ray, SceneBvh, Shape, Sphere, Transform,
     };
     use crate::lanes::{F32x16, LANES, Vec3x16};
     use crate::rng::SplitMix64;
@@ -410,19 +401,19 @@ mod tests {
             let n = if case % 5 == 0 { 1 + case % LANES } else { LANES };
             let (o, d, t) = super::ray_columns(&rays);
             for wide in [false, true] {
-                let mut got: [Option<Option<Hit>>; LANES] = [None; LANES];
-                let mut sink = |l: usize, h: Option<Hit>| got[l] = Some(h);
+                let mut out = HitLanes::default();
                 if wide {
-                    crate::lanes::widest(|| bvh.closest_hits_packet(&o, &d, &t, n, &mut sink));
+                    crate::lanes::widest(|| bvh.closest_hits_packet(&o, &d, &t, n, &mut out));
                 } else {
-                    bvh.closest_hits_packet(&o, &d, &t, n, &mut sink);
+                    bvh.closest_hits_packet(&o, &d, &t, n, &mut out);
                 }
+                let got: [Option<Hit>; LANES] = std::array::from_fn(|l| out.hit(l));
                 // Any-hit from an origin on the lane's first hit (which then does not block it,
                 // unless it is a sphere), or from nowhere.
                 let mut origins = [GeometryId::NONE; LANES];
                 for (l, ray) in rays.iter().enumerate() {
                     let want = (l < n).then(|| bvh.closest_hit(ray));
-                    assert_eq!(got[l], want, "case {case}, lane {l}, {ray:?}");
+                    assert_eq!(got[l], want.flatten(), "case {case}, lane {l}, {ray:?}");
                     hits += want.flatten().is_some() as usize;
                     exact_cases += (case % 4 == 2 && want.flatten().is_some()) as usize;
                     if l % 2 == 0 {

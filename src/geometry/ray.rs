@@ -21,7 +21,7 @@
 
 use glam::{DVec3, Vec3};
 
-use crate::lanes::{F32x16, Vec3x16};
+use crate::lanes::{F32x16, Real, Vec3x16, Vector};
 
 /// Unit roundoff of f32 round-to-nearest: half the distance from 1 to the next float (2^-24).
 pub const F32_UNIT_ROUNDOFF: f32 = f32::EPSILON * 0.5;
@@ -213,9 +213,11 @@ pub fn f64_point_error(p64: DVec3, abs_terms: DVec3) -> Vec3 {
 }
 
 /// The bound pbrt-v4 uses for a point interpolated from triangle vertices with barycentrics
-/// `b` (from the watertight test or from sampling): `gamma(7) * sum_i |b_i v_i|`.
-pub fn triangle_point_error(v: &[Vec3; 3], b: [f32; 3]) -> Vec3 {
-    gamma(7) * ((b[0] * v[0]).abs() + (b[1] * v[1]).abs() + (b[2] * v[2]).abs())
+/// `b` (from the watertight test or from sampling): `gamma(7) * sum_i |b_i v_i|`. For one point
+/// (`Vec3`) or a lane of them (`Vec3x16`).
+#[inline(always)]
+pub fn triangle_point_error<V: Vector>(v: &[V; 3], b: [V::Real; 3]) -> V {
+    ((v[0] * b[0]).abs() + (v[1] * b[1]).abs() + (v[2] * b[2]).abs()) * V::Real::splat(gamma(7))
 }
 
 /// A point on triangle `v` at barycentrics `b` (b0 + b1 + b2 = 1), with its error bound and unit

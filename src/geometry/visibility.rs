@@ -14,7 +14,7 @@ use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::bvh::{GeometryId, NO_SHAPE, SceneBvh};
-use super::ray::{Ray, SurfacePoint, triangle_point_error};
+use super::ray::{Ray, SurfacePoint};
 use super::triangle::ShearedRay;
 use super::wide::{PrimBlock, triangle_block_hits};
 
@@ -371,60 +371,6 @@ impl SceneBvh {
             return Hit { t: best.t, p: sp.p, p_error: sp.p_error, ng: sp.n, ns: sp.n, uv, id, material, instance };
         }
         self.triangle_attributes(self.prim_of_slot(best.slot), best.slot).hit(best.t, best.b)
-    }
-
-    /// What every hit on the triangle in leaf slot `slot` (input primitive `prim`) shares.
-    #[inline(always)]
-    pub(super) fn triangle_attributes(&self, prim: u32, slot: usize) -> TriangleAttributes {
-        let (instance, id, material) = self.id_of(prim);
-        let v = self.leaf[slot].v;
-        let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or(Vec3::Z);
-        let (mut normals, mut uvs) = (None, None);
-        if let Some(mesh) = self.mesh_of(instance) {
-            let idx = mesh.triangle_indices(id.primitive as usize).map(|k| k as usize);
-            if let Some(n) = mesh.normals() {
-                let tr = self.instances[instance as usize].transform;
-                normals = Some(([n[idx[0]], n[idx[1]], n[idx[2]]], tr));
-            }
-            uvs = mesh.uvs().map(|t| [t[idx[0]], t[idx[1]], t[idx[2]]]);
-        }
-        TriangleAttributes { v, ng, normals, uvs, id, material, instance }
-    }
-}
-
-/// A triangle's data that its hits share: world vertices and unit normal, the mesh's vertex
-/// normals (object space, with the instance's transform) and uvs, and its ids.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct TriangleAttributes {
-    v: [Vec3; 3],
-    ng: Vec3,
-    normals: Option<([Vec3; 3], crate::geometry::Transform)>,
-    uvs: Option<[Vec2; 3]>,
-    id: GeometryId,
-    material: u32,
-    instance: u32,
-}
-
-impl TriangleAttributes {
-    /// The hit record at parameter `t` and barycentrics `b`.
-    #[inline(always)]
-    pub(super) fn hit(&self, t: f32, b: [f32; 3]) -> Hit {
-        let v = &self.v;
-        let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
-        let mut ns = self.ng;
-        if let Some((n, transform)) = self.normals {
-            let local = b[0] * n[0] + b[1] * n[1] + b[2] * n[2];
-            let world = transform.transform_normal(local).normalize_or_zero();
-            if world.is_finite() && world != Vec3::ZERO {
-                ns = world;
-            }
-        }
-        let uv = match self.uvs {
-            Some(t) => b[0] * t[0] + b[1] * t[1] + b[2] * t[2],
-            None => Vec2::new(b[1], b[2]),
-        };
-        let (id, material, instance) = (self.id, self.material, self.instance);
-        Hit { t, p, p_error: triangle_point_error(v, b), ng: self.ng, ns, uv, id, material, instance }
     }
 }
 

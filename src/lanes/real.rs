@@ -74,6 +74,8 @@ pub trait Vector:
     fn dot(self, o: Self) -> Self::Real;
     fn cross(self, o: Self) -> Self;
     fn length(self) -> Self::Real;
+    /// Each component's magnitude.
+    fn abs(self) -> Self;
     fn is_finite(self) -> <Self::Real as Real>::Mask;
     /// `yes` where `mask` holds, else `no`.
     fn select(mask: <Self::Real as Real>::Mask, yes: Self, no: Self) -> Self;
@@ -178,6 +180,10 @@ impl Vector for Vec3 {
     #[inline(always)]
     fn length(self) -> f32 {
         Vec3::length(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Vec3::abs(self)
     }
     #[inline(always)]
     fn is_finite(self) -> bool {
@@ -331,6 +337,10 @@ impl Vector for Vec3x16 {
     #[inline(always)]
     fn length(self) -> F32x16 {
         Vec3x16::length(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        self.map(F32x16::abs)
     }
     #[inline(always)]
     fn is_finite(self) -> Mask16 {

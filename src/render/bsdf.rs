@@ -14,6 +14,7 @@ use std::f32::consts::{FRAC_1_PI, PI, TAU};
 
 use glam::{Vec2, Vec3};
 
+use crate::lanes::{Real, Vector};
 use crate::sampling::{Frame, cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::spectrum::SampledSpectrum;
 
@@ -92,11 +93,11 @@ fn sample_visible_normal(o: Vec3, alpha: f32, u: Vec2) -> Vec3 {
 /// `wo` is then above the shading hemisphere too, so a smooth or normal-mapped surface seen at a
 /// grazing angle is shaded, not black. Unchanged where the mirror direction already leaves.
 pub fn bent_shading_normal(ns: Vec3, ng: Vec3, wo: Vec3) -> Vec3 {
-    let iz = wo.dot(ng);
-    let threshold = (0.9 * iz).min(0.01);
-    if !(iz > 0.0) || 2.0 * ns.dot(wo) * ns.dot(ng) - iz >= threshold {
+    if shading_normal_stands(ns, ng, wo) {
         return ns;
     }
+    let iz = wo.dot(ng);
+    let threshold = (0.9 * iz).min(0.01);
     // In the plane of ng and ns, n(t) = sin t x + cos t ng reflects wo to a cosine of
     // 2 (n.wo)(n.ng) - iz = a cos(2t - phi) with ng: solve for the threshold, keep the root
     // nearer the original normal.
@@ -110,6 +111,15 @@ pub fn bent_shading_normal(ns: Vec3, ng: Vec3, wo: Vec3) -> Vec3 {
     let normal = |t: f32| x * t.sin() + ng * t.cos();
     let (plus, minus) = (normal(0.5 * (phi + spread)), normal(0.5 * (phi - spread)));
     if plus.dot(ns) >= minus.dot(ns) { plus } else { minus }
+}
+
+/// Where [`bent_shading_normal`] leaves `ns` as it is: `wo` below the surface (nothing to bend
+/// toward), or the mirror direction of `wo` about `ns` already leaving. For one normal or a lane.
+#[inline(always)]
+pub fn shading_normal_stands<V: Vector>(ns: V, ng: V, wo: V) -> <V::Real as Real>::Mask {
+    let iz = wo.dot(ng);
+    let threshold = (iz * 0.9).min(V::Real::splat(0.01));
+    !iz.gt(V::Real::splat(0.0)) | (ns.dot(wo) * 2.0 * ns.dot(ng) - iz).ge(threshold)
 }
 
 impl Bsdf {

@@ -5,10 +5,10 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::bsdf::bent_shading_normal;
+use super::bsdf::{bent_shading_normal, shading_normal_stands};
 use super::camera::CameraModel;
-use crate::geometry::{GeometryId, Hit, HitSink, RAY_CHUNK, SceneBvh};
-use crate::lanes::{F32x16, LANES, Vec3x16};
+use crate::geometry::{GeometryId, Hit, HitLanes, RAY_CHUNK, SceneBvh};
+use crate::lanes::{F32x16, LANES, U32x16, Vec3x16};
 use crate::rng::{Pattern, SampleStream};
 use crate::shading::{ImageLayout, ShadingBatch};
 
@@ -99,46 +99,67 @@ pub(super) struct SampleRange {
     pub(super) first_sample: u32,
 }
 
-/// Writes slot `i` of every column for a ray with direction `dir` and closest hit `hit`. Escaped
-/// rays get a NaN position (the light system chooses no light there) and zero normals.
+/// Writes slots `b..b + n` of every column for a block of rays with unit directions `dirs` and
+/// closest hits `hits`, in lanes. Escaped rays get a NaN position (the light system chooses no
+/// light there) and zero normals.
 #[inline(always)]
-fn write_slot(batch: &mut BatchChunk, i: usize, dir: Vec3, hit: Option<Hit>) {
-    let Some(h) = hit else {
-        (batch.position[i], batch.position_error[i]) = (Vec3::NAN, Vec3::ZERO);
-        (batch.normal[i], batch.shading_normal[i]) = (Vec3::ZERO, Vec3::ZERO);
-        batch.geometry[i] = GeometryId::NONE;
-        batch.set_surface(i, dir, SampleSurface::ESCAPED);
-        return;
-    };
+fn write_block(batch: &mut BatchChunk, b: usize, n: usize, dirs: &Vec3x16, hits: &HitLanes) {
+    let found = hits.found;
     // Normals face the viewer.
-    let flipped = h.ng.dot(dir) > 0.0;
-    let flip = if flipped { -1.0 } else { 1.0 };
+    let flipped = hits.ng.dot(*dirs).gt(F32x16::ZERO) & found;
+    let flip = F32x16::select(flipped, F32x16::splat(-1.0), F32x16::ONE);
+    let ng = hits.ng * flip;
     // The shading normal goes to the geometric one's side (`ns . ng` does not change sign when
     // both turn): one whose file disagrees with the winding is turned over, not flattened.
-    let ns = if h.ns.dot(h.ng) < 0.0 { -h.ns * flip } else { h.ns * flip };
-    let ns = bent_shading_normal(ns, h.ng * flip, -dir);
-    (batch.position[i], batch.position_error[i]) = (h.p, h.p_error);
-    (batch.normal[i], batch.shading_normal[i]) = (h.ng * flip, ns);
-    batch.geometry[i] = h.id;
-    let surface =
-        SampleSurface { uv: h.uv, material: h.material, instance: h.instance, primitive: h.id.primitive, flipped };
-    batch.set_surface(i, dir, surface);
+    let mut ns = Vec3x16::select(hits.ns.dot(hits.ng).lt(F32x16::ZERO), -hits.ns * flip, hits.ns * flip);
+    let wo = -*dirs;
+    let mut bend = (!shading_normal_stands(ns, ng, wo) & found).bits() & (u32::MAX >> (LANES - n));
+    while bend != 0 {
+        let l = bend.trailing_zeros() as usize;
+        bend &= bend - 1;
+        ns.set_lane(l, bent_shading_normal(ns.lane(l), ng.lane(l), wo.lane(l)));
+    }
+    let none = GeometryId::NONE;
+    store_vec3s(batch.position, b, n, Vec3x16::select(found, hits.p, Vec3x16::splat(Vec3::NAN)));
+    store_vec3s(batch.position_error, b, n, Vec3x16::select(found, hits.p_error, Vec3x16::ZERO));
+    store_vec3s(batch.normal, b, n, Vec3x16::select(found, ng, Vec3x16::ZERO));
+    store_vec3s(batch.shading_normal, b, n, Vec3x16::select(found, ns, Vec3x16::ZERO));
+    let entity_index = U32x16::select(found, hits.entity_index, U32x16::splat(none.entity_index));
+    let primitive = U32x16::select(found, hits.primitive, U32x16::splat(none.primitive));
+    for l in 0..n {
+        batch.geometry[b + l] = GeometryId { entity_index: entity_index.0[l], primitive: primitive.0[l] };
+    }
+    for (a, dir) in dirs.as_array().iter().enumerate() {
+        store(batch.dir[a], b, n, dir.0);
+    }
+    for (a, uv) in hits.uv.iter().enumerate() {
+        store(batch.uv[a], b, n, F32x16::select(found, *uv, F32x16::ZERO).0);
+    }
+    store(batch.material, b, n, U32x16::select(found, hits.material, U32x16::splat(0)).0);
+    let escaped = SampleSurface::ESCAPED.instance;
+    store(batch.instance, b, n, U32x16::select(found, hits.instance, U32x16::splat(escaped)).0);
+    store(batch.flipped, b, n, flipped.to_bools());
 }
 
-/// Writes the closest hits of the block of camera rays from slot `b` of a chunk.
-struct SlotWriter<'c, 'a> {
-    chunk: &'c mut BatchChunk<'a>,
-    b: usize,
-    /// Lanes that are samples (the chunk's last block may be partial).
-    n: usize,
-    dirs: &'c Vec3x16,
+/// Stores the first `n` lanes at `column[b..]`: a whole block as one copy of known length (a
+/// vector store; a variable one calls memmove).
+#[inline(always)]
+fn store<T: Copy>(column: &mut [T], b: usize, n: usize, lanes: [T; LANES]) {
+    if n == LANES {
+        column[b..b + LANES].copy_from_slice(&lanes);
+    } else {
+        column[b..b + n].copy_from_slice(&lanes[..n]);
+    }
 }
 
-impl HitSink for SlotWriter<'_, '_> {
-    #[inline(always)]
-    fn hit(&mut self, l: usize, hit: Option<Hit>) {
-        if l < self.n {
-            write_slot(self.chunk, self.b + l, self.dirs.lane(l), hit);
+/// [`store`] for vectors.
+#[inline(always)]
+fn store_vec3s(column: &mut [Vec3], b: usize, n: usize, lanes: Vec3x16) {
+    if n == LANES {
+        lanes.store_vec3s((&mut column[b..b + LANES]).try_into().expect("a block of LANES slots"));
+    } else {
+        for l in 0..n {
+            column[b + l] = lanes.lane(l);
         }
     }
 }
@@ -157,19 +178,6 @@ struct BatchChunk<'a> {
     material: &'a mut [u32],
     instance: &'a mut [u32],
     flipped: &'a mut [bool],
-}
-
-impl BatchChunk<'_> {
-    /// Writes slot `i` of the `CameraColumns`.
-    #[inline(always)]
-    fn set_surface(&mut self, i: usize, dir: Vec3, surface: SampleSurface) {
-        for a in 0..3 {
-            self.dir[a][i] = dir[a];
-        }
-        (self.uv[0][i], self.uv[1][i]) = surface.uv.into();
-        (self.material[i], self.instance[i]) = (surface.material, surface.instance);
-        self.flipped[i] = surface.flipped;
-    }
 }
 
 /// Traces the camera rays of `range` and writes every slot of `batch` (resized to `range.len`,
@@ -210,11 +218,22 @@ pub(super) fn write_found_surfaces(batch: &mut ShadingBatch, columns: &mut Camer
     // The surviving paths' surfaces are no image.
     batch.layout = None;
     for_each_chunk(batch, columns, surfaces.len(), |c, chunk| {
-        let first = c * RAY_CHUNK;
-        for (i, s) in surfaces[first..first + chunk.pixel.len()].iter().enumerate() {
-            (chunk.pixel[i], chunk.sample[i]) = (s.pixel, s.sample);
-            write_slot(chunk, i, s.dir, Some(s.hit));
-        }
+        let surfaces = &surfaces[c * RAY_CHUNK..c * RAY_CHUNK + chunk.pixel.len()];
+        crate::lanes::widest(
+            #[inline(always)]
+            || {
+                let (mut hits, mut dirs) = (HitLanes::default(), Vec3x16::ZERO);
+                for (k, block) in surfaces.chunks(LANES).enumerate() {
+                    for (l, s) in block.iter().enumerate() {
+                        let i = k * LANES + l;
+                        (chunk.pixel[i], chunk.sample[i]) = (s.pixel, s.sample);
+                        hits.set(l, Some(s.hit));
+                        dirs.set_lane(l, s.dir);
+                    }
+                    write_block(chunk, k * LANES, block.len(), &dirs, &hits);
+                }
+            },
+        )
     });
 }
 
@@ -286,6 +305,7 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
     let len = chunk.pixel.len();
     let origin = camera.origin();
     let origins = Vec3x16::splat(origin);
+    let mut hits = HitLanes::default();
     let mut b = 0;
     while b < len {
         let end = (b + LANES).min(len);
@@ -335,8 +355,8 @@ fn trace_chunk(chunk: &mut BatchChunk, first: usize, bvh: &SceneBvh, camera: &Ca
             SampleStream::lanes::<3>(pattern, seed, &pixel, &sample)
         };
         let dirs = camera.dirs_lanes([&x, &y], &u, &v);
-        let mut writer = SlotWriter { chunk: &mut *chunk, b, n: end - b, dirs: &dirs };
-        bvh.closest_hits_packet(&origins, &dirs, &F32x16::splat(f32::INFINITY), end - b, &mut writer);
+        bvh.closest_hits_packet(&origins, &dirs, &F32x16::splat(f32::INFINITY), end - b, &mut hits);
+        write_block(chunk, b, end - b, &dirs, &hits);
         b = end;
     }
 }
