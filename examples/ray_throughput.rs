@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
-use kelvin::geometry::{GeometryId, Hit, HitLanes, RAY_CHUNK, Ray, SceneBvh, closest_hits, occluded, ray_columns};
+use kelvin::geometry::{GeometryId, HitLanes, RAY_CHUNK, Ray, SceneBvh, closest_hits, occluded, ray_columns};
 use kelvin::lanes::{self, LANES};
 use kelvin::systems::LightingPlugin;
 use rayon::prelude::*;
