@@ -21,9 +21,9 @@ pub mod visibility;
 mod wide;
 
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
-pub use mesh::Mesh;
 pub use hits::HitLanes;
-pub use packets::ray_columns;
+pub use mesh::Mesh;
+pub use packets::{closest_hits_in_packets, ray_columns};
 pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin, triangle_surface_point};
 pub use shapes::{Disk, PlacedShape, Rectangle, Shape, ShapeHit, Sphere};
 pub use transform::{Placement, Transform};

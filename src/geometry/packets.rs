@@ -4,12 +4,13 @@
 //! [`SceneBvh::closest_hit`]'s (or [`SceneBvh::occluded_from`]'s).
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::bvh::{GeometryId, SceneBvh};
+use super::hits::{HitLanes, TriangleAttributes, TriangleLanes};
 use super::ray::Ray;
 use super::triangle::ShearedRay;
-use super::hits::{HitLanes, TriangleAttributes, TriangleLanes};
-use super::visibility::{Best, FEW_PRIMITIVES};
+use super::visibility::{Best, FEW_PRIMITIVES, Hit, RAY_CHUNK};
 use super::wide::PrimBlock;
 use super::wide::packet::{RayPacket, triangle_lanes};
 use crate::lanes::{F32x16, LANES, Mask16, Vec3x16};
@@ -38,6 +39,41 @@ pub fn ray_columns(rays: &[Ray]) -> (Vec3x16, Vec3x16, F32x16) {
         t[l] = r.t_max;
     }
     (o, d, t)
+}
+
+/// The closest hit of rays `ray(0..n)` (None for misses and invalid rays) into `out`, cleared and
+/// refilled: as [`closest_hits`](super::closest_hits), traced as packets of [`LANES`] consecutive
+/// rays, for batches whose neighbouring rays share a path (a pixel's samples, their bounces).
+pub fn closest_hits_in_packets(
+    bvh: &SceneBvh,
+    n: usize,
+    ray: impl Fn(usize) -> Ray + Sync,
+    out: &mut Vec<Option<Hit>>,
+) {
+    out.clear();
+    out.resize(n, None);
+    out.par_chunks_mut(RAY_CHUNK).enumerate().for_each(|(c, out)| {
+        crate::lanes::widest(
+            #[inline(always)]
+            || {
+                let mut hits = HitLanes::default();
+                for (k, out) in out.chunks_mut(LANES).enumerate() {
+                    let first = c * RAY_CHUNK + k * LANES;
+                    let (mut o, mut d, mut t) = (Vec3x16::ZERO, Vec3x16::ZERO, F32x16::ZERO);
+                    for l in 0..out.len() {
+                        let r = ray(first + l);
+                        o.set_lane(l, r.origin);
+                        d.set_lane(l, r.dir);
+                        t[l] = r.t_max;
+                    }
+                    bvh.closest_hits_packet(&o, &d, &t, out.len(), &mut hits);
+                    for (l, out) in out.iter_mut().enumerate() {
+                        *out = hits.hit(l);
+                    }
+                }
+            },
+        )
+    });
 }
 
 impl SceneBvh {
@@ -350,6 +386,38 @@ mod tests {
             SINGLE_RAY_LANES_FOR_TESTS.with(|c| c.set(threshold));
             packets_match_one_ray_at_a_time_at_this_threshold();
         }
+    }
+
+    /// A batch traced in packets gets `closest_hits`'s answers ray for ray: 1,000 rays (a partial
+    /// rayon chunk and a partial packet at the end), in groups of 16 from one origin as a pixel's
+    /// bounces, others random, some invalid, on a sheared instance with vertex normals and uvs.
+    #[test]
+    fn batches_in_packets_match_closest_hits() {
+        let mut rng = SplitMix64::new(5);
+        let (soup, _) = scene(&mut rng);
+        let sheared = Transform { shear: Vec3::new(0.4, -0.3, 0.2), ..Transform::from_translation(Vec3::X) };
+        let bvh = SceneBvh::build(&[GeometryInstance {
+            geometry: GeometryRef::Mesh(&soup),
+            transform: sheared,
+            entity_index: 3,
+            material: 1,
+        }]);
+        let rays: Vec<Ray> = (0..1000)
+            .map(|k| {
+                let origin = if k % 32 < 16 {
+                    Vec3::new(0.0, 0.0, 7.0) + Vec3::X * (k / 32) as f32 * 0.1
+                } else {
+                    v(&mut rng, 6.0)
+                };
+                let t_max = if k % 97 == 0 { 0.0 } else { f32::INFINITY };
+                Ray { origin, dir: v(&mut rng, 2.0) - origin, t_max }
+            })
+            .collect();
+        let (mut want, mut got) = (Vec::new(), Vec::new());
+        crate::geometry::closest_hits(&bvh, &rays, &mut want);
+        super::closest_hits_in_packets(&bvh, rays.len(), |k| rays[k], &mut got);
+        assert!(want.iter().filter(|h| h.is_some()).count() > 200, "the rays find the mesh");
+        assert_eq!(got, want);
     }
 
     fn packets_match_one_ray_at_a_time_at_this_threshold() {

@@ -18,7 +18,7 @@ use super::material::Material;
 use super::normal_map::apply_normal_maps;
 use super::renderer::{RenderStats, Strategy, to_rgb};
 use super::shade::{Bounce, BounceRules, BsdfRay, Continuation, Materials, ShadeContext};
-use crate::geometry::{Hit, RAY_CHUNK, SceneBvh};
+use crate::geometry::{Hit, RAY_CHUNK, SceneBvh, closest_hits_in_packets};
 use crate::lanes::LANES;
 use crate::light::ColorQuery;
 use crate::rng::mix64;
@@ -203,8 +203,8 @@ impl Paths {
     /// they hit for the next bounce unless this one was the last.
     fn follow(&mut self, ctx: &ShadeContext, rules: BounceRules) {
         let bvh: &SceneBvh = ctx.bvh;
-        self.hits.clear();
-        self.hits.par_extend(self.continuations.par_iter().with_min_len(64).map(|(_, c)| bvh.closest_hit(&c.ray)));
+        let continuations = &self.continuations;
+        closest_hits_in_packets(bvh, continuations.len(), |k| continuations[k].1.ray, &mut self.hits);
         let wavelengths = &self.wavelengths;
         // In blocks of `LANES` rays, whose light is found together (see `found_by_bsdf_rays`).
         self.found.clear();
