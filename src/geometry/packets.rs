@@ -78,7 +78,7 @@ pub fn closest_hits_in_packets(
 
 impl SceneBvh {
     /// The closest hit of each of the first `n` rays `origin[l] + t dir[l]`, t in (0, `t_max[l]`],
-    /// written to `out`'s lane columns (lanes past `n` are found nothing). Run it inside
+    /// written to `out`'s lane columns (`found` is false past `n`). Run it inside
     /// `lanes::widest` so that the lane loops compile to vector code.
     #[inline(always)]
     pub fn closest_hits_packet(&self, origin: &Vec3x16, dir: &Vec3x16, t_max: &F32x16, n: usize, out: &mut HitLanes) {
