@@ -5,10 +5,9 @@
 //! by area, so no sample lies outside a triangle and a texel half covered is sampled on its
 //! covered half only.
 
-use glam::{DVec2, Vec2, Vec3};
+use glam::{DVec2, Vec2};
 
-use crate::geometry::ray::triangle_point_error;
-use crate::geometry::{GeometryId, Mesh};
+use crate::geometry::{GeometryId, Mesh, mesh_point};
 use crate::render::surface_paths::StartPoint;
 use crate::sampling::sample_uniform_triangle;
 
@@ -131,17 +130,11 @@ impl Coverage {
         let b = [(1.0 - b12.x - b12.y).max(0.0), b12.x, b12.y];
         let surface = &surfaces[piece.surface as usize];
         let t = piece.triangle as usize;
-        let v = surface.mesh.triangle(t);
-        let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
-        let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or(Vec3::Z);
-        let ns = surface.mesh.normals().map_or(ng, |n| {
-            let [i0, i1, i2] = surface.mesh.triangle_indices(t).map(|i| i as usize);
-            let ns = (b[0] * n[i0] + b[1] * n[i1] + b[2] * n[i2]).normalize_or(ng);
-            // As the camera pass does: a vertex normal against the winding turns over, not flat.
-            if ns.dot(ng) < 0.0 { -ns } else { ns }
-        });
+        let (p, p_error, ng, ns) = mesh_point(&surface.mesh, t, b);
+        // As the camera pass does: a vertex normal against the winding turns over, not flat.
+        let ns = if ns.dot(ng) < 0.0 { -ns } else { ns };
         let geometry = GeometryId { entity_index: surface.entity_index, primitive: piece.triangle };
-        StartPoint { p, p_error: triangle_point_error(&v, b), ng, ns, geometry, pixel, sample }
+        StartPoint { p, p_error, ng, ns, geometry, pixel, sample }
     }
 }
 
@@ -195,6 +188,7 @@ fn clip_to_texel(tri: &[DVec2; 3], x: f64, y: f64) -> Vec<DVec2> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     fn quad_surface(uv: [Vec2; 4]) -> Surface {
         let positions = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, -1.0), Vec3::NEG_Z];

@@ -5,6 +5,7 @@
 use glam::{Vec2, Vec3};
 
 use super::bvh::{GeometryId, SceneBvh};
+use super::mesh::Mesh;
 use super::ray::triangle_point_error;
 use super::visibility::Hit;
 use crate::lanes::{F32x16, Mask16, Real, U32x16, Vec3x16, Vector};
@@ -81,6 +82,18 @@ impl SceneBvh {
         }
         TriangleAttributes { v, ng, normals, uvs, id, material, instance }
     }
+}
+
+/// The point of triangle `t` of a world-space mesh at barycentrics `b` as a hit there has it: the
+/// point, its error bound, the unit geometric normal and the shading normal (as `surface_at`, not
+/// yet turned to the geometric normal's side). For points that start paths on a surface (bakes).
+pub(crate) fn mesh_point(mesh: &Mesh, t: usize, b: [f32; 3]) -> (Vec3, Vec3, Vec3, Vec3) {
+    let v = mesh.triangle(t);
+    let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or(Vec3::Z);
+    let normals = mesh.normals().map_or([Vec3::ZERO; 3], |n| mesh.triangle_indices(t).map(|k| n[k as usize]));
+    let uv = BARYCENTRIC_UVS.map(|t| [t.x, t.y]);
+    let (p, p_error, ns, _) = surface_at(&v, ng, &normals, &uv, b);
+    (p, p_error, ng, ns)
 }
 
 /// The closest hits of up to [`LANES`] rays as lane columns, one per field of [`Hit`]; lane `l`

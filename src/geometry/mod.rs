@@ -22,6 +22,7 @@ mod wide;
 
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
 pub use hits::HitLanes;
+pub(crate) use hits::mesh_point;
 pub use mesh::Mesh;
 pub use packets::{closest_hits_in_packets, ray_columns};
 pub use ray::{Ray, SHADOW_EPSILON, ShadowOffset, SurfacePoint, offset_ray_origin, triangle_surface_point};
