@@ -32,8 +32,14 @@ struct Nearest {
 /// Up to `LANES` rays as the lane columns the packet queries take: origins, directions and
 /// t_max (lanes past `rays.len()` are zero, and a query told `n = rays.len()` ignores them).
 pub fn ray_columns(rays: &[Ray]) -> (Vec3x16, Vec3x16, F32x16) {
+    columns_of(rays.iter().copied())
+}
+
+/// [`ray_columns`] of the first `LANES` rays of `rays`.
+#[inline(always)]
+fn columns_of(rays: impl Iterator<Item = Ray>) -> (Vec3x16, Vec3x16, F32x16) {
     let (mut o, mut d, mut t) = (Vec3x16::ZERO, Vec3x16::ZERO, F32x16::ZERO);
-    for (l, r) in rays.iter().take(LANES).enumerate() {
+    for (l, r) in rays.take(LANES).enumerate() {
         o.set_lane(l, r.origin);
         d.set_lane(l, r.dir);
         t[l] = r.t_max;
@@ -59,13 +65,7 @@ pub fn closest_hits_in_packets(
                 let mut hits = HitLanes::default();
                 for (k, out) in out.chunks_mut(LANES).enumerate() {
                     let first = c * RAY_CHUNK + k * LANES;
-                    let (mut o, mut d, mut t) = (Vec3x16::ZERO, Vec3x16::ZERO, F32x16::ZERO);
-                    for l in 0..out.len() {
-                        let r = ray(first + l);
-                        o.set_lane(l, r.origin);
-                        d.set_lane(l, r.dir);
-                        t[l] = r.t_max;
-                    }
+                    let (o, d, t) = columns_of((first..first + out.len()).map(&ray));
                     bvh.closest_hits_packet(&o, &d, &t, out.len(), &mut hits);
                     for (l, out) in out.iter_mut().enumerate() {
                         *out = hits.hit(l);
@@ -190,8 +190,10 @@ impl SceneBvh {
         // hit one triangle, whose shared data is looked up once per run. The rest are set over.
         let mut triangles = TriangleLanes::new();
         let (mut shared, mut others) = (None::<(u32, TriangleAttributes)>, 0u32);
+        // Lanes whose walk ran out of stack test every primitive instead (all, if the packet's did).
+        let redo = if complete { st.redo } else { u32::MAX };
         for l in 0..n {
-            let unsure = !complete || st.redo & (1 << l) != 0;
+            let unsure = redo & (1 << l) != 0;
             if rays.valid & (1 << l) == 0 || (!unsure && st.prim[l] == NO_PRIM) {
                 continue;
             }
@@ -213,7 +215,7 @@ impl SceneBvh {
         while others != 0 {
             let l = others.trailing_zeros() as usize;
             others &= others - 1;
-            let hit = if !complete || st.redo & (1 << l) != 0 {
+            let hit = if redo & (1 << l) != 0 {
                 self.closest_hit_each(&ray(l))
             } else {
                 let best = Best { t: best_t[l], slot: st.slot[l] as usize, b: [0.0; 3] };
