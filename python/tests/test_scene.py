@@ -138,3 +138,19 @@ def test_load_errors_name_the_file_and_the_sky(tmp_path):
         kelvin.Scene.load(tmp_path / "no-such-scene.glb")
     with pytest.raises(ValueError, match="latitude"):
         kelvin.Scene.load(sky="95,0,2024-06-21T10:00")
+
+
+@pytest.mark.parametrize("mirror", [(-1.0, 1.0, 1.0), (1.0, -1.0, 1.0), (1.0, 1.0, -1.0), (-2.0, 0.5, 1.0)])
+def test_cameras_under_a_mirrored_parent_look_along_the_world_matrix(data, tmp_path, mirror):
+    """glTF, Bevy and three.js aim a camera along its world matrix applied to -Z; a parent scaled by
+    a mirror (as Blender writes one) must not turn it round."""
+    doc = json.loads((data / LAMP).read_text())
+    doc["nodes"].append({"name": "mirror", "scale": list(mirror), "children": [4]})
+    doc["scenes"][0]["nodes"] = [0, 1, 2, len(doc["nodes"]) - 1]
+    path = tmp_path / "mirrored.gltf"
+    path.write_text(json.dumps(doc))
+    [camera] = kelvin.Scene.load(path).cameras
+    # The child looks 45 degrees down towards -Z; the parent's matrix is diag(mirror).
+    want = np.array(mirror) * np.array([0.0, -np.sqrt(0.5), -np.sqrt(0.5)])
+    np.testing.assert_allclose(camera["direction"], want / np.linalg.norm(want), atol=1e-6)
+    np.testing.assert_allclose(camera["position"], np.array(mirror) * np.array([0.0, 3.0, 3.0]), atol=1e-5)

@@ -95,10 +95,25 @@ impl Transform {
         Affine3A::from_mat3_translation(linear, self.translation)
     }
 
-    /// The local -Z axis in world space (the forward direction of spot, distant and projection
-    /// lights and of cameras, as glTF defines it).
+    /// The local -Z axis in world space, normalised: the forward direction of spot, distant,
+    /// projection and goniometric lights and of cameras. As glTF, Bevy's
+    /// `GlobalTransform::forward()` and three.js define it, this is the whole matrix applied to
+    /// -Z, so a mirror or a shear of a parent node turns it as it turns the node's geometry.
     pub fn forward(&self) -> Vec3 {
-        self.rotation * Vec3::NEG_Z
+        self.aim() * Vec3::NEG_Z
+    }
+
+    /// The rotation that aims lights and cameras: its -Z is [`Self::forward`] and its +Y the
+    /// matrix's +Y made orthogonal to that (a camera's up, a profile's zero azimuth plane's
+    /// neighbour). Unlike `rotation` (the QR factor that places meshes, into which a mirror folds
+    /// as a negative `scale.z`), it never flips the forward axis. A matrix that loses the Z axis
+    /// keeps `rotation`.
+    pub fn aim(&self) -> Quat {
+        let m = self.to_affine().matrix3;
+        let Some(back) = Vec3::from(m.z_axis).try_normalize() else { return self.rotation };
+        let up = Vec3::from(m.y_axis);
+        let up = (up - back * back.dot(up)).try_normalize().unwrap_or_else(|| back.any_orthonormal_vector());
+        Quat::from_mat3(&Mat3::from_cols(up.cross(back), up, back)).normalize()
     }
 
     /// A point from local to world space.
@@ -119,10 +134,10 @@ impl Transform {
         self.rotation * (unsheared / self.scale)
     }
 
-    /// A world-space direction in this transform's local frame, ignoring scale (for lights,
-    /// whose emission profiles live in the rotated frame).
+    /// A world-space direction in the frame of [`Self::aim`] (for lights, whose emission
+    /// profiles live in that frame).
     pub fn to_local_direction(&self, v: Vec3) -> Vec3 {
-        self.rotation.inverse() * v
+        self.aim().inverse() * v
     }
 }
 

@@ -138,7 +138,7 @@ impl GoniometricLight {
         }
         let resolved = ResolvedGoniometric {
             position: transform.translation,
-            rotation: transform.rotation.normalize(),
+            rotation: transform.aim(),
             profile: self.profile.clone(),
             intensity,
             unit_power,

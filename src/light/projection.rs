@@ -115,7 +115,7 @@ impl ProjectionLight {
         }
         Ok(ResolvedProjection {
             position: transform.translation,
-            rotation: transform.rotation.normalize(),
+            rotation: transform.aim(),
             image: self.image.clone(),
             half_extent: half.as_vec2(),
             intensity,

@@ -37,7 +37,7 @@ pub struct PinholeCamera {
 impl PinholeCamera {
     /// The camera at `transform` rendering a `width` x `height` image.
     pub fn new(camera: &Camera, transform: &Transform, width: u32, height: u32) -> Self {
-        let r = transform.rotation;
+        let r = transform.aim();
         let (width, height) = (width.max(1), height.max(1));
         let (right, up, forward) =
             ((r * Vec3::X).normalize(), (r * Vec3::Y).normalize(), (r * Vec3::NEG_Z).normalize());

@@ -59,6 +59,9 @@ pub struct Doc {
     nodes: Vec<Value>,
     materials: Vec<Value>,
     lights: Vec<Value>,
+    cameras: Vec<Value>,
+    /// Nodes that are another node's child (not scene roots).
+    children: Vec<usize>,
 }
 
 impl Doc {
@@ -119,11 +122,31 @@ impl Doc {
     }
 
     /// A KHR_lights_punctual light (`light` without its `type`-independent fields) at `at`,
-    /// turned by the quaternion `rotation`.
-    pub fn light(&mut self, light: Value, at: Vec3, rotation: [f32; 4]) {
+    /// turned by the quaternion `rotation`; returns its node.
+    pub fn light(&mut self, light: Value, at: Vec3, rotation: [f32; 4]) -> usize {
         self.lights.push(light);
         let ext = json!({ "KHR_lights_punctual": { "light": self.lights.len() - 1 } });
         self.nodes.push(json!({ "translation": at.to_array(), "rotation": rotation, "extensions": ext }));
+        self.nodes.len() - 1
+    }
+
+    /// A perspective camera of vertical field of view `yfov` (radians) at `at`, turned by the
+    /// quaternion `rotation`; returns its node.
+    #[allow(dead_code)]
+    pub fn camera(&mut self, yfov: f32, at: Vec3, rotation: [f32; 4]) -> usize {
+        self.cameras.push(json!({ "type": "perspective", "perspective": { "yfov": yfov, "znear": 0.01 } }));
+        let camera = self.cameras.len() - 1;
+        self.nodes.push(json!({ "translation": at.to_array(), "rotation": rotation, "camera": camera }));
+        self.nodes.len() - 1
+    }
+
+    /// A new node with the world matrix `matrix` whose child is node `child`; returns it.
+    #[allow(dead_code)]
+    pub fn parent(&mut self, child: usize, matrix: glam::Affine3A) -> usize {
+        let m = glam::Mat4::from(matrix).to_cols_array();
+        self.nodes.push(json!({ "matrix": m, "children": [child] }));
+        self.children.push(child);
+        self.nodes.len() - 1
     }
 
     pub fn write(&self, path: &Path) {
@@ -136,7 +159,7 @@ impl Doc {
             "asset": { "version": "2.0" },
             "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_specular", "KHR_materials_emissive_strength"],
             "scene": 0,
-            "scenes": [{ "nodes": (0..self.nodes.len()).collect::<Vec<_>>() }],
+            "scenes": [{ "nodes": (0..self.nodes.len()).filter(|n| !self.children.contains(n)).collect::<Vec<_>>() }],
             "nodes": self.nodes,
         });
         // glTF allows no empty arrays: a scene of lights alone has no meshes, buffers or accessors.
@@ -146,6 +169,9 @@ impl Doc {
             doc["buffers"] = json!([{ "uri": uri, "byteLength": self.bin.len() }]);
             doc["bufferViews"] = json!(self.views);
             doc["accessors"] = json!(self.accessors);
+        }
+        if !self.cameras.is_empty() {
+            doc["cameras"] = json!(self.cameras);
         }
         if !self.lights.is_empty() {
             doc["extensions"] = json!({ "KHR_lights_punctual": { "lights": self.lights } });

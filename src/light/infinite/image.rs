@@ -105,7 +105,7 @@ impl ImageInfiniteLight {
             image: self.image.clone(),
             tables,
             lookup: self.lookup,
-            rotation: transform.rotation.normalize(),
+            rotation: transform.aim(),
             emitter,
             scene,
             phi: phi as f32,
