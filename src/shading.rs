@@ -145,7 +145,10 @@ pub struct Settings {
     /// independent: see [`Settings::light_pattern`].)
     pub pattern: crate::rng::Pattern,
     /// The caller combines light samples with BSDF samples by MIS, so image lights may sample
-    /// their MIS-compensated tables. Set false when light samples are used alone. Resampled
+    /// their MIS-compensated tables (which never sample texels below the map's mean: light
+    /// samples alone would then miss their light). Defaults to false, so that the estimator of
+    /// [`DirectLighting::irradiance`] is unbiased; an integrator that weighs BSDF samples by MIS
+    /// sets it (kelvin's renderer does). Resampled
     /// selections take no MIS, so under them the tables are never compensated (see
     /// [`Settings::compensates_image_lights`]).
     pub mis: bool,
@@ -199,7 +202,7 @@ impl Default for Settings {
             samples_per_point: 1,
             seed: 0,
             pattern: crate::rng::Pattern::Sobol,
-            mis: true,
+            mis: false,
             shadow_offset: crate::geometry::ShadowOffset::ErrorBound,
             light_precision: LightPrecision::F32,
             light_updates: LightUpdates::Incremental,

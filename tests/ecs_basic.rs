@@ -144,3 +144,56 @@ fn shadow_rays_pass_the_flat_surface_the_batch_says_they_leave() {
         assert_eq!(occluded(points, ball, true), vec![false; points], "{points} points, ball {ball}: on the floor");
     }
 }
+
+/// Hard case: the estimator the README shows (`DirectLighting::irradiance`, light samples alone)
+/// under a real HDR map with a sun, on default `Settings`. The MIS-compensated table that an
+/// integrator weighing BSDF samples may use never samples texels below the map's mean; by
+/// default it must not be used, so the mean estimate equals the irradiance integrated here from
+/// the map's radiance (a midpoint rule over the upper hemisphere at 4x the map's resolution).
+#[test]
+fn default_settings_give_the_closed_form_irradiance_under_an_hdr_map() {
+    use kelvin::light::{ImageInfiniteLight, SceneSphere};
+    use kelvin::scene::image::{LUMINANCE_WEIGHTS, load_image};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/env/spiaggia_di_mondello_1k.hdr");
+    let image = std::sync::Arc::new(load_image(&path).expect("tests/data/env/spiaggia_di_mondello_1k.hdr").image);
+    let light = ImageInfiniteLight::new(image.clone());
+
+    let resolved = light.resolve(&Transform::IDENTITY, SceneSphere { center: Vec3::ZERO, radius: 1.0 }).unwrap();
+    let (rows, cols) = (4 * image.height / 2, 4 * image.width);
+    let (d_theta, d_phi) = (std::f64::consts::FRAC_PI_2 / rows as f64, std::f64::consts::TAU / cols as f64);
+    let mut closed_form = 0.0f64;
+    for i in 0..rows {
+        let theta = (i as f64 + 0.5) * d_theta;
+        for j in 0..cols {
+            let phi = (j as f64 + 0.5) * d_phi;
+            let w = glam::DVec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()).as_vec3();
+            let le = resolved.le(w, kelvin::light::ColorQuery::Rgb).0;
+            let y = LUMINANCE_WEIGHTS.dot(Vec3::new(le[0], le[1], le[2])) as f64;
+            closed_form += y * theta.cos() * theta.sin() * d_theta * d_phi;
+        }
+    }
+
+    let (mut world, mut schedule) = world_and_schedule();
+    world.spawn((light, Transform::IDENTITY));
+    let n = 1 << 15;
+    for pixel in 0..n {
+        world.resource_mut::<ShadingBatch>().push(Vec3::ZERO, Vec3::Y, pixel as u32, 0);
+    }
+    schedule.run(&mut world);
+    let out = world.resource::<DirectLighting>();
+    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+    for i in 0..n {
+        let e = out.irradiance(i, Vec3::Y).0;
+        let y = LUMINANCE_WEIGHTS.dot(Vec3::new(e[0], e[1], e[2])) as f64;
+        sum += y;
+        sum2 += y * y;
+    }
+    let mean = sum / n as f64;
+    let sigma = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+    eprintln!("irradiance under mondello: estimate {mean:.4} +- {sigma:.4} lx, closed form {closed_form:.4} lx");
+    assert!(
+        (mean - closed_form).abs() < 4.0 * sigma + 2e-3 * closed_form,
+        "estimate {mean} +- {sigma} lx, closed form {closed_form} lx"
+    );
+    assert!(!world.resource::<Settings>().mis, "the library default is light samples alone");
+}
