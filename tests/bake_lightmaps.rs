@@ -496,7 +496,7 @@ fn a_time_budget_takes_whole_passes_of_new_samples() {
     let timed = bake(&dir, &doc, &opts(4, Some(0.2)), |_| {});
     let spp = timed.stats.spp;
     assert!(spp > 4 && spp % 4 == 0 && timed.stats.seconds >= 0.2, "{spp} spp in {} s", timed.stats.seconds);
-    let whole = bake(&dir, &doc, &opts(spp, None), |_| {});
+    let whole = bake(&dir, &doc, &opts(u32::try_from(spp).unwrap(), None), |_| {});
     for (a, b) in timed.lightmaps[0].texels.iter().zip(&whole.lightmaps[0].texels) {
         assert!((*a - *b).abs().max_element() <= 1e-6 * b.max_element(), "{a} vs {b}");
     }

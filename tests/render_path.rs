@@ -236,7 +236,7 @@ fn time_budget_renders_passes_equal_to_one_render_at_their_total_spp() {
     };
     let (passes, total) = render_with(2, Some(std::time::Duration::from_millis(300)));
     assert!(total >= 4 && total.is_multiple_of(2), "{total} spp in passes of 2");
-    let (once, spp) = render_with(total, None);
+    let (once, spp) = render_with(u32::try_from(total).unwrap(), None);
     assert_eq!(spp, total);
     let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
     let lit = once.iter().filter(|p| p.max_element() > 0.0).count();

@@ -373,7 +373,7 @@ impl LightmapPlan {
             };
             let passes = Passes { cells: part.range(self.cells()), spp: opts.spp, time: opts.time };
             let (sums, spp) = trace_all(world, schedule, &mut tracer, passes, place, progress);
-            (sums, RenderStats { spp, ..tracer.stats })
+            (sums, RenderStats { spp: spp.into(), ..tracer.stats })
         })
     }
 

@@ -82,7 +82,7 @@ struct Header {
     cells: u64,
     first: u64,
     end: u64,
-    spp: u32,
+    spp: u64,
     seconds: f64,
     camera_samples: u64,
     shadow_rays: u64,

@@ -247,7 +247,7 @@ fn trace(
         };
         let passes = Passes { cells: part.range(cells), spp: opts.spp, time: opts.time };
         let (sums, spp) = trace_all(world, schedule, &mut tracer, passes, place, progress);
-        (sums, RenderStats { spp, ..tracer.stats })
+        (sums, RenderStats { spp: spp.into(), ..tracer.stats })
     })
 }
 

@@ -145,7 +145,7 @@ pub struct RenderStats {
     /// Wall-clock time of the whole render, s (the first update included).
     pub seconds: f64,
     /// Samples per pixel rendered (more than asked under a time budget).
-    pub spp: u32,
+    pub spp: u64,
     /// Camera rays traced, one per sample (escaped ones included).
     pub camera_samples: u64,
     /// Shadow rays the light system traced, over every bounce.
@@ -293,8 +293,8 @@ fn render_on_pool(
     let mut paths = Paths::default();
     // Passes of `spp` samples per pixel: one, or as many as fit in the time budget (each pass
     // draws the next samples of every pixel's streams).
-    'passes: for pass in 0u32.. {
-        let first_sample = pass * opts.spp;
+    'passes: for pass in 0u32..=u32::MAX {
+        let Some(first_sample) = first_sample_of_pass(pass, opts.spp) else { break };
         let mut first = 0usize;
         while first < total {
             let len = BATCH_SAMPLES.min(total - first);
@@ -346,13 +346,21 @@ fn render_on_pool(
                 break 'passes;
             }
         }
-        stats.spp += opts.spp;
+        stats.spp += u64::from(opts.spp);
         if opts.time_budget.is_none_or(|budget| start.elapsed() >= budget) {
             break;
         }
     }
     stats.seconds = start.elapsed().as_secs_f64();
     (film, stats)
+}
+
+/// The index of the first sample of pass `pass` of `spp` samples per pixel, or None when the pass
+/// would run past the sample streams' u32 index (2^32 samples per pixel): a time budget stops
+/// there instead of wrapping round to samples already drawn.
+fn first_sample_of_pass(pass: u32, spp: u32) -> Option<u32> {
+    let first = pass.checked_mul(spp)?;
+    first.checked_add(spp.saturating_sub(1)).map(|_| first)
 }
 
 /// What the direct integrator needs beyond the world.
@@ -430,5 +438,22 @@ impl DirectJob<'_> {
         };
         stats.passes.shading += shading_start.elapsed().as_secs_f64();
         stats.bsdf_rays += bsdf_rays as u64;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::first_sample_of_pass;
+
+    /// Hard case: `--time` with the largest `--spp` (2^20) reaches the end of the u32 sample index
+    /// after 4,096 passes; pass 4,096 would wrap to sample 0 and repeat every pixel's samples.
+    #[test]
+    fn passes_stop_where_the_sample_index_would_wrap() {
+        let spp = 1 << 20;
+        assert_eq!(first_sample_of_pass(4095, spp), Some(4095 << 20));
+        assert_eq!(first_sample_of_pass(4096, spp), None);
+        assert_eq!(first_sample_of_pass(u32::MAX, 1), Some(u32::MAX));
+        assert_eq!(first_sample_of_pass(1 << 31, 3), None, "a pass whose last sample is past u32::MAX");
+        assert_eq!(first_sample_of_pass(0, u32::MAX), Some(0));
     }
 }
