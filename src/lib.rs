@@ -32,6 +32,15 @@ pub mod spectrum;
 #[path = "../systems/mod.rs"]
 pub mod systems;
 
+/// The vector and matrix types of kelvin's API (glam, the version kelvin is built with): an app
+/// names `kelvin::math::Vec3` and never guesses which glam to depend on. Bevy's `bevy::math` types
+/// are another glam version; pass them as arrays (`Vec3::from_array(v.to_array())`).
+pub use glam as math;
+
+/// The ECS kelvin's components, resources and systems live in (bevy_ecs, the version kelvin is
+/// built with), for apps that run the light system without Bevy.
+pub use bevy_ecs as ecs;
+
 /// What an app that embeds the light system needs, glob-importable next to `bevy::prelude::*`: it
 /// holds no name Bevy's prelude uses. kelvin's types named like Bevy's (`PointLight`, `SpotLight`,
 /// `Transform`, `Mesh`, `Sphere`, `Rectangle`, `Camera`, `Material`) are reached through the

@@ -23,7 +23,7 @@
 //! always rebuilds (a new `SceneBvh::build`).
 
 use bevy_ecs::resource::Resource;
-use glam::{Affine3A, Vec3, Vec3A};
+use glam::{Affine3A, Vec3};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
@@ -35,7 +35,7 @@ use super::mesh::Mesh;
 use super::shapes::{PlacedShape, Shape};
 use super::transform::Transform;
 use super::triangle::is_degenerate;
-use super::wide::{LeafSource, WideBvh};
+use super::wide::{LeafSource, WideBvh, box_corners, obvhs_box};
 
 /// Rebuild after refits once the tree's SAH cost has grown by this factor since the last build.
 pub const REBUILD_COST_RATIO: f32 = 1.5;
@@ -263,7 +263,7 @@ impl SceneBvh {
 
     /// World-space bounding box of everything in the tree, or None when it is empty.
     pub fn world_bounds(&self) -> Option<(Vec3, Vec3)> {
-        self.wide.bounds().map(|b| (b.min.into(), b.max.into()))
+        self.wide.bounds().map(|b| box_corners(&b))
     }
 
     /// SAH-style cost of the tree now, relative to its value after the last build (1 = as built).
@@ -350,11 +350,11 @@ impl SceneBvh {
 
     pub(crate) fn prim_bounds(&self, p: &LeafPrim) -> Aabb {
         if p.shape == NO_SHAPE {
-            let v = p.v.map(Vec3A::from);
-            Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]))
+            let v = p.v;
+            obvhs_box(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]))
         } else {
             let (lo, hi) = self.shapes[p.shape as usize].world_bounds();
-            Aabb::new(lo.into(), hi.into())
+            obvhs_box(lo, hi)
         }
     }
 

@@ -57,9 +57,9 @@ impl WideNode {
     }
 
     fn child_box(&self, c: usize) -> Aabb {
-        Aabb::new(
-            Vec3::new(self.lo[0][c], self.lo[1][c], self.lo[2][c]).into(),
-            Vec3::new(self.hi[0][c], self.hi[1][c], self.hi[2][c]).into(),
+        obvhs_box(
+            Vec3::new(self.lo[0][c], self.lo[1][c], self.lo[2][c]),
+            Vec3::new(self.hi[0][c], self.hi[1][c], self.hi[2][c]),
         )
     }
 }
@@ -93,6 +93,18 @@ pub(crate) struct WideBvh {
     dirty: Vec<bool>,
     /// Sum of the half areas of every child box, kept up to date by refits.
     area_sum: f64,
+}
+
+/// obvhs's box of kelvin's corners, passed as plain floats: obvhs may be built with another glam
+/// than kelvin (an app's own resolution picks the newest glam each allows), so no glam type
+/// crosses between them.
+pub(crate) fn obvhs_box(lo: Vec3, hi: Vec3) -> Aabb {
+    Aabb::new(lo.to_array().into(), hi.to_array().into())
+}
+
+/// kelvin's corners of obvhs's box (see [`obvhs_box`]).
+pub(crate) fn box_corners(b: &Aabb) -> (Vec3, Vec3) {
+    (Vec3::from_array(b.min.to_array()), Vec3::from_array(b.max.to_array()))
 }
 
 fn half_area(b: &Aabb) -> f64 {
