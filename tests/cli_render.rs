@@ -259,3 +259,55 @@ fn restir_reuses_neighbours_in_a_render() {
     assert!(ris > 0.0 && (restir / ris - 1.0).abs() < 0.05, "ReSTIR {restir} vs RIS {ris}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Options the light choice would ignore are refused before any work, naming both sides:
+/// `--all-lights` with a resampling sampler (which it used to override, then tile as ReSTIR),
+/// resampling options under a sampler that does not resample, reuse options without ReSTIR.
+/// The same job written in a manifest is refused by `kelvin batch` with the same words.
+#[test]
+fn contradictory_light_options_are_refused() {
+    let dir = std::env::temp_dir().join(format!("kelvin-cli-contradictions-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("never.exr");
+    let o = out.to_str().unwrap();
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["--all-lights", "--light-sampler", "ris"], &["all_lights", "ris"]),
+        (&["--all-lights", "--light-sampler", "restir"], &["all_lights", "restir"]),
+        (&["--light-sampler", "uniform", "--candidates", "4"], &["candidates = 4", "uniform"]),
+        (&["--candidates", "4"], &["candidates = 4", "bvh"]),
+        (&["--light-sampler", "ris", "--neighbours", "2"], &["neighbours = 2", "ris"]),
+        (&["--light-sampler", "power", "--radius", "3"], &["radius = 3", "power"]),
+        (&["--biased-reuse"], &["biased_reuse", "bvh"]),
+    ];
+    for (args, words) in cases {
+        let run = kelvin(&[&["render", "-o", o, "--size", "8x8", "--spp", "1"], *args].concat());
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{args:?} was accepted");
+        assert!(words.iter().all(|w| stderr.contains(w)), "{args:?}: {stderr}");
+    }
+    assert!(!out.exists(), "a refused render wrote its output");
+    // Each is accepted alone, and with the sampler it belongs to.
+    for args in [&["--all-lights"][..], &["--light-sampler", "ris", "--candidates", "4"], &[
+        "--light-sampler",
+        "restir",
+        "--candidates",
+        "2",
+        "--neighbours",
+        "2",
+        "--radius",
+        "3",
+        "--biased-reuse",
+    ]] {
+        let run = kelvin(&[&["render", "-o", o, "--size", "8x8", "--spp", "1"], args].concat());
+        assert!(run.status.success(), "{args:?}: {}", String::from_utf8_lossy(&run.stderr));
+    }
+    let manifest = dir.join("jobs.json");
+    let job = r#"{"jobs": [{"name": "both", "output": "both.exr", "size": "8x8", "spp": 1,
+                  "settings": {"all_lights": true, "light_sampler": "restir"}}]}"#;
+    std::fs::write(&manifest, job).unwrap();
+    let run = kelvin(&["batch", manifest.to_str().unwrap()]);
+    let log = format!("{}{}", String::from_utf8_lossy(&run.stdout), String::from_utf8_lossy(&run.stderr));
+    assert!(!run.status.success() && log.contains("all_lights") && log.contains("restir"), "{log}");
+    assert!(!dir.join("both.exr").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -57,15 +57,15 @@ pub struct RenderArgs {
     /// Colour mode.
     #[arg(long, value_enum, default_value = "rgb")]
     color: ColorMode,
-    /// Light samples drawn per resampled one (--light-sampler ris).
-    #[arg(long, default_value_t = 8, value_parser = values::whole(job::CANDIDATES))]
-    candidates: u32,
-    /// Neighbour reservoirs combined per pixel (--light-sampler restir).
-    #[arg(long, default_value_t = 4, value_parser = values::whole(job::NEIGHBOURS))]
-    neighbours: u32,
-    /// Radius of the neighbourhood, pixels (--light-sampler restir).
-    #[arg(long, default_value_t = 16, value_parser = values::whole(job::RADIUS))]
-    radius: u32,
+    /// Light samples drawn per resampled one (--light-sampler ris or restir; default 8).
+    #[arg(long, value_parser = values::whole(job::CANDIDATES))]
+    candidates: Option<u32>,
+    /// Neighbour reservoirs combined per pixel (--light-sampler restir; default 4).
+    #[arg(long, value_parser = values::whole(job::NEIGHBOURS))]
+    neighbours: Option<u32>,
+    /// Radius of the neighbourhood, pixels (--light-sampler restir; default 16).
+    #[arg(long, value_parser = values::whole(job::RADIUS))]
+    radius: Option<u32>,
     /// Weigh combined reservoirs 1/sum M: fewer target evaluations, biased (--light-sampler restir).
     #[arg(long)]
     biased_reuse: bool,

@@ -106,13 +106,14 @@ pub struct RenderJob {
     pub depth: PathDepth,
     /// How a light is chosen per sample.
     pub light_sampler: SamplerChoice,
-    /// RIS: light-BVH candidates per resampled sample.
-    pub candidates: u32,
-    /// ReSTIR: neighbour reservoirs combined per pixel.
-    pub neighbours: u32,
-    /// ReSTIR: radius of the neighbourhood, pixels.
-    pub radius: u32,
-    /// ReSTIR: weigh combined reservoirs 1/sum M (biased).
+    /// RIS and ReSTIR: light-BVH candidates per resampled sample (None: 8). Set under another
+    /// light sampler, it is refused.
+    pub candidates: Option<u32>,
+    /// ReSTIR: neighbour reservoirs combined per pixel (None: 4). Refused under other samplers.
+    pub neighbours: Option<u32>,
+    /// ReSTIR: radius of the neighbourhood, pixels (None: 16). Refused under other samplers.
+    pub radius: Option<u32>,
+    /// ReSTIR: weigh combined reservoirs 1/sum M (biased). Refused under other samplers.
     pub biased_reuse: bool,
     /// RGB or spectral rendering.
     pub color: ColorMode,
@@ -145,9 +146,9 @@ impl Default for RenderJob {
             integrator: IntegratorChoice::Path,
             depth: PathDepth::DEFAULT,
             light_sampler: SamplerChoice::Bvh,
-            candidates: 8,
-            neighbours: 4,
-            radius: 16,
+            candidates: None,
+            neighbours: None,
+            radius: None,
             biased_reuse: false,
             color: ColorMode::Rgb,
             all_lights: false,
@@ -197,9 +198,10 @@ impl RenderJob {
         check_in("spp", self.spp, SPP)?;
         check_in("max_depth", self.depth.max_depth, DEPTH)?;
         check_in("roulette_depth", self.depth.roulette_depth, DEPTH)?;
-        check_in("candidates", self.candidates, CANDIDATES)?;
-        check_in("neighbours", self.neighbours, NEIGHBOURS)?;
-        check_in("radius", self.radius, RADIUS)?;
+        check_in("candidates", self.candidates(), CANDIDATES)?;
+        check_in("neighbours", self.neighbours(), NEIGHBOURS)?;
+        check_in("radius", self.radius(), RADIUS)?;
+        self.check_light_choice()?;
         check_in("env_intensity", self.env_intensity, INTENSITY)?;
         check_in("sky_intensity", self.sky_intensity, INTENSITY)?;
         if let Some(t) = self.time
@@ -221,15 +223,61 @@ impl RenderJob {
         Ok(())
     }
 
+    /// RIS candidates per resampled sample.
+    pub fn candidates(&self) -> u32 {
+        self.candidates.unwrap_or(8)
+    }
+
+    /// ReSTIR neighbours per pixel.
+    pub fn neighbours(&self) -> u32 {
+        self.neighbours.unwrap_or(4)
+    }
+
+    /// ReSTIR neighbourhood radius, pixels.
+    pub fn radius(&self) -> u32 {
+        self.radius.unwrap_or(16)
+    }
+
+    /// Refuses options that the light choice would silently ignore: every light sampled
+    /// (`all_lights`) with a resampling sampler, resampling options under a sampler that does not
+    /// resample, reuse options without ReSTIR.
+    fn check_light_choice(&self) -> Result<(), JobError> {
+        let sampler = format!("{:?}", self.light_sampler).to_lowercase();
+        let refuse = |msg: String| Err(JobError::Invalid(msg));
+        let resamples = matches!(self.light_sampler, SamplerChoice::Ris | SamplerChoice::Restir);
+        if self.all_lights && resamples {
+            return refuse(format!(
+                "all_lights samples every light at every point, which light_sampler = {sampler} would replace: \
+                 choose one"
+            ));
+        }
+        if let Some(c) = self.candidates
+            && !resamples
+        {
+            return refuse(format!("candidates = {c} is for light_sampler = ris or restir, not {sampler}"));
+        }
+        if self.light_sampler != SamplerChoice::Restir {
+            let reuse = [
+                self.neighbours.map(|n| format!("neighbours = {n}")),
+                self.radius.map(|r| format!("radius = {r}")),
+                self.biased_reuse.then(|| "biased_reuse".to_string()),
+            ];
+            if let Some(option) = reuse.into_iter().flatten().next() {
+                return refuse(format!("{option} is for light_sampler = restir, not {sampler}"));
+            }
+        }
+        Ok(())
+    }
+
     /// How lights are chosen per point.
     pub fn selection(&self) -> LightSelection {
         match self.light_sampler {
             _ if self.all_lights => LightSelection::All,
-            SamplerChoice::Ris => LightSelection::Resampled { candidates: self.candidates },
+            SamplerChoice::Ris => LightSelection::Resampled { candidates: self.candidates() },
             SamplerChoice::Restir => LightSelection::Restir(Restir {
-                candidates: self.candidates,
-                spatial: self.neighbours,
-                radius: self.radius,
+                candidates: self.candidates(),
+                spatial: self.neighbours(),
+                radius: self.radius(),
                 // One frame: no previous run to reuse.
                 temporal: false,
                 weights: if self.biased_reuse { ReuseWeights::Biased } else { ReuseWeights::Unbiased },
