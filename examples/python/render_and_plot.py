@@ -68,6 +68,7 @@ def main():
     xs = np.linspace(-10, 10, 200)
     exact, estimates = floor_illuminance(bulbs(), xs)
 
+    # Imported here: the tests import this module for floor_illuminance without matplotlib.
     import matplotlib
 
     matplotlib.use("Agg")

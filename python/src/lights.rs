@@ -135,6 +135,7 @@ impl LightSystem {
                 points.len()
             )));
         }
+        let pool = super::pool(threads)?;
         // Past u32 sample indices the streams start over (after 2^32 samples of a point).
         let first = self.next_sample.checked_add(spp).map_or(0, |_| self.next_sample);
         self.next_sample = first + spp;
@@ -154,7 +155,6 @@ impl LightSystem {
                 }
             }
         }
-        let pool = super::pool(threads)?;
         let (world, schedule) = (&mut self.world, &mut self.schedule);
         super::interruptible(py, &AtomicBool::new(false), || match &pool {
             Some(pool) => pool.install(|| schedule.run(world)),
