@@ -404,7 +404,6 @@ impl LightSystem {
         let slots = 0..pn.len() * k;
         let point: Vec<u32> = slots.clone().flat_map(|j| lighting.entries(j).map(move |_| (j / k) as u32)).collect();
         let radiance: Vec<f32> = slots
-            .clone()
             .flat_map(|j| lighting.entries(j).flat_map(move |e| to_rgb(lighting.radiance[e], wavelengths.get(j))))
             .collect();
         let wi: Vec<f32> = lighting.wi.iter().flat_map(|w| w.to_array()).collect();
