@@ -42,11 +42,16 @@ pub(crate) fn sampler(name: &str) -> PyResult<SamplerChoice> {
     )
 }
 
+/// Worker threads of a run.
+const THREADS: std::ops::RangeInclusive<u32> = 1..=1024;
+
 /// A rayon pool of `threads` workers, or None for the global pool.
 pub(crate) fn pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
     match threads {
         None => Ok(None),
-        Some(0) | Some(1025..) => Err(PyValueError::new_err(format!("threads = {threads:?} is outside 1..=1024"))),
+        Some(t) if !u32::try_from(t).is_ok_and(|t| THREADS.contains(&t)) => {
+            Err(PyValueError::new_err(format!("threads = {t} is outside {}..={}", THREADS.start(), THREADS.end())))
+        }
         Some(t) => rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build()
@@ -141,8 +146,36 @@ fn ies_json(path: PathBuf) -> PyResult<String> {
     serde_json::to_string(&summary).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
+/// The ranges of the integer and float options, name to (lowest, highest): what Python checks
+/// before PyO3's conversions, which would raise errors without the option's name.
+fn limits(py: Python<'_>) -> PyResult<Bound<'_, pyo3::types::PyDict>> {
+    use kelvin::render::job::{CANDIDATES, DEPTH, INTENSITY, MAX_SIDE, NEIGHBOURS, RADIUS, SECONDS, SPP};
+    let d = pyo3::types::PyDict::new(py);
+    let ranges = [
+        ("size", 1..=MAX_SIDE),
+        ("crop", 0..=MAX_SIDE),
+        ("spp", SPP),
+        ("max_depth", DEPTH),
+        ("roulette_depth", DEPTH),
+        ("candidates", CANDIDATES),
+        ("neighbours", NEIGHBOURS),
+        ("radius", RADIUS),
+        ("light_spp", lights::SPP),
+        ("threads", THREADS),
+    ];
+    for (name, r) in ranges {
+        d.set_item(name, (*r.start(), *r.end()))?;
+    }
+    d.set_item("seed", (0u64, u64::MAX))?;
+    d.set_item("intensity", (*INTENSITY.start(), *INTENSITY.end()))?;
+    d.set_item("time", (SECONDS.start, SECONDS.end))?;
+    Ok(d)
+}
+
 #[pymodule]
 fn _kelvin(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("LIMITS", limits(m.py())?)?;
+    m.add("LUMINANCE_WEIGHTS", kelvin::scene::image::LUMINANCE_WEIGHTS.to_array())?;
     m.add_function(wrap_pyfunction!(write_exr, m)?)?;
     m.add_function(wrap_pyfunction!(write_png, m)?)?;
     m.add_function(wrap_pyfunction!(read_exr, m)?)?;

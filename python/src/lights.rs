@@ -9,8 +9,10 @@ use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 use kelvin::geometry::{Mesh, Rectangle, Transform};
 use kelvin::light::{Amount, AreaLight, DistantLight, GoniometricLight, PointLight, SpotLight};
-use kelvin::shading::{DirectLighting, LightSamplerKind, LightSelection, Settings, ShadingBatch};
-use kelvin::spectrum::Spectrum;
+use kelvin::rng::SampleStream;
+use kelvin::shading::{ColorMode, DirectLighting, LightSamplerKind, LightSelection, Settings, ShadingBatch};
+use kelvin::spectrum::color::xyz_to_srgb;
+use kelvin::spectrum::{SampledSpectrum, SampledWavelengths, Spectrum};
 use kelvin::systems::LightingPlugin;
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::{PyKeyError, PyOSError, PyValueError};
@@ -22,6 +24,22 @@ use pyo3::types::PyDict;
 pub struct LightSystem {
     world: World,
     schedule: Schedule,
+    /// The first sample index of the next run: each run draws new samples, so the mean of runs converges.
+    next_sample: u32,
+}
+
+/// Light samples per point per run.
+pub(crate) const SPP: std::ops::RangeInclusive<u32> = 1..=1 << 16;
+
+/// Salt of the wavelengths' streams, apart from the light samples' (same seed, pixel and sample).
+const WAVELENGTH_SALT: u64 = 0x7a5e_1e9f_3c0d_b00c;
+
+/// A value of the run's colour mode as photometric linear sRGB (spectral: through XYZ at its wavelengths).
+fn to_rgb(v: SampledSpectrum, wavelengths: Option<&SampledWavelengths>) -> [f32; 3] {
+    match wavelengths {
+        None => [v.0[0], v.0[1], v.0[2]],
+        Some(w) => xyz_to_srgb(w.to_xyz(v).as_dvec3()).as_vec3().to_array(),
+    }
 }
 
 /// An emitter's spectrum: a blackbody temperature (K), or a linear-sRGB colour ((1, 1, 1) is D65).
@@ -102,33 +120,51 @@ impl LightSystem {
             .ok_or_else(|| PyKeyError::new_err(format!("no light or geometry with id {id}")))
     }
 
-    /// Fills the batch with the points, runs the schedule with `spp` samples per point (without
-    /// the GIL, on `threads` workers) and returns the lighting.
-    fn run(
-        &mut self,
-        py: Python<'_>,
-        points: &[(Vec3, Vec3)],
-        spp: u32,
-        threads: Option<usize>,
-    ) -> PyResult<&DirectLighting> {
-        if !(1..=1 << 16).contains(&spp) {
-            return Err(PyValueError::new_err(format!("spp = {spp} is outside 1..=65536")));
+    /// Runs the schedule on `spp` slots per point (slot `i * spp + s` is sample `s` of point `i`),
+    /// one light sample each, without the GIL on `threads` workers. Each slot is its own sample
+    /// index, so that in spectral mode it has its own wavelengths; the run's indices follow the
+    /// last run's, so runs draw new samples.
+    fn run(&mut self, py: Python<'_>, points: &[(Vec3, Vec3)], spp: u32, threads: Option<usize>) -> PyResult<()> {
+        if !SPP.contains(&spp) {
+            return Err(PyValueError::new_err(format!("spp = {spp} is outside {}..={}", SPP.start(), SPP.end())));
         }
-        self.world.resource_mut::<Settings>().samples_per_point = spp;
+        // Entry offsets are u32.
+        if points.len() as u64 * spp as u64 > u32::MAX as u64 / 2 {
+            return Err(PyValueError::new_err(format!(
+                "{} points x spp = {spp}: too many samples for one run",
+                points.len()
+            )));
+        }
+        let pool = super::pool(threads)?;
+        // Past u32 sample indices the streams start over (after 2^32 samples of a point).
+        let first = self.next_sample.checked_add(spp).map_or(0, |_| self.next_sample);
+        self.next_sample = first + spp;
+        let mut settings = self.world.resource_mut::<Settings>();
+        settings.samples_per_point = 1;
+        let (spectral, pattern, seed) = (settings.color_mode == ColorMode::Spectral, settings.pattern, settings.seed);
         {
             let mut batch = self.world.resource_mut::<ShadingBatch>();
             batch.clear();
             for (i, &(p, n)) in points.iter().enumerate() {
-                batch.push(p, n, i as u32, 0);
+                for sample in first..first + spp {
+                    batch.push(p, n, i as u32, sample);
+                    if spectral {
+                        let u = SampleStream::new(pattern, seed ^ WAVELENGTH_SALT, i as u32, sample).next_f32();
+                        batch.wavelengths.push(SampledWavelengths::sample_visible(u));
+                    }
+                }
             }
         }
-        let pool = super::pool(threads)?;
         let (world, schedule) = (&mut self.world, &mut self.schedule);
         super::interruptible(py, &AtomicBool::new(false), || match &pool {
             Some(pool) => pool.install(|| schedule.run(world)),
             None => schedule.run(world),
-        })?;
-        Ok(self.world.resource::<DirectLighting>())
+        })
+    }
+
+    /// The last run's lighting and its slots' wavelengths (empty in RGB mode).
+    fn output(&self) -> (&DirectLighting, &[SampledWavelengths]) {
+        (self.world.resource::<DirectLighting>(), &self.world.resource::<ShadingBatch>().wavelengths)
     }
 }
 
@@ -154,7 +190,7 @@ impl LightSystem {
             ..Default::default()
         });
         LightingPlugin::build(&mut world, &mut schedule);
-        Ok(Self { world, schedule })
+        Ok(Self { world, schedule, next_sample: 0 })
     }
 
     #[pyo3(signature = (position, candela=None, lumens=None, watts=None, color=None, temperature=None, radius=0.0))]
@@ -203,7 +239,7 @@ impl LightSystem {
         )?;
         if !(0.0 <= inner_angle && inner_angle <= outer_angle && outer_angle <= 180.0) {
             return Err(PyValueError::new_err(format!(
-                "angles: need 0 <= inner_angle ({inner_angle}) <= outer_angle ({outer_angle}) <= 180 degrees"
+                "inner_angle = {inner_angle}, outer_angle = {outer_angle}: need 0 <= inner_angle <= outer_angle <= 180 degrees"
             )));
         }
         let light = SpotLight {
@@ -336,15 +372,18 @@ impl LightSystem {
         threads: Option<usize>,
     ) -> PyResult<Bound<'py, PyArray1<f32>>> {
         let pn = points_and_normals(&points, &normals)?;
-        let lighting = self.run(py, &pn, spp, threads)?;
-        let flat: Vec<f32> = pn
-            .iter()
-            .enumerate()
-            .flat_map(|(i, (_, n))| {
-                let e = lighting.irradiance(i, *n).0;
-                [e[0], e[1], e[2]]
-            })
-            .collect();
+        self.run(py, &pn, spp, threads)?;
+        let (lighting, wavelengths) = self.output();
+        let k = spp as usize;
+        // A point's estimate is the mean of its slots' (each an estimate from one sample).
+        let mut flat = vec![0.0f32; 3 * pn.len()];
+        for (j, (_, n)) in pn.iter().flat_map(|pn| std::iter::repeat_n(pn, k)).enumerate() {
+            let e = to_rgb(lighting.irradiance(j, *n), wavelengths.get(j));
+            for (sum, c) in flat[3 * (j / k)..][..3].iter_mut().zip(e) {
+                *sum += c;
+            }
+        }
+        flat.iter_mut().for_each(|e| *e /= k as f32);
         Ok(PyArray1::from_vec(py, flat))
     }
 
@@ -359,15 +398,22 @@ impl LightSystem {
         threads: Option<usize>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let pn = points_and_normals(&points, &normals)?;
-        let lighting = self.run(py, &pn, spp, threads)?;
-        let point: Vec<u32> = (0..pn.len()).flat_map(|i| lighting.entries(i).map(move |_| i as u32)).collect();
-        let radiance: Vec<f32> = lighting.radiance.iter().flat_map(|r| [r.0[0], r.0[1], r.0[2]]).collect();
+        self.run(py, &pn, spp, threads)?;
+        let (lighting, wavelengths) = self.output();
+        let k = spp as usize;
+        let slots = 0..pn.len() * k;
+        let point: Vec<u32> = slots.clone().flat_map(|j| lighting.entries(j).map(move |_| (j / k) as u32)).collect();
+        let radiance: Vec<f32> = slots
+            .flat_map(|j| lighting.entries(j).flat_map(move |e| to_rgb(lighting.radiance[e], wavelengths.get(j))))
+            .collect();
         let wi: Vec<f32> = lighting.wi.iter().flat_map(|w| w.to_array()).collect();
+        // A slot's pdf is one sample's: the point's k samples together have k times its density.
+        let pdf: Vec<f32> = lighting.pdf.iter().map(|p| p * k as f32).collect();
         let columns = PyDict::new(py);
         columns.set_item("point", PyArray1::from_vec(py, point))?;
         columns.set_item("radiance", PyArray1::from_vec(py, radiance))?;
         columns.set_item("wi", PyArray1::from_vec(py, wi))?;
-        columns.set_item("pdf", PyArray1::from_vec(py, lighting.pdf.clone()))?;
+        columns.set_item("pdf", PyArray1::from_vec(py, pdf))?;
         columns.set_item("occluded", lighting.occluded.clone())?;
         columns.set_item("delta", lighting.delta.clone())?;
         Ok(columns)

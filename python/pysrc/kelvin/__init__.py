@@ -15,9 +15,26 @@ from typing import Optional, Sequence, Tuple
 
 import numpy as np
 
-from . import _kelvin
+from . import _check, _kelvin
 
-__all__ = ["render", "Scene", "write_exr", "write_png", "read_exr", "spectrum", "ies", "LightSystem"]
+__all__ = ["render", "Scene", "write_exr", "write_png", "read_exr", "spectrum", "ies", "LightSystem", "luminance",
+           "LUMINANCE_WEIGHTS"]
+
+
+#: The Rec. 709 / sRGB luminance weights (the Y row of sRGB to XYZ), kelvin's own: linear sRGB . weights
+#: is the photometric Y, so cd/m^2 of radiance and lux of irradiance.
+LUMINANCE_WEIGHTS = np.array(_kelvin.LUMINANCE_WEIGHTS, dtype=np.float32)
+LUMINANCE_WEIGHTS.flags.writeable = False
+
+
+def luminance(rgb) -> np.ndarray:
+    """The photometric Y of linear-sRGB values (... x 3, as any of kelvin's results): luminance in cd/m^2
+    of an image, illuminance in lux of ``LightSystem.irradiance``. Not the mean of R, G and B, which for a
+    coloured light is not a photometric quantity."""
+    a = np.asarray(rgb, dtype=np.float32)
+    if a.shape[-1:] != (3,):
+        raise ValueError(f"rgb: expected ... x 3 values, got shape {a.shape}")
+    return a @ LUMINANCE_WEIGHTS
 
 
 def _path(p) -> Optional[str]:
@@ -25,13 +42,16 @@ def _path(p) -> Optional[str]:
 
 
 _RENDER_DOC = """Every keyword is the ``kelvin render`` option of the same name (``mis=False`` is ``--no-mis``);
-    the same options give the same image, bit for bit. Returns an H x W x 3 float32 array of linear
+    the same options give the same image, bit for bit. ``size`` is (width, height) in pixels, but the
+    result is an H x W x 3 float32 array (rows first, as NumPy and matplotlib index images) of linear
     photometric radiance (cd/m^2, linear sRGB), rows top to bottom; with ``crop=(x0, y0, x1, y1)``
-    only that region of the full image. Warnings are issued as ``UserWarning``s; pass a dict as
+    (x before y, as ``size``) only that region of the full image, (y1 - y0) x (x1 - x0) x 3. Warnings are issued as ``UserWarning``s; pass a dict as
     ``stats`` to receive the render's counts and seconds.
 
     Raises ValueError for an option out of range, OSError for a file that does not load (the message
-    names the file, and for glTF the JSON pointer) and KeyboardInterrupt when Ctrl-C stopped it."""
+    names the file, and for glTF the JSON pointer) and KeyboardInterrupt when Ctrl-C stopped it. Every
+    option is checked before it reaches the renderer: a negative, fractional, NaN or too large value is
+    a ValueError naming the option and the value."""
 
 
 def _warn(said) -> None:
@@ -60,6 +80,8 @@ class Scene:
         and sun and sky (``sky`` = "LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY]"). The loaders' warnings
         are issued as ``UserWarning``s; a file that does not load raises OSError naming the file
         and the JSON pointer, a bad sky ValueError."""
+        env_intensity = _check.real("env_intensity", env_intensity, limit="intensity")
+        sky_intensity = _check.real("sky_intensity", sky_intensity, limit="intensity")
         native, said = _kelvin.Scene.load(_path(scene), _path(env), env_intensity, sky, sky_intensity)
         _warn(said)
         return cls(native, native.summary())
@@ -92,10 +114,15 @@ class Scene:
         ``environment_at=(x, y, z)``, as a lat-long map seen from that point).
 
         """
+        c = _check
         pixels, width, height, said, info = self._native.render(
-            tuple(size), spp, time, integrator, max_depth, roulette_depth, light_sampler, candidates, neighbours,
-            radius, biased_reuse, color, all_lights, mis, seed, pattern, threads,
-            None if environment_at is None else tuple(environment_at), None if crop is None else tuple(crop))
+            c.size(size), c.integer("spp", spp, "spp"), c.optional_real("time", time, limit="time"), integrator,
+            c.integer("max_depth", max_depth, "max_depth"), c.integer("roulette_depth", roulette_depth, "roulette_depth"),
+            light_sampler, c.integer("candidates", candidates, "candidates"),
+            c.integer("neighbours", neighbours, "neighbours"), c.integer("radius", radius, "radius"), biased_reuse,
+            color, all_lights, mis, c.integer("seed", seed, "seed"), pattern,
+            c.optional_integer("threads", threads, "threads"), c.optional_vector("environment_at", environment_at),
+            None if crop is None else c.integers("crop", crop, 4, "crop"))
         _warn(said)
         if stats is not None:
             stats.update(info)
@@ -106,7 +133,7 @@ class Scene:
         frame ``t * fps``. Returns the counts of entities ``moved``, ``unchanged`` and ``frozen`` (meshes
         with a singular rest transform, which stay at rest: a UserWarning says so). Raises KeyError
         for an animation the scene lacks."""
-        report = self._native.pose(animation, t)
+        report = self._native.pose(animation, _check.real("t", t))
         if report["frozen"]:
             warnings.warn(f"{report['frozen']} animated meshes have a singular rest transform and stay at rest",
                           UserWarning, stacklevel=2)
@@ -188,20 +215,23 @@ def _image(image) -> Tuple[np.ndarray, int, int]:
 
 
 def write_exr(path, image) -> None:
-    """Write an H x W x 3 linear image as a 32-bit float OpenEXR (ZIP compressed)."""
+    """Write an H x W x 3 linear image (rows first: a W x H image is shape (H, W, 3)) as a 32-bit
+    float OpenEXR (ZIP compressed)."""
     flat, width, height = _image(image)
     _kelvin.write_exr(os.fspath(path), flat, width, height)
 
 
 def write_png(path, image, exposure: Optional[float] = None) -> None:
-    """Write an H x W x 3 linear image as a tone-mapped 8-bit sRGB PNG; ``exposure`` in stops,
-    automatic (the log-average luminance to 18% grey, as ``kelvin render``) when None."""
+    """Write an H x W x 3 linear image (rows first: a W x H image is shape (H, W, 3)) as a tone-mapped
+    8-bit sRGB PNG; ``exposure`` in stops, automatic (the log-average luminance to 18% grey, as
+    ``kelvin render``) when None."""
     flat, width, height = _image(image)
-    _kelvin.write_png(os.fspath(path), flat, width, height, exposure)
+    _kelvin.write_png(os.fspath(path), flat, width, height, _check.optional_real("exposure", exposure))
 
 
 def read_exr(path) -> np.ndarray:
-    """Read an OpenEXR image's RGB as an H x W x 3 float32 array."""
+    """Read an OpenEXR image's RGB as an H x W x 3 float32 array (rows first: a W x H image is
+    shape (H, W, 3))."""
     flat, width, height = _kelvin.read_exr(os.fspath(path))
     return flat.reshape(height, width, 3)
 
@@ -238,40 +268,64 @@ class LightSystem:
     photometric (candela, lumens, lux, nits) or radiometric where named (watts); ``color`` is linear
     sRGB with (1, 1, 1) the D65 white, ``temperature`` a blackbody in kelvin. Angles are degrees.
     Positions are metres, +Y up.
+
+    ``color="rgb"`` (default) carries light as three linear-sRGB channels; ``color="spectral"`` as
+    four wavelengths per sample (hero wavelengths, each sample its own), converted to linear sRGB
+    through CIE XYZ. Both return the same quantities (lux and cd/m^2 in linear sRGB); spectral
+    estimates add colour noise that falls with ``spp`` and over calls, and agree with RGB in the mean.
+
+    Each ``irradiance`` or ``sample_li`` call draws the samples after the last call's (sample index
+    i * spp + s of the ``seed``'s streams), so the mean of N calls converges as one call with N times
+    the ``spp``; a new ``LightSystem`` with the same ``seed`` repeats the same sequence of results.
     """
 
     def __init__(self, sampler: str = "bvh", *, color: str = "rgb", seed: int = 0, all_lights: bool = False):
-        self._native = _kelvin.LightSystem(sampler, color, seed, all_lights)
+        self._native = _kelvin.LightSystem(sampler, color, _check.integer("seed", seed, "seed"), all_lights)
 
     def add_point(self, position, *, candela=None, lumens=None, watts=None, color=None, temperature=None,
                   radius: float = 0.0) -> int:
         """A point light (a sphere light of the same intensity when ``radius`` > 0). Returns its id."""
-        return self._native.add_point(tuple(position), candela, lumens, watts, _rgb(color), temperature, radius)
+        c = _check
+        return self._native.add_point(c.vector("position", position), c.optional_real("candela", candela),
+                                      c.optional_real("lumens", lumens), c.optional_real("watts", watts),
+                                      c.optional_vector("color", color), c.optional_real("temperature", temperature),
+                                      c.real("radius", radius))
 
     def add_spot(self, position, direction, *, candela=None, lumens=None, inner_angle: float = 0.0,
                  outer_angle: float = 45.0, color=None, temperature=None) -> int:
         """A spot light pointing along ``direction``; full intensity within ``inner_angle`` of the axis,
         none beyond ``outer_angle`` (half-angles, degrees). Returns its id."""
-        return self._native.add_spot(tuple(position), tuple(direction), candela, lumens, inner_angle, outer_angle,
-                                     _rgb(color), temperature)
+        c = _check
+        return self._native.add_spot(c.vector("position", position), c.vector("direction", direction),
+                                     c.optional_real("candela", candela), c.optional_real("lumens", lumens),
+                                     c.real("inner_angle", inner_angle), c.real("outer_angle", outer_angle),
+                                     c.optional_vector("color", color), c.optional_real("temperature", temperature))
 
     def add_distant(self, direction, *, lux=None, color=None, temperature=None, angular_diameter: float = 0.0) -> int:
         """A distant light shining along ``direction`` (the sun: ``angular_diameter=0.53``). Returns its id."""
-        return self._native.add_distant(tuple(direction), lux, _rgb(color), temperature, angular_diameter)
+        c = _check
+        return self._native.add_distant(c.vector("direction", direction), c.optional_real("lux", lux),
+                                        c.optional_vector("color", color), c.optional_real("temperature", temperature),
+                                        c.real("angular_diameter", angular_diameter))
 
     def add_area(self, center, normal, size, *, nits=None, lumens=None, color=None, temperature=None,
                  two_sided: bool = False) -> int:
         """A rectangular area light of ``size`` = (width, height) metres at ``center``, emitting along
         ``normal`` (both sides with ``two_sided``). Returns its id."""
-        return self._native.add_area(tuple(center), tuple(normal), tuple(size), nits, lumens, _rgb(color),
-                                     temperature, two_sided)
+        c = _check
+        return self._native.add_area(c.vector("center", center), c.vector("normal", normal), c.vector("size", size, 2),
+                                     c.optional_real("nits", nits), c.optional_real("lumens", lumens),
+                                     c.optional_vector("color", color), c.optional_real("temperature", temperature),
+                                     two_sided)
 
     def add_ies(self, path, position, direction=(0.0, -1.0, 0.0), *, lumens=None, multiplier: float = 1.0,
                 color=None, temperature=None) -> int:
         """A luminaire with the IES LM-63 profile at ``path``, its photometric nadir along ``direction``;
         the file's candela times ``multiplier``, or scaled to ``lumens``. Returns its id."""
-        return self._native.add_ies(os.fspath(path), tuple(position), tuple(direction), lumens, multiplier,
-                                    _rgb(color), temperature)
+        c = _check
+        return self._native.add_ies(os.fspath(path), c.vector("position", position), c.vector("direction", direction),
+                                    c.optional_real("lumens", lumens), c.real("multiplier", multiplier),
+                                    c.optional_vector("color", color), c.optional_real("temperature", temperature))
 
     def add_mesh(self, vertices, indices) -> int:
         """Occluding triangles in world space: ``vertices`` N x 3 (metres), ``indices`` M x 3. Returns its id."""
@@ -293,25 +347,27 @@ class LightSystem:
     def move(self, id: int, position, direction=None) -> None:
         """Place light or mesh ``id`` at ``position`` (and turn it to ``direction``); the next run
         updates only what moved."""
-        self._native.move_to(id, tuple(position), None if direction is None else tuple(direction))
+        self._native.move_to(_check.integer("id", id, lo=0, hi=2**64 - 1), _check.vector("position", position),
+                             _check.optional_vector("direction", direction))
 
     def remove(self, id: int) -> None:
         """Remove light or mesh ``id``."""
-        self._native.remove(id)
+        self._native.remove(_check.integer("id", id, lo=0, hi=2**64 - 1))
 
     def irradiance(self, points, normals, *, spp: int = 64, threads: Optional[int] = None) -> np.ndarray:
         """Irradiance (lux, linear sRGB; N x 3 float32) at ``points`` (N x 3) facing ``normals``: an
-        unbiased estimate from ``spp`` light samples per point, shadow rays included."""
+        unbiased estimate from ``spp`` light samples per point, shadow rays included. Each call draws
+        new samples (see the class docstring), so averaging calls converges."""
         p, n, count = _columns(points, normals)
-        return self._native.irradiance(p, n, spp, threads).reshape(count, 3)
+        return self._native.irradiance(p, n, *self._run_options(spp, threads)).reshape(count, 3)
 
     def sample_li(self, points, normals, *, spp: int = 1, threads: Optional[int] = None) -> dict:
         """Every light sample of the points as columns: ``point`` (its point's index), ``radiance`` (E x 3,
-        Li with visibility applied), ``wi`` (E x 3, unit direction to the light), ``pdf`` (the density of
-        the point's samples together: sum radiance * cos / pdf over a point's rows is its irradiance),
-        ``occluded`` and ``delta`` (booleans)."""
+        Li with visibility applied, cd/m^2 in linear sRGB), ``wi`` (E x 3, unit direction to the light),
+        ``pdf`` (the density of the point's samples together: sum radiance * cos / pdf over a point's rows
+        is its irradiance), ``occluded`` and ``delta`` (booleans). Each call draws new samples."""
         p, n, _ = _columns(points, normals)
-        c = self._native.sample_li(p, n, spp, threads)
+        c = self._native.sample_li(p, n, *self._run_options(spp, threads))
         c["radiance"] = c["radiance"].reshape(-1, 3)
         c["wi"] = c["wi"].reshape(-1, 3)
         c["occluded"] = np.asarray(c["occluded"], dtype=bool)
@@ -322,6 +378,6 @@ class LightSystem:
         """The last run's warnings (lights skipped and why)."""
         return self._native.warnings()
 
-
-def _rgb(color):
-    return None if color is None else tuple(float(c) for c in color)
+    @staticmethod
+    def _run_options(spp, threads) -> Tuple[int, Optional[int]]:
+        return _check.integer("spp", spp, "light_spp"), _check.optional_integer("threads", threads, "threads")

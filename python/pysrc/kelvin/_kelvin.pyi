@@ -3,6 +3,11 @@ from typing import Optional, Sequence, Tuple, Union
 import numpy as np
 import numpy.typing as npt
 
+# Option name to its (lowest, highest) value, as the Rust side checks them.
+LIMITS: dict[str, Tuple[Union[int, float], Union[int, float]]]
+
+LUMINANCE_WEIGHTS: Tuple[float, float, float]
+
 def write_exr(path: str, pixels: npt.NDArray[np.float32], width: int, height: int) -> None: ...
 def write_png(path: str, pixels: npt.NDArray[np.float32], width: int, height: int,
               exposure: Optional[float] = None) -> None: ...
