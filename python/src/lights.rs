@@ -136,9 +136,13 @@ impl LightSystem {
             )));
         }
         let pool = super::pool(threads)?;
-        // Past u32 sample indices the streams start over (after 2^32 samples of a point).
-        let first = self.next_sample.checked_add(spp).map_or(0, |_| self.next_sample);
-        self.next_sample = first + spp;
+        // Sample indices are u32: past 2^32 samples of a point the streams would repeat.
+        let first = self.next_sample;
+        self.next_sample = first.checked_add(spp).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "spp = {spp}: this LightSystem has drawn {first} samples per point, and its sample streams end at 2^32"
+            ))
+        })?;
         let mut settings = self.world.resource_mut::<Settings>();
         settings.samples_per_point = 1;
         let (spectral, pattern, seed) = (settings.color_mode == ColorMode::Spectral, settings.pattern, settings.seed);

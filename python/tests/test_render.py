@@ -82,6 +82,10 @@ def test_stats_and_warnings(data, tmp_path):
         (dict(crop=(0, 0, 4, 4), light_sampler="restir"), "ReSTIR"),
         (dict(sky="95,0,2024-06-21T10:00"), "latitude"),
         (dict(threads=0), "threads"),
+        # Contradictions that used to be ignored silently.
+        (dict(all_lights=True, light_sampler="restir"), "all_lights .* restir"),
+        (dict(candidates=4), "candidates = 4 is for light_sampler = ris or restir, not bvh"),
+        (dict(light_sampler="ris", neighbours=2), "neighbours = 2 is for light_sampler = restir, not ris"),
     ],
 )
 def test_bad_options_are_value_errors_naming_the_option(options, says):

@@ -48,7 +48,7 @@ class Scene:
     def load(scene: Optional[str], env: Optional[str], env_intensity: float, sky: Optional[str],
              sky_intensity: float) -> Tuple["Scene", list[str]]: ...
     def render(self, size: Tuple[int, int], spp: int, time: Optional[float], integrator: str, max_depth: int,
-               roulette_depth: int, light_sampler: str, candidates: int, neighbours: int, radius: int,
+               roulette_depth: int, light_sampler: str, candidates: Optional[int], neighbours: Optional[int], radius: Optional[int],
                biased_reuse: bool, color: str, all_lights: bool, mis: bool, seed: int, pattern: str,
                threads: Optional[int],
                environment_at: Optional[Tuple[float, float, float]], crop: Optional[Tuple[int, int, int, int]]
