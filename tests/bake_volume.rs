@@ -44,6 +44,33 @@ fn options(resolution: UVec3, bounds: (Vec3, Vec3)) -> VolumeOptions {
     VolumeOptions { resolution, spp: 32, bounds: Some(bounds), ..VolumeOptions::default() }
 }
 
+/// In open space under a sun and sky (no ground geometry) the light's own ground is a Lambertian
+/// bounce of albedo a of the sun and sky: the -Y side (E / pi of the lower hemisphere) is a times
+/// the +Y side (E / pi of the upper one).
+#[test]
+fn a_sun_and_sky_light_the_minus_y_side_with_their_ground() {
+    use kelvin::light::infinite::sunsky::{SunPosition, SunSkyLight, direction_from_angles};
+    let dir = TempDir::new("volume", "sunsky");
+    let opts = VolumeOptions { spp: 1024, ..options(UVec3::ONE, (Vec3::splat(-1.0), Vec3::splat(1.0))) };
+    let albedo = 0.3;
+    let light = SunSkyLight {
+        sun: SunPosition::Direction(direction_from_angles(35.0, 200.0)),
+        ground_albedo: albedo,
+        ..Default::default()
+    };
+    let volume = bake(&dir, &Doc::default(), &opts, |w| {
+        w.spawn(light);
+    })
+    .unwrap();
+    let side = |v: Vec3| SIDES.iter().position(|s| *s == v).unwrap();
+    let (up, down) = (side(Vec3::Y), side(Vec3::NEG_Y));
+    let (u, d) = (lum(volume.sides[0][up]), lum(volume.sides[0][down]));
+    let (su, sd) = (lum(volume.std_error[0][up]), lum(volume.std_error[0][down]));
+    eprintln!("+Y {u:.1} +- {su:.1} nit, -Y {d:.1} +- {sd:.1} nit (albedo {albedo})");
+    let sigma = (sd * sd + (albedo as f64 * su).powi(2)).sqrt();
+    assert!((d - albedo as f64 * u).abs() <= 3.0 * sigma + 0.01 * d, "-Y {d} vs {albedo} x +Y {u} (sigma {sigma})");
+}
+
 /// In open space under a uniform sky of radiance L, each side of each voxel sees a hemisphere of
 /// it: E / pi = L.
 #[test]

@@ -13,33 +13,36 @@
 //! spectral model in spectral mode, which an image row cannot.
 //!
 //! Radiance is the model's own evaluation (not the table's texels): linear sRGB from the RGB
-//! tables times 683 (nit) in RGB mode, the spectral tables in spectral mode; nothing comes from
-//! below the horizon (+Y up), and with the sun below it (night; twilight is outside the model)
-//! the light is black. Frame: +Y up, -Z north, +X east.
+//! tables times 683 (nit) in RGB mode, the spectral tables in spectral mode. The model takes the
+//! sun's geometric elevation; below the horizon its sky fades out through civil twilight
+//! ([`twilight`]). Below the horizon (+Y up) is a Lambertian ground lit by sun and sky
+//! ([`ground`]), sampled by the same table. Frame: +Y up, -Z north, +X east.
 
+mod disc;
+pub mod ground;
 mod hosek;
 mod sky_lanes;
 pub mod solar;
+pub mod twilight;
 
 use std::f32::consts::PI;
 use std::f64::consts::PI as PI64;
 use std::sync::Arc;
 
 use bevy_ecs::component::Component;
-use glam::{DVec3, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::tables::{EnvLookup, EnvMapTables, EnvTableOptions};
 use super::{ColorQuery, LiSample, LightError, LightFlags, LightSampleContext, SceneSphere, far_distance};
 use crate::lanes::{self, F32x16, LANES};
 use crate::light::distant::SUN_ANGULAR_DIAMETER;
-use crate::sampling::{Frame, sample_uniform_cone_sin2};
 use crate::scene::image::{LUMINANCE_WEIGHTS, RgbImage};
 use crate::spectrum::SampledSpectrum;
 use crate::spectrum::cie::CIE_1931;
-use crate::spectrum::color::XYZ_TO_SRGB;
 use crate::spectrum::photometry::K_M;
 
+pub use disc::SunDisc;
 pub use hosek::{ChannelConfig, RgbRow, SkyModel, SunModel, TURBIDITY_RANGE, WAVELENGTHS_NM};
 pub use solar::{SolarPosition, UtcDateTime, direction_from_angles, solar_position};
 
@@ -175,12 +178,22 @@ impl SunSkyLight {
         }
     }
 
-    /// Why this light gives no light, when the sun is at or below the horizon: the Hosek-Wilkie
-    /// model covers a sun above it, and kelvin models neither twilight nor the night sky, so the
-    /// light is black there. None by day.
+    /// The sun's geometric (unrefracted) elevation, radians: what the Hosek-Wilkie model and the
+    /// twilight fade take ([`twilight`]). With a direction it is the direction's elevation.
+    pub fn geometric_elevation(&self) -> Result<f32, LightError> {
+        match self.sun {
+            SunPosition::Direction(_) => Ok(self.sun_direction()?.y.clamp(-1.0, 1.0).asin()),
+            SunPosition::Location { latitude_deg, longitude_deg, time } => {
+                Ok(solar_position(latitude_deg, longitude_deg, &time)?.elevation_deg.to_radians() as f32)
+            }
+        }
+    }
+
+    /// Why this light gives no light, when the sun is past the end of civil twilight (see
+    /// [`twilight`]; the night sky is not modelled). None while sun or sky give light.
     pub fn dark_reason(&self) -> Result<Option<String>, LightError> {
-        let d = self.sun_direction()?;
-        if d.y > 0.0 {
+        let h = self.geometric_elevation()?;
+        if twilight::sky_fade(h) > 0.0 || self.sun_direction()?.y > -(0.5 * self.sun_angular_diameter).sin() {
             return Ok(None);
         }
         let at = match self.sun {
@@ -191,9 +204,10 @@ impl SunSkyLight {
             SunPosition::Direction(_) => String::new(),
         };
         Ok(Some(format!(
-            "the sun is {:.1} degrees below the horizon{at}: the sun and sky give no light (the Hosek-Wilkie \
-             model covers a sun above the horizon; twilight and night skies are not modelled)",
-            -d.y.clamp(-1.0, 1.0).asin().to_degrees()
+            "the sun is {:.1} degrees below the horizon{at}: the sun and sky give no light (the sky fades out \
+             by the end of civil twilight, {} degrees; the night sky is not modelled)",
+            -h.to_degrees(),
+            twilight::CIVIL_TWILIGHT_END_DEG
         )))
     }
 
@@ -228,16 +242,25 @@ impl SunSkyLight {
     /// resolve: [`ResolvedSunSky::into_buffers`]), so a changing sky allocates nothing.
     pub fn resolve_reusing(&self, scene: SceneSphere, mut buffers: SkyBuffers) -> Result<ResolvedSunSky, LightError> {
         self.validate()?;
+        // The disc is drawn where it is seen (refracted); the models take the geometric elevation
+        // (clamped to their range at 0) and the sky fades below it (see `twilight`).
         let sun_dir = self.sun_direction()?;
-        let night = !(sun_dir.y > 0.0);
-        let elevation = sun_dir.y.clamp(-1.0, 1.0).asin();
-        let sky = (!night).then(|| SkyModel::new(elevation, self.turbidity, self.ground_albedo));
-        let sun = (!night)
-            .then(|| SunDisc::new(SunModel::new(elevation, self.turbidity), sun_dir, self.sun_angular_diameter));
+        let elevation = self.geometric_elevation()?;
+        let fade = twilight::sky_fade(elevation);
+        let sky = (fade > 0.0).then(|| SkyModel::new(elevation, self.turbidity, self.ground_albedo).scaled(fade));
+        // The disc shines while a part of it is above the horizon (`le` clips the rest).
+        let disc_up = sun_dir.y > -(0.5 * self.sun_angular_diameter).sin() && sky.is_some();
+        let sun =
+            disc_up.then(|| SunDisc::new(SunModel::new(elevation, self.turbidity), sun_dir, self.sun_angular_diameter));
         let (mut sky_lum, mut sky_rad) = (0.0, 0.0);
+        let (mut ground_rgb, mut ground_spectral) = (Vec3::ZERO, [0.0; 11]);
         if let Some(sky) = &sky {
             let b = &mut buffers;
             fill_sky_image(&mut b.image, &mut b.columns, &mut b.row_luminance, self.table_width, sky, sun_dir);
+            let sky_e = ground::image_horizontal_irradiance(&b.image);
+            (ground_rgb, ground_spectral) =
+                ground::ground_radiance(sky, sun_dir, sun.as_ref(), sky_e, self.ground_albedo);
+            ground::fill_ground(&mut b.image, &mut b.row_luminance, ground_rgb);
             let options = EnvTableOptions { compensate: false, max_width: None, lookup: EnvLookup::Nearest };
             match &mut buffers.tables {
                 Some(t) => t.rebuild(&buffers.image, options),
@@ -257,6 +280,8 @@ impl SunSkyLight {
             sun_dir,
             sky,
             sun,
+            ground_rgb,
+            ground_spectral,
             buffers: Arc::new(buffers),
             scale: self.scale,
             p_sun: if total > 0.0 { (sun_lum / total) as f32 } else { 0.0 },
@@ -269,7 +294,7 @@ impl SunSkyLight {
 
 /// Fills `image` (resized to `width` x its even half, buffers reused) with the sky's luminance
 /// at texel centres, in parallel over rows, and `row_luminance` with each row's luminance sum; the
-/// lower half (below the horizon) is black. The directions are those of
+/// lower half (below the horizon) is left black for [`ground::fill_ground`]. The directions are those of
 /// [`crate::scene::image::lat_long_direction`], with each row's zenith-angle factors and each
 /// column's sin/cos of phi computed once (`columns`, reused). Blocks of [`LANES`] texels go
 /// through the lane kernel ([`SkyModel::rgb_nits_lanes`]), the rest of a row through the scalar model.
@@ -339,120 +364,19 @@ fn sky_efficacy(sky: &SkyModel, sun: Vec3) -> f64 {
     if e > 0.0 { K_M * y / e } else { K_M }
 }
 
-/// The sun's disc: Hosek-Wilkie radiance with limb darkening, sampled uniformly in its cone.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SunDisc {
-    /// Spectral radiance and limb darkening for the sun's elevation and the turbidity.
-    pub model: SunModel,
-    /// Unit direction toward the disc's centre.
-    pub dir: Vec3,
-    /// sin^2 and 1 - cos of the disc's angular radius.
-    pub sin2_radius: f32,
-    /// 1 - cos of the disc's angular radius (see `sin2_radius`).
-    pub one_minus_cos: f32,
-    /// Radiance factor keeping the illuminance of a sun of [`SUN_ANGULAR_DIAMETER`].
-    pub size_factor: f32,
-    /// Photometric linear sRGB radiance (nit) as a polynomial in the limb cosine mu:
-    /// L(mu) = sum_k `rgb_limb[k]` mu^k (size factor included, `scale` not).
-    pub rgb_limb: [Vec3; 6],
-    /// Normal illuminance (lx) and irradiance (W/m^2) of the disc, before `scale`.
-    pub illuminance: f64,
-    /// Normal irradiance of the disc, W/m^2, before `scale` (see `illuminance`).
-    pub irradiance: f64,
-}
-
-impl SunDisc {
-    fn new(model: SunModel, dir: Vec3, diameter: f32) -> Self {
-        let r = 0.5 * diameter as f64;
-        let omega = |r: f64| 4.0 * PI as f64 * (0.5 * r).sin().powi(2);
-        let size_factor = omega(0.5 * SUN_ANGULAR_DIAMETER as f64) / omega(r);
-        // Per power of mu: the integral of centre(lambda) c_k(lambda) cmf(lambda) over 360-830 nm.
-        let mut xyz = [DVec3::ZERO; 6];
-        let mut watts = [0.0f64; 6];
-        for nm in 360..=830usize {
-            let cmf = DVec3::from_array(CIE_1931.at_nm(nm));
-            for k in 0..6 {
-                let v = limb_term(&model, nm as f32, k);
-                xyz[k] += cmf * v;
-                watts[k] += v;
-            }
-        }
-        let rgb_limb = xyz.map(|c| (XYZ_TO_SRGB * c * K_M * size_factor).as_vec3());
-        // Over the disc, mu^k averages to 2 / (k + 2) (small-disc limit: area element 2 mu dmu).
-        let mean = |k: usize| 2.0 / (k as f64 + 2.0);
-        let solid_angle = omega(r);
-        let illuminance = (0..6).map(|k| xyz[k].y * K_M * mean(k)).sum::<f64>() * solid_angle * size_factor;
-        let irradiance = (0..6).map(|k| watts[k] * mean(k)).sum::<f64>() * solid_angle * size_factor;
-        Self {
-            model,
-            dir,
-            sin2_radius: r.sin().powi(2) as f32,
-            one_minus_cos: (2.0 * (0.5 * r).sin().powi(2)) as f32,
-            size_factor: size_factor as f32,
-            rgb_limb,
-            illuminance,
-            irradiance,
-        }
-    }
-
-    /// Solid angle of the disc, sr.
-    pub fn solid_angle(&self) -> f32 {
-        2.0 * PI * self.one_minus_cos
-    }
-
-    /// sin^2 of the angle between unit `wi` and the disc's centre, None outside the disc (or
-    /// behind). f64 cross product as [`crate::light::ResolvedDistant`]; the 1e-4 margin covers the
-    /// f32 rounding of sampled directions at the rim.
-    fn sin2_in_disc(&self, wi: Vec3) -> Option<f64> {
-        let (w, d) = (wi.as_dvec3().normalize(), self.dir.as_dvec3());
-        let s2 = w.cross(d).length_squared();
-        (w.dot(d) > 0.0 && s2 <= self.sin2_radius as f64 * (1.0 + 1e-4)).then_some(s2)
-    }
-
-    /// The limb cosine at sin^2 `s2` from the centre.
-    fn mu(&self, s2: f64) -> f32 {
-        (1.0 - s2 / self.sin2_radius as f64).max(0.0).sqrt() as f32
-    }
-
-    fn sample(&self, u: Vec2) -> Vec3 {
-        Frame::from_z(self.dir).from_local(sample_uniform_cone_sin2(u, self.sin2_radius)).normalize()
-    }
-
-    fn pdf(&self, wi: Vec3) -> f32 {
-        if self.sin2_in_disc(wi).is_some() { 1.0 / self.solid_angle() } else { 0.0 }
-    }
-
-    /// Radiance toward `wi` (zero outside the disc), before `scale`.
-    fn le(&self, wi: Vec3, query: ColorQuery) -> Option<SampledSpectrum> {
-        let mu = self.mu(self.sin2_in_disc(wi)?);
-        Some(match query {
-            ColorQuery::Rgb => {
-                // A low sun is redder than sRGB's gamut: its negative blue is clipped.
-                let c = self.rgb_limb.iter().rev().fold(Vec3::ZERO, |acc, &c| acc * mu + c).max(Vec3::ZERO);
-                SampledSpectrum([c.x, c.y, c.z, 0.0])
-            }
-            ColorQuery::Spectral(w) => SampledSpectrum(w.lambda.map(|l| self.model.spectral(l, mu) * self.size_factor)),
-        })
-    }
-}
-
-/// centre(lambda) times the mu^k coefficient of limb darkening at `lambda`: the k-th term of
-/// [`SunModel::spectral`].
-fn limb_term(model: &SunModel, lambda: f32, k: usize) -> f64 {
-    let (i, f) = hosek::wavelength_cell(lambda);
-    let lerp = |a: f32, b: f32| (a + f * (b - a)) as f64;
-    lerp(model.radiance[i], model.radiance[i + 1]) * lerp(model.limb[i][k], model.limb[i + 1][k])
-}
-
 /// A sun-and-sky light, ready to sample (see the module docs for the design).
 #[derive(Clone)]
 pub struct ResolvedSunSky {
     /// Unit direction toward the sun.
     pub sun_dir: Vec3,
-    /// The sky model; None with the sun below the horizon.
+    /// The sky model (twilight fade included); None past the end of civil twilight.
     pub sky: Option<SkyModel>,
-    /// The sun's disc; None with the sun below the horizon.
+    /// The sun's disc; None with the whole disc below the horizon.
     pub sun: Option<SunDisc>,
+    /// Radiance of the ground below the horizon, photometric linear sRGB (nit), before `scale`.
+    pub ground_rgb: Vec3,
+    /// The same at the model's wavelengths, W/(m^2 sr nm) ([`WAVELENGTHS_NM`]; held beyond).
+    pub ground_spectral: [f32; 11],
     /// The sky's image and sampling tables.
     pub buffers: Arc<SkyBuffers>,
     /// Multiplies sky and sun radiance alike (see [`SunSkyLight::scale`]).
@@ -485,7 +409,7 @@ impl ResolvedSunSky {
         LightFlags::INFINITE
     }
 
-    /// True with the sun below the horizon: the light is black.
+    /// True past the end of civil twilight: the light is black.
     pub fn is_night(&self) -> bool {
         self.sky.is_none()
     }
@@ -533,11 +457,20 @@ impl ResolvedSunSky {
         self.p_sun * sun + (1.0 - self.p_sun) * sky
     }
 
-    /// Radiance along an escaping ray of direction `wi` (unit): sky plus sun disc.
+    /// Radiance along an escaping ray of direction `wi` (unit): sky plus sun disc above the
+    /// horizon, the ground below it.
     pub fn le(&self, wi: Vec3, query: ColorQuery) -> SampledSpectrum {
         let Some(sky) = &self.sky else { return SampledSpectrum::default() };
         if !(wi.y > 0.0) {
-            return SampledSpectrum::default();
+            let g = match query {
+                ColorQuery::Rgb => SampledSpectrum([self.ground_rgb.x, self.ground_rgb.y, self.ground_rgb.z, 0.0]),
+                ColorQuery::Spectral(w) => SampledSpectrum(w.lambda.map(|l| {
+                    let (i, f) = hosek::wavelength_cell(l);
+                    let (a, b) = (self.ground_spectral[i], self.ground_spectral[i + 1]);
+                    a + f * (b - a)
+                })),
+            };
+            return g.scale(self.scale);
         }
         let mut l = match query {
             ColorQuery::Rgb => {

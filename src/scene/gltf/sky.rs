@@ -11,8 +11,8 @@
 //! `YYYY-MM-DDTHH:MM[:SS]`), or by `direction` (toward the sun, world frame, +Y up), not both.
 //! `sunAngularDiameter` is in radians as glTF's angles are; `intensity` multiplies the model's
 //! physical radiance. A bad optional field gets a warning at its pointer and its default; a sun that
-//! cannot be placed drops the sky with a warning; a sun below the horizon keeps the (dark) sky and
-//! says so. Sky extensions kelvin does not evaluate get a warning at their pointer.
+//! cannot be placed drops the sky with a warning; a sun past the end of civil twilight keeps the
+//! (dark) sky and says so. Sky extensions kelvin does not evaluate get a warning at their pointer.
 
 use serde_json::Value;
 

@@ -155,6 +155,15 @@ impl SkyModel {
         }
     }
 
+    /// The same sky with every channel's radiance times `factor` (L_M scales L linearly): the
+    /// twilight fade.
+    pub fn scaled(mut self, factor: f32) -> Self {
+        for ch in self.rgb.iter_mut().chain(self.spectral.iter_mut()) {
+            ch.radiance *= factor;
+        }
+        self
+    }
+
     /// Photometric linear sRGB radiance, nit, toward unit `w` for a sun toward unit `sun`; zero
     /// below the horizon (w.y <= 0), where the model is not defined.
     pub fn rgb_nits(&self, w: Vec3, sun: Vec3) -> Vec3 {
