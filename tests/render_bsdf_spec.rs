@@ -44,7 +44,7 @@ fn spec_brdf(p: Params, n: [f64; 3], v: [f64; 3], l: [f64; 3]) -> [f64; 3] {
         return [0.0; 3];
     }
     let h = normalize([l[0] + v[0], l[1] + v[1], l[2] + v[2]]);
-    let (n_h, v_h) = (dot(n, h), dot(v, h).abs());
+    let (n_h, v_h) = (dot(n, h), dot(v, h).abs().min(1.0));
     let alpha = p.roughness * p.roughness;
     let a2 = alpha * alpha;
     // D_GGX = alpha^2 chi+(N.H) / (pi ((N.H)^2 (alpha^2 - 1) + 1)^2).
@@ -95,8 +95,9 @@ fn check(what: &str, p: Params, n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
     let (got, want) = (crate_f(p, n, wo, wi), spec_brdf(p, f64s(n), f64s(wo), f64s(wi)));
     let mut worst = 0.0f64;
     for k in 0..3 {
-        if want[k] == 0.0 {
-            assert!(got[k] == 0.0, "{what} {p:?} wo {wo} wi {wi} channel {k}: f = {} where the spec's is 0", got[k]);
+        // Zero (and the spec's 1e-40 of f64 rounding in a Fresnel tail whose V.H is 1 in f32).
+        if want[k] < 1e-12 {
+            assert!(got[k] < 1e-12, "{what} {p:?} wo {wo} wi {wi} channel {k}: f = {} where the spec's is 0", got[k]);
             continue;
         }
         let rel = (got[k] / want[k] - 1.0).abs();

@@ -115,12 +115,15 @@ fn every_kind_of_light(world: &mut World) {
     world.spawn((Disk { radius: 1.5, inner_radius: 0.0 }, down, disk));
     let texels = (0..12).map(|i| Vec3::new(0.2 + 0.3 * (i % 4) as f32, 1.0, 0.1 * (i / 4) as f32)).collect();
     let texture = Arc::new(LightTexture::new(4, 3, texels).unwrap());
-    let panel = AreaLight { amount: Amount::Nits(3000.0), texture: Some(texture), two_sided: true, ..Default::default() };
+    let panel =
+        AreaLight { amount: Amount::Nits(3000.0), texture: Some(texture), two_sided: true, ..Default::default() };
     let beside = Transform::from_translation(Vec3::new(6.0, 1.0, 0.0)).looking_to(Vec3::NEG_X, Vec3::Y);
     world.spawn((Rectangle { half_size: glam::Vec2::new(1.0, 2.0) }, beside, panel));
     let (width, height) = (32usize, 16usize);
     let pixels = (0..width * height)
-        .map(|i| if i == 3 * width + 5 { Vec3::new(9000.0, 8000.0, 6000.0) } else { Vec3::splat(20.0 + (i % 7) as f32) })
+        .map(
+            |i| if i == 3 * width + 5 { Vec3::new(9000.0, 8000.0, 6000.0) } else { Vec3::splat(20.0 + (i % 7) as f32) },
+        )
         .collect();
     let sky = kelvin::scene::image::RgbImage { width, height, pixels };
     world.spawn((ImageInfiniteLight::new(Arc::new(sky)), Transform::IDENTITY));

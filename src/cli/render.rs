@@ -118,7 +118,7 @@ pub struct RenderArgs {
 #[derive(clap::Args)]
 pub(super) struct LightingArgs {
     /// Lat-long environment map (.exr or .hdr) lighting the scene as an infinite light.
-    #[arg(long)]
+    #[arg(long, value_parser = values::existing_file)]
     pub(super) env: Option<PathBuf>,
     /// Luminance (nit) of an environment texel of value 1.
     #[arg(long, default_value_t = 1.0, value_parser = values::intensity())]

@@ -194,12 +194,14 @@ fn temporal_and_spatial_reuse_together_are_unbiased() {
     assert!(mean.abs() < 0.01, "mean error {mean} ({errors:?})");
 }
 
-/// Bounds on one frame's error (sum of estimates over the exact sum, less 1), each about four
-/// times the largest measured over the test's frames: a frame's error is its own, so a frame
-/// whose reuse goes wrong shows however well the others average out.
-const MOVING_LIGHTS_BOUND: f64 = 0.1;
-const PAN_BOUND: f64 = 0.1;
-const SPATIAL_BOUND: f64 = 0.1;
+/// Bounds on one frame's error (sum of estimates over the exact sum, less 1), each about 5x the
+/// rms per-frame error measured over the test's frames (moving lights 0.028 rms, largest 0.068
+/// of 20 frames; camera pan 0.0035, largest 0.009 of 200; temporal + spatial 0.036, largest
+/// 0.113 of 200): a frame's error is its own, so a frame whose reuse goes wrong shows however
+/// well the others average out.
+const MOVING_LIGHTS_BOUND: f64 = 0.15;
+const PAN_BOUND: f64 = 0.02;
+const SPATIAL_BOUND: f64 = 0.2;
 
 /// Asserts every (frame, error) is within `bound`, printing the spread; returns the mean error.
 fn assert_every_frame(what: &str, errors: &[(u32, f64)], bound: f64) -> f64 {
