@@ -9,9 +9,14 @@ use glam::{Vec2, Vec3};
 use kelvin::light::ColorQuery;
 use kelvin::render::material::Material;
 
-/// Relative tolerance of a point evaluation: the crate evaluates in f32 (a sharp lobe's D is
-/// steep in the half vector, whose f32 rounding moves D by ~1e-5 of itself).
-const TOLERANCE: f64 = 1e-4;
+/// Relative tolerance of a point evaluation, 5e-4: the crate evaluates in f32, and a sharp lobe's
+/// D is steep in the half vector where its angle is near alpha (d ln D / d sin = 2 / alpha, 2000
+/// at alpha 1e-3), so the half vector's f32 rounding (6e-8) moves D by up to ~1.5e-4 there
+/// (measured: 1.48e-4 just off the peak at roughness 0.032). About a tilted normal the crate's
+/// change of frame rounds local coordinates by ~6e-8 too, which a grazing mirror pair at alpha
+/// 1e-3 amplifies (measured up to 4.4e-3): `TILTED_TOLERANCE`. A D 3% off fails either.
+const TOLERANCE: f64 = 5e-4;
+const TILTED_TOLERANCE: f64 = 1e-2;
 
 /// The spec's parameters of one material (the defaults ior 1.5 and specular 1 give f0 = 0.04).
 #[derive(Clone, Copy, Debug)]
@@ -89,10 +94,15 @@ fn direction(n: Vec3, theta: f32, phi: f32) -> Vec3 {
     frame.from_local(Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())).normalize()
 }
 
-/// Asserts the crate's f equals the spec's within `TOLERANCE` (exactly 0 where the spec's is);
+/// Asserts the crate's f equals the spec's within `TOLERANCE` (`TILTED_TOLERANCE` about a normal
+/// other than +z; 0 where the spec's is);
 /// returns the largest relative error.
 fn check(what: &str, p: Params, n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
-    let (got, want) = (crate_f(p, n, wo, wi), spec_brdf(p, f64s(n), f64s(wo), f64s(wi)));
+    let tolerance = if n == Vec3::Z { TOLERANCE } else { TILTED_TOLERANCE };
+    // The spec's N is unit: an f32 unit vector's length is 1 +- 6e-8, which at alpha 1e-3
+    // (alpha^2 1e-6) moves 1 - (N.H)^2, so the spec's D at its peak, by tens of percent. V and L
+    // are used as given (H is normalised; N.L and N.V move by 6e-8 of themselves).
+    let (got, want) = (crate_f(p, n, wo, wi), spec_brdf(p, normalize(f64s(n)), f64s(wo), f64s(wi)));
     let mut worst = 0.0f64;
     for k in 0..3 {
         // Zero (and the spec's 1e-40 of f64 rounding in a Fresnel tail whose V.H is 1 in f32).
@@ -102,7 +112,7 @@ fn check(what: &str, p: Params, n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
         }
         let rel = (got[k] / want[k] - 1.0).abs();
         assert!(
-            rel < TOLERANCE,
+            rel < tolerance,
             "{what} {p:?} wo {wo} wi {wi} channel {k}: f = {:e}, the spec's {:e} (relative error {rel:.2e})",
             got[k],
             want[k]

@@ -311,11 +311,14 @@ pub(super) fn render_to_files(
     if let Some(crop) = args.crop {
         crop.check(width, height)?;
         if ext.as_deref() != Some("exr") {
-            return Err(format!("{out}: a --crop tile is written as .exr, which records its place in the image").into());
+            return Err(format!(
+                "--output {out}: a --crop tile is written as .exr, which records its place in the image"
+            )
+            .into());
         }
         opts.check_tiling(&job.selection()).map_err(|e| format!("--crop {crop}: {e}"))?;
     } else if !matches!(ext.as_deref(), Some("exr" | "png")) {
-        return Err(format!("{out}: unsupported output extension; use .exr or .png").into());
+        return Err(format!("--output {out}: unsupported output extension; use .exr or .png").into());
     }
     // Checked before the scene loads, so a bad name fails at once.
     let frames: Vec<Option<u32>> = match &args.frames {
