@@ -274,3 +274,60 @@ fn validator_spot_angles_are_fixed_and_directional_range_dropped() {
         (LightKind::Point, 1.0, Vec3::ONE)
     );
 }
+/// An emissive texture with NaN and negative texels cannot tint an area light: it is dropped
+/// (the surface emits its factor uniformly) with one warning naming the material, the texture
+/// and how many texels are bad, though two instances use the material; a good texture is kept
+/// without a warning.
+#[test]
+fn an_emissive_texture_with_nan_or_negative_texels_is_dropped_with_a_warning() {
+    use glam::Affine3A;
+    use kelvin::scene::gltf::{MaterialData, MeshData, MeshInstance, PrimitiveData};
+    use kelvin::scene::image::RgbImage;
+    use std::sync::Arc;
+    let bad = vec![Vec3::ONE, Vec3::new(f32::NAN, 1.0, 1.0), Vec3::new(0.5, -0.1, 0.0), Vec3::splat(-2.0)];
+    let good = vec![Vec3::ONE, Vec3::splat(2.0), Vec3::splat(0.5), Vec3::ZERO];
+    for (texels, warned) in [(bad, true), (good, false)] {
+        let primitive = PrimitiveData {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: None,
+            uvs: Some(vec![glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]),
+            uvs1: None,
+            indices: vec![0, 1, 2],
+            material: Some(0),
+        };
+        let instance = |x: f32| MeshInstance {
+            mesh: 0,
+            world: Affine3A::from_translation(Vec3::new(x, 0.0, 0.0)),
+            node: None,
+            node_name: None,
+        };
+        let scene = GltfScene {
+            meshes: vec![MeshData { name: None, primitives: vec![primitive] }],
+            instances: vec![instance(0.0), instance(2.0)],
+            materials: vec![MaterialData {
+                name: Some("Glow".into()),
+                emissive: Vec3::splat(5.0),
+                emissive_texture: Some(0),
+                ..Default::default()
+            }],
+            textures: vec![Arc::new(RgbImage { width: 2, height: 2, pixels: texels })],
+            ..Default::default()
+        };
+        let mut w = World::new();
+        let report = spawn_gltf(&mut w, &scene);
+        assert_eq!(report.emissive_meshes, 2, "{:?}", report.warnings);
+        let lights: Vec<AreaLight> = w.query::<&AreaLight>().iter(&w).cloned().collect();
+        assert_eq!(lights.len(), 2);
+        let mentions: Vec<&String> = report.warnings.iter().filter(|m| m.contains("emissiveTexture")).collect();
+        if warned {
+            assert_eq!(mentions.len(), 1, "one warning for the material: {:?}", report.warnings);
+            let says = mentions[0];
+            assert!(says.contains("material 0 \"Glow\"") && says.contains("texture 0"), "{says}");
+            assert!(says.contains("1 NaN or infinite and 2 negative texel(s) of 4"), "{says}");
+            assert!(lights.iter().all(|l| l.texture.is_none()), "the texture is dropped");
+        } else {
+            assert!(mentions.is_empty(), "{:?}", report.warnings);
+            assert!(lights.iter().all(|l| l.texture.is_some()), "a good texture is kept");
+        }
+    }
+}

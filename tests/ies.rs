@@ -309,6 +309,37 @@ fn type_b_mirrors_about_the_right_planes() {
     assert_eq!(p.candela_dir(Vec3::new(0.1, 0.2, 0.9)), 0.0);
 }
 
+/// The summary names the planes of its beam and field angles in the file's own angles: a type A
+/// or B file's horizontal angles are not C-planes, so its table says "V = 0 (H sweep)" and
+/// "H = 0 (V sweep)", never C0-C180. A spot 10 degrees wide in H and 30 in V (Gaussian s) has
+/// the beam angle 2 s sqrt(2 ln 2) of each in the plane so named: local XZ sweeps H for type B,
+/// local YZ for type A (their frames, tested above).
+#[test]
+fn summaries_of_type_a_and_b_files_name_their_planes_by_type_not_as_c_planes() {
+    use kelvin::scene::ies::IesSummary;
+    let beam = |s: f64| 2.0 * s * (2.0 * 2f64.ln()).sqrt();
+    let spot = |v: f64, h: f64| 1000.0 * (-h * h / (2.0 * 10.0 * 10.0) - v * v / (2.0 * 30.0 * 30.0)).exp();
+    let (v, h) = (steps(-90.0, 90.0, 0.5), steps(-90.0, 90.0, 0.5));
+    for kind in [2u8, 3] {
+        let summary = IesSummary::of(&parse(&ies_file(kind, &v, &h, spot)));
+        let table = summary.to_string();
+        let (h_sweep, v_sweep) = match kind {
+            2 => ((summary.beam_angle_deg, 0), (summary.beam_angle_c90_deg, 1)),
+            _ => ((summary.beam_angle_c90_deg, 1), (summary.beam_angle_deg, 0)),
+        };
+        eprintln!("type {kind}: {}", table.lines().find(|l| l.starts_with("beam")).unwrap_or_default());
+        assert_eq!(summary.angle_planes[h_sweep.1], "V = 0 (H sweep)", "type {kind}");
+        assert_eq!(summary.angle_planes[v_sweep.1], "H = 0 (V sweep)", "type {kind}");
+        assert!((h_sweep.0.unwrap() - beam(10.0)).abs() < 0.2, "type {kind}: H beam {:?}", h_sweep.0);
+        assert!((v_sweep.0.unwrap() - beam(30.0)).abs() < 0.2, "type {kind}: V beam {:?}", v_sweep.0);
+        assert!(!table.contains("C0-C180") && !table.contains("C90-C270"), "type {kind}:\n{table}");
+        assert!(table.contains("(XZ / V = 0 (H sweep))") || table.contains("(YZ / V = 0 (H sweep))"), "{table}");
+    }
+    let c = IesSummary::of(&parse(&ies_file(1, &steps(0.0, 180.0, 5.0), &[0.0], |g, _| 100.0 + g)));
+    assert_eq!(c.angle_planes, ["C0-C180", "C90-C270"]);
+    assert!(c.to_string().contains("(XZ / C0-C180)"));
+}
+
 #[test]
 fn beam_and_field_angles_of_a_gaussian_spot() {
     // I = 1000 exp(-gamma^2 / (2 s^2)): 50% at gamma = s sqrt(2 ln 2), 10% at s sqrt(2 ln 10).

@@ -118,7 +118,7 @@ pub struct RenderArgs {
 #[derive(clap::Args)]
 pub(super) struct LightingArgs {
     /// Lat-long environment map (.exr or .hdr) lighting the scene as an infinite light.
-    #[arg(long)]
+    #[arg(long, value_parser = values::existing_file)]
     pub(super) env: Option<PathBuf>,
     /// Luminance (nit) of an environment texel of value 1.
     #[arg(long, default_value_t = 1.0, value_parser = values::intensity())]
@@ -311,11 +311,14 @@ pub(super) fn render_to_files(
     if let Some(crop) = args.crop {
         crop.check(width, height)?;
         if ext.as_deref() != Some("exr") {
-            return Err(format!("{out}: a --crop tile is written as .exr, which records its place in the image").into());
+            return Err(format!(
+                "--output {out}: a --crop tile is written as .exr, which records its place in the image"
+            )
+            .into());
         }
         opts.check_tiling(&job.selection()).map_err(|e| format!("--crop {crop}: {e}"))?;
     } else if !matches!(ext.as_deref(), Some("exr" | "png")) {
-        return Err(format!("{out}: unsupported output extension; use .exr or .png").into());
+        return Err(format!("--output {out}: unsupported output extension; use .exr or .png").into());
     }
     // Checked before the scene loads, so a bad name fails at once.
     let frames: Vec<Option<u32>> = match &args.frames {

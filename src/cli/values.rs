@@ -120,3 +120,15 @@ pub(super) fn data_dir(path: &std::path::Path) -> Result<(), String> {
         ))
     }
 }
+
+/// A file read later by name (an environment map): refused at once, named with its option, when
+/// it does not exist.
+pub(super) fn existing_file(s: &str) -> Result<std::path::PathBuf, String> {
+    let path = std::path::PathBuf::from(s);
+    match path.metadata() {
+        Ok(m) if m.is_dir() => Err("is a folder, not a file".into()),
+        Ok(_) => Ok(path),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err("file not found".into()),
+        Err(e) => Err(format!("cannot read: {e}")),
+    }
+}

@@ -329,7 +329,7 @@ impl RenderJob {
     /// The sun and sky the job names, checked.
     fn sun_sky(&self) -> Result<Option<SunSkyLight>, JobError> {
         let Some(spec) = &self.sky else { return Ok(None) };
-        let bad = |e: crate::light::LightError| JobError::Invalid(format!("sky {spec}: {e}"));
+        let bad = |e: crate::light::LightError| JobError::Invalid(format!("--sky {spec}: {e}"));
         let light = SunSkyLight { scale: self.sky_intensity, ..SunSkyLight::parse(spec).map_err(bad)? };
         light.validate().map_err(bad)?;
         Ok(Some(light))

@@ -120,15 +120,17 @@ impl RenderOptions {
     }
 
     /// Whether the crop (if any) renders that region of the full render. Two things make a tile
-    /// another image: ReSTIR's reuse, whose neighbours come from the render's own samples and
-    /// batches, and a time budget, which gives each tile as many passes as fit its own time. A
-    /// crop that covers the whole image is the full render.
+    /// another image: ReSTIR's spatial reuse, whose neighbours come from the render's own samples
+    /// and batches, and a time budget, which gives each tile as many passes as fit its own time.
+    /// ReSTIR's temporal reuse alone tiles: a render never gives its batches previous points
+    /// (`ShadingBatch::previous` stays empty), so no reservoir finds a history to reuse. A crop
+    /// that covers the whole image is the full render.
     pub fn check_tiling(&self, selection: &LightSelection) -> Result<(), TileError> {
         if self.region() == Crop::full(self.width, self.height) {
             return Ok(());
         }
         if let LightSelection::Restir(r) = selection
-            && (r.spatial > 0 || r.temporal)
+            && r.spatial > 0
         {
             return Err(TileError::Reuse);
         }

@@ -126,11 +126,12 @@ pub enum TileError {
     /// [`merge_tiles`] was given an empty list.
     #[error("no tiles to merge")]
     NoTiles,
-    /// A crop was asked of a ReSTIR render with spatial or temporal reuse, whose tiles would not
-    /// match the full render.
+    /// A crop was asked of a ReSTIR render with spatial reuse, whose tiles would not match the
+    /// full render.
     #[error(
-        "ReSTIR reuses reservoirs of the render's own samples, so a tile would not be that region of the full \
-         image: render ReSTIR images whole, or tile with the ris light sampler"
+        "ReSTIR's spatial reuse takes reservoirs of the render's own samples, so a tile would not be that region \
+         of the full image: render ReSTIR images with neighbours whole, or tile with --neighbours 0 or the ris \
+         light sampler"
     )]
     Reuse,
     /// A crop was asked of a render with a time budget, whose tiles would differ in samples per pixel.

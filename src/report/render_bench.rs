@@ -278,7 +278,7 @@ pub fn selected_scenes(cfg: &RenderBenchConfig) -> Result<Vec<&'static SuiteScen
     for name in &cfg.scenes {
         if suite_scene(name).is_none() {
             let names: Vec<&str> = SUITE.iter().map(|s| s.name).collect();
-            return Err(format!("unknown scene '{name}'; the suite has: {}", names.join(", ")).into());
+            return Err(format!("--scenes: unknown scene '{name}'; the suite has: {}", names.join(", ")).into());
         }
     }
     Ok(SUITE.iter().filter(|s| cfg.scenes.is_empty() || cfg.scenes.iter().any(|n| n == s.name)).collect())

@@ -108,6 +108,9 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
     let file = report.file;
     let at_node = |node: Option<usize>, rest_inverse| node.map(|node| GltfNode { file, node, rest_inverse });
     let materials: Vec<Material> = scene.materials.iter().map(|m| material_of(m, scene)).collect();
+    // Each material's area light, made once (its texture checked once, with one warning).
+    let emitters: Vec<Option<crate::light::AreaLight>> =
+        scene.materials.iter().enumerate().map(|(i, m)| emissive_light(i, m, scene, &mut report.warnings)).collect();
     for (i, inst) in scene.instances.iter().enumerate() {
         let Some(mesh) = scene.meshes.get(inst.mesh) else { continue };
         // Normals take the inverse transpose (right under mirrors too). A mirroring transform (negative
@@ -155,9 +158,7 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
                 primitive: p,
                 uvs1: prim.uvs1.clone(),
             });
-            if let Some(area) =
-                prim.material.and_then(|i| scene.materials.get(i)).and_then(|m| emissive_light(m, scene))
-            {
+            if let Some(area) = prim.material.and_then(|i| emitters.get(i).cloned().flatten()) {
                 entity.insert(area);
                 report.emissive_meshes += 1;
             }
@@ -231,15 +232,42 @@ fn load_ies(source: Option<&IesSource>) -> Result<IesProfile, String> {
     }
 }
 
-/// The area light an emissive material makes, if any.
-fn emissive_light(m: &MaterialData, scene: &GltfScene) -> Option<crate::light::AreaLight> {
+/// The area light emissive material `index` makes, if any. An emissive texture an area light
+/// cannot use (a texel NaN, infinite or negative) is dropped, and the surface emits its factor
+/// uniformly, with a warning naming the material, the texture and how many texels are bad.
+fn emissive_light(
+    index: usize,
+    m: &MaterialData,
+    scene: &GltfScene,
+    warnings: &mut Vec<String>,
+) -> Option<crate::light::AreaLight> {
     let y = luminance(m.emissive);
     if y.is_nan() || y <= 0.0 {
         return None;
     }
     let (spectrum, _) = colour_spectrum(m.emissive);
-    let texture = m.emissive_texture.and_then(|i| scene.textures.get(i).cloned());
-    Some(crate::light::AreaLight::emissive(Amount::Nits(y), spectrum, texture, m.double_sided))
+    let mut texture = m.emissive_texture.and_then(|i| scene.textures.get(i).map(|t| (i, t.clone())));
+    if let Some((t, image)) = &texture {
+        let material = match &m.name {
+            Some(name) => format!("material {index} {name:?}"),
+            None => format!("material {index}"),
+        };
+        let not_finite = image.pixels.iter().filter(|p| !p.is_finite()).count();
+        let negative = image.pixels.iter().filter(|p| p.is_finite() && p.min_element() < 0.0).count();
+        if not_finite + negative > 0 {
+            warnings.push(format!(
+                "{material}: emissiveTexture (texture {t}) has {not_finite} NaN or infinite and {negative} negative \
+                 texel(s) of {}; the texture is dropped and the surface emits its emissiveFactor uniformly",
+                image.pixels.len()
+            ));
+            texture = None;
+        } else if image.width * image.height != image.pixels.len() || image.pixels.is_empty() {
+            let (w, h, n) = (image.width, image.height, image.pixels.len());
+            warnings.push(format!("{material}: emissiveTexture (texture {t}) has {n} texel(s) for {w} x {h}; dropped"));
+            texture = None;
+        }
+    }
+    Some(crate::light::AreaLight::emissive(Amount::Nits(y), spectrum, texture.map(|(_, t)| t), m.double_sided))
 }
 
 #[cfg(test)]

@@ -37,13 +37,18 @@ pub struct IesSummary {
     pub integrated_over_stated: Option<f64>,
     /// Peak intensity of the grid, cd (multiplier and ballast factor applied).
     pub max_candela: f64,
-    /// Beam (50%) and field (10%) full angles in the C0-C180 plane (local XZ), degrees.
+    /// The planes of the beam and field angles, local XZ then local YZ, each named in the file's
+    /// own angles ([`plane_names`]): C0-C180 and C90-C270 for type C; for types A and B, whose
+    /// horizontal angles are not C-planes, the plane V = 0 (swept in H) and H = 0 (swept in V).
+    pub angle_planes: [&'static str; 2],
+    /// Beam (50%) full angle in the local XZ plane (`angle_planes[0]`; C0-C180 for type C), degrees.
     pub beam_angle_deg: Option<f64>,
-    /// Field (10%) full angle in the C0-C180 plane (local XZ), degrees.
+    /// Field (10%) full angle in the local XZ plane (`angle_planes[0]`), degrees.
     pub field_angle_deg: Option<f64>,
-    /// The same in the C90-C270 plane (local YZ).
+    /// Beam (50%) full angle in the local YZ plane (`angle_planes[1]`; C90-C270 for type C; the
+    /// key keeps its type C name), degrees.
     pub beam_angle_c90_deg: Option<f64>,
-    /// Field (10%) full angle in the C90-C270 plane (local YZ), degrees.
+    /// Field (10%) full angle in the local YZ plane (`angle_planes[1]`), degrees.
     pub field_angle_c90_deg: Option<f64>,
     /// Input power stated in the file, W.
     pub input_watts: f64,
@@ -77,6 +82,7 @@ impl IesSummary {
             integrated_lumens: integrated,
             integrated_over_stated: stated.map(|s| integrated / s),
             max_candela: profile.max_candela(),
+            angle_planes: plane_names(profile.photometric_type()),
             beam_angle_deg: profile.beam_angle_deg(),
             field_angle_deg: profile.field_angle_deg(),
             beam_angle_c90_deg: profile.spread_angle_deg(90.0, 0.5),
@@ -125,15 +131,16 @@ impl std::fmt::Display for IesSummary {
             None => writeln!(f)?,
         }
         writeln!(f, "max candela        {:.1} cd", self.max_candela)?;
+        let [xz, yz] = self.angle_planes;
         writeln!(
             f,
-            "beam angle (50%)   {} (XZ / C0-C180), {} (YZ / C90-C270)",
+            "beam angle (50%)   {} (XZ / {xz}), {} (YZ / {yz})",
             angle(self.beam_angle_deg),
             angle(self.beam_angle_c90_deg)
         )?;
         writeln!(
             f,
-            "field angle (10%)  {} (XZ / C0-C180), {} (YZ / C90-C270)",
+            "field angle (10%)  {} (XZ / {xz}), {} (YZ / {yz})",
             angle(self.field_angle_deg),
             angle(self.field_angle_c90_deg)
         )?;
