@@ -11,7 +11,8 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
+            // What failed, by code (see `kelvin --help`): a farm retries 3 and 130, not 2.
+            ExitCode::from(cli::exit_code(&*e))
         }
     }
 }

@@ -5,13 +5,83 @@
 
 use std::collections::BTreeMap;
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use sha2::{Digest, Sha256};
 
 /// The name of the EXR header attribute that holds the provenance.
 pub const ATTRIBUTE: &str = "kelvin";
+
+/// `sha256:` and the lowercase hex SHA-256 of a digest's state.
+fn hex(hasher: Sha256) -> String {
+    let hex: String = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
+    format!("sha256:{hex}")
+}
+
+/// `sha256:` and the lowercase hex SHA-256 of `bytes`.
+pub fn sha256(bytes: &[u8]) -> String {
+    hex(Sha256::new_with_prefix(bytes))
+}
+
+/// A file a loader read: its path and the SHA-256 of the very bytes it parsed (hashed in memory
+/// when read, so a file replaced afterwards is not mistaken for the one the output shows).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct InputFile {
+    /// The path it was read from.
+    pub path: PathBuf,
+    /// `sha256:` and the hex digest of its bytes.
+    pub sha256: String,
+}
+
+impl InputFile {
+    /// The record of `bytes`, read from `path`.
+    pub fn read(path: &Path, bytes: &[u8]) -> Self {
+        Self { path: path.to_path_buf(), sha256: sha256(bytes) }
+    }
+
+    /// The record of a file whose bytes went through `hasher` ([`Sha256`] state) as they were read.
+    pub fn hashed(path: &Path, hasher: Sha256) -> Self {
+        Self { path: path.to_path_buf(), sha256: hex(hasher) }
+    }
+}
+
+/// Every file a job read: the scene file, the environment map, and what the scene references
+/// (buffers, images, IES profiles).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Inputs {
+    /// The scene file (None: the embedded default scene).
+    pub scene: Option<InputFile>,
+    /// The environment map.
+    pub env: Option<InputFile>,
+    /// The files the scene references, in the order read.
+    pub referenced: Vec<InputFile>,
+}
+
+/// The prefix of a provenance key naming a file the scene references: `input ` and its path
+/// relative to the scene's folder (paths differ between machines; the layout beside the scene does
+/// not), so that a done-check can hash the same files again.
+pub const INPUT_PREFIX: &str = "input ";
+
+impl Inputs {
+    /// Provenance entries: `scene`, `env` and one `input <path>` per referenced file (relative to
+    /// the scene's folder when under it; a file read twice keeps its last digest).
+    pub fn entries(&self) -> BTreeMap<String, String> {
+        let mut entries = BTreeMap::new();
+        if let Some(scene) = &self.scene {
+            entries.insert("scene".to_owned(), scene.sha256.clone());
+        }
+        if let Some(env) = &self.env {
+            entries.insert("env".to_owned(), env.sha256.clone());
+        }
+        let base = self.scene.as_ref().and_then(|s| s.path.parent());
+        for f in &self.referenced {
+            let rel = base.and_then(|b| f.path.strip_prefix(b).ok()).unwrap_or(&f.path);
+            entries.insert(format!("{INPUT_PREFIX}{}", rel.display()), f.sha256.clone());
+        }
+        entries
+    }
+}
 
 /// `sha256:` and the lowercase hex SHA-256 of the file at `path` (what `sha256sum` prints).
 pub fn file_sha256(path: &Path) -> std::io::Result<String> {
@@ -24,8 +94,7 @@ pub fn file_sha256(path: &Path) -> std::io::Result<String> {
             n => hasher.update(&buf[..n]),
         }
     }
-    let hex: String = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
-    Ok(format!("sha256:{hex}"))
+    Ok(hex(hasher))
 }
 
 /// The running program: its file name and SHA-256 (two builds of one commit with another
@@ -53,6 +122,12 @@ impl Provenance {
     /// This with `key` set to `value`.
     pub fn with(mut self, key: &str, value: impl Into<String>) -> Self {
         self.0.insert(key.to_owned(), value.into());
+        self
+    }
+
+    /// This with every entry of `entries`.
+    pub fn with_all(mut self, entries: BTreeMap<String, String>) -> Self {
+        self.0.extend(entries);
         self
     }
 

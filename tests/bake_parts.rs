@@ -228,3 +228,60 @@ fn the_back_of_a_double_sided_lamp_lights_what_it_faces_and_is_no_leak() {
     let one_sided = bake(false);
     assert!(one_sided.leaked_samples == 16 * 64, "every sample meets the lamp's back: {}", one_sided.leaked_samples);
 }
+
+/// A part whose bytes were damaged on the way (one bit flipped in its sums) is refused by the
+/// merge, naming the file, instead of baking wrong light into the maps.
+#[test]
+fn a_bake_part_with_a_flipped_bit_is_refused() {
+    let dir = TempDir::new("bake-parts", "flipped");
+    let scene = common::room_files::write(&dir.join(""));
+    let out = dir.join("maps");
+    let base = ["bake", "lightmaps", scene.to_str().unwrap(), "--size", "8", "--spp", "2", "-o", out.to_str().unwrap()];
+    ok(&[&base[..], &["--part", "1/2"]].concat());
+    ok(&[&base[..], &["--part", "2/2"]].concat());
+    let part = out.join("parts/part-1-of-2.kbake");
+    let mut bytes = std::fs::read(&part).unwrap();
+    // A bit of the last cell's sums, past the header.
+    let at = bytes.len() - 32 - 20;
+    bytes[at] ^= 0x10;
+    std::fs::write(&part, &bytes).unwrap();
+    let err = failed(&[&base[..], &["--merge"]].concat());
+    assert!(err.contains("part-1-of-2.kbake") && err.contains("checksum"), "{err}");
+    assert!(!out.join("lightmaps.json").exists());
+}
+
+/// Parts baked from two versions of the scene's buffer (`box.bin` changed between them) do not merge.
+#[test]
+fn bake_parts_of_another_buffer_are_refused() {
+    let dir = TempDir::new("bake-parts", "inputs");
+    let scene = common::room_files::write(&dir.join(""));
+    let out = dir.join("maps");
+    let base = ["bake", "lightmaps", scene.to_str().unwrap(), "--size", "8", "--spp", "2", "-o", out.to_str().unwrap()];
+    ok(&[&base[..], &["--part", "1/2"]].concat());
+    common::room_files::change(&dir.join(""), "box.bin");
+    ok(&[&base[..], &["--part", "2/2"]].concat());
+    let err = failed(&[&base[..], &["--merge"]].concat());
+    assert!(err.contains("was not made by this bake") && err.contains("/inputs/input box.bin"), "{err}");
+}
+
+/// A split bake run again bakes only its missing parts, and its merge ignores the parts of
+/// another split left in the folder (a part of a split into 3 among those of a split into 2).
+#[test]
+fn split_bakes_resume_per_part_and_ignore_parts_of_another_split() {
+    let dir = TempDir::new("bake-parts", "resume");
+    let scene = common::room_files::write(&dir.join(""));
+    let out = dir.join("maps");
+    let base = ["bake", "lightmaps", scene.to_str().unwrap(), "--size", "8", "--spp", "2", "-o", out.to_str().unwrap()];
+    ok(&[&base[..], &["--part", "1/3"]].concat());
+    ok(&[&base[..], &["--part", "1/2"]].concat());
+    let first = std::fs::read(out.join("parts/part-1-of-2.kbake")).unwrap();
+    let again = ok(&[&base[..], &["--part", "1/2"]].concat());
+    assert!(again.contains("part 1 of 2 is already baked"), "{again}");
+    assert_eq!(std::fs::read(out.join("parts/part-1-of-2.kbake")).unwrap(), first);
+    ok(&[&base[..], &["--part", "2/2"]].concat());
+    let merged = kelvin(&[&base[..], &["--merge"]].concat());
+    let log = String::from_utf8_lossy(&merged.stderr);
+    assert!(merged.status.success(), "{log}");
+    assert!(log.contains("1 parts of a split into 3 ignored"), "{log}");
+    assert!(out.join("lightmaps.json").exists());
+}

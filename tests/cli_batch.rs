@@ -341,3 +341,28 @@ fn chunks_of_frames_render_as_each_frame_alone() {
     let plan: serde_json::Value = serde_json::from_slice(&kelvin(&["batch", &manifest, "--plan"]).stdout).unwrap();
     assert_eq!((plan["jobs"][0]["done"].as_bool(), plan["jobs"][1]["done"].as_bool()), (Some(false), Some(true)));
 }
+
+/// A finished bake is not finished once a file its scene references changes (the IES profile
+/// here): `--plan` says so and names the file, and `batch` bakes it again.
+#[test]
+fn a_bake_whose_referenced_file_changed_is_not_finished() {
+    let dir = TempDir::new("cli-batch", "bake-inputs");
+    common::room_files::write(&dir.join(""));
+    let manifest = write_manifest(
+        &dir,
+        r#"{"name": "maps", "bake": "lightmaps", "scene": "room.gltf", "output": "out/maps",
+            "settings": {"size": 8, "spp": 1}}"#,
+    );
+    let plan = |m: &str| -> serde_json::Value {
+        serde_json::from_slice::<serde_json::Value>(&kelvin(&["batch", m, "--plan"]).stdout).unwrap()["jobs"][0].clone()
+    };
+    let first = kelvin(&["batch", &manifest]);
+    assert!(first.status.success(), "{}", text(&first));
+    assert_eq!(plan(&manifest)["done"], true);
+    common::room_files::change(&dir.join(""), "lamp.ies");
+    let entry = plan(&manifest);
+    assert_eq!(entry["done"], false, "{entry}");
+    assert!(entry["stale"].as_str().unwrap().contains("/inputs/input lamp.ies"), "{entry}");
+    let again = text(&kelvin(&["batch", &manifest]));
+    assert!(again.contains("1 jobs: 1 rendered"), "{again}");
+}

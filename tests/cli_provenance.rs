@@ -88,3 +88,120 @@ fn batch_renders_again_what_is_not_its_jobs_and_clears_stale_temporaries() {
     assert!(!stale.exists() && live.exists(), "{log}");
     assert!(std::fs::read(&room).unwrap().len() > bytes.len() / 2);
 }
+
+/// `kelvin batch --plan`'s first entry for the manifest `m`.
+fn planned(m: &str) -> serde_json::Value {
+    let out = kelvin(&["batch", m, "--plan"]);
+    assert!(out.status.success(), "{}", text(&out));
+    serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()["jobs"][0].clone()
+}
+
+#[test]
+fn a_changed_buffer_texture_ies_or_env_map_unfinishes_the_output_and_merge_refuses_its_tiles() {
+    use common::room_files;
+    let dir = TempDir::new("provenance", "inputs");
+    let scene = room_files::write(&dir.join(""));
+    let manifest = dir.join("jobs.json");
+    let job = r#"{"jobs": [{"scene": "room.gltf", "output": "out/room.exr", "size": "8x8", "spp": 1,
+                 "settings": {"env": "env.hdr"}}]}"#;
+    std::fs::write(&manifest, job).unwrap();
+    let m = manifest.to_str().unwrap();
+    let first = kelvin(&["batch", m]);
+    assert!(first.status.success(), "{}", text(&first));
+    // Every file the render read is recorded, with the digest of its bytes.
+    let p = read_exr_provenance(&dir.join("out/room.exr")).unwrap();
+    for (key, file) in [("input box.bin", "box.bin"), ("input tex.png", "tex.png"), ("input lamp.ies", "lamp.ies")]
+        .into_iter()
+        .chain([("env", "env.hdr"), ("scene", "room.gltf")])
+    {
+        let digest = kelvin::provenance::file_sha256(&dir.join(file)).unwrap();
+        assert_eq!(p.0.get(key), Some(&digest), "{key} in {:?}", p.0);
+    }
+    // The driver checks each node holds the referenced files too.
+    let inputs = planned(m)["inputs"].clone();
+    for file in room_files::FILES.iter().chain(&["room.gltf"]) {
+        assert!(inputs.as_object().unwrap().keys().any(|k| k.ends_with(file)), "{file} not in {inputs}");
+    }
+    assert_eq!(planned(m)["done"], true);
+    for name in room_files::FILES {
+        let original = std::fs::read(dir.join(name)).unwrap();
+        room_files::change(&dir.join(""), name);
+        let entry = planned(m);
+        assert_eq!(entry["done"], false, "{name} changed, yet the output is finished: {entry}");
+        let key = if name == "env.hdr" { "its env is".to_owned() } else { format!("its input {name} is") };
+        assert!(entry["stale"].as_str().unwrap_or_default().contains(&key), "{name}: {entry}");
+        std::fs::write(dir.join(name), original).unwrap();
+        assert_eq!(planned(m)["done"], true, "{name} restored");
+    }
+    // Tiles of two geometries (the lamp's vertices in box.bin moved between them) do not merge.
+    let s = scene.to_str().unwrap();
+    let tile = |crop: &str, out: &str| {
+        let o = kelvin(&["render", s, "--size", "8x8", "--spp", "1", "--crop", crop, "-o", out]);
+        assert!(o.status.success(), "{}", text(&o));
+    };
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    tile("0,0,4,8", a.to_str().unwrap());
+    room_files::change(&dir.join(""), "box.bin");
+    tile("4,0,8,8", b.to_str().unwrap());
+    let merged =
+        kelvin(&["merge", a.to_str().unwrap(), b.to_str().unwrap(), "-o", dir.join("m.exr").to_str().unwrap()]);
+    let log = text(&merged);
+    assert!(!merged.status.success() && log.contains("its input box.bin is"), "{log}");
+}
+
+#[test]
+fn a_scene_replaced_mid_render_records_the_digest_of_the_file_it_read() {
+    use std::io::BufRead;
+    let dir = TempDir::new("provenance", "replaced");
+    let scene = common::room_files::write(&dir.join(""));
+    let read = kelvin::provenance::file_sha256(&scene).unwrap();
+    let out = dir.join("room.exr");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kelvin"))
+        .args(["render", scene.to_str().unwrap(), "--size", "16x16", "--spp", "1", "--time", "1.5"])
+        .args(["-o", out.to_str().unwrap()])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The loader's summary says the scene was read; then another file takes its name.
+    let mut log = String::new();
+    let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        log += &line;
+        if line.starts_with("scene ") {
+            break;
+        }
+    }
+    let text = std::fs::read_to_string(&scene).unwrap().replace("\"floor\"", "\"other floor\"");
+    std::fs::write(dir.join("next.gltf"), text).unwrap();
+    std::fs::rename(dir.join("next.gltf"), &scene).unwrap();
+    log.extend(lines.map(|l| l.unwrap()));
+    assert!(child.wait().unwrap().success(), "{log}");
+    let recorded = read_exr_provenance(&out).unwrap();
+    assert_ne!(read, kelvin::provenance::file_sha256(&scene).unwrap(), "the scene was replaced");
+    assert_eq!(recorded.0["scene"], read, "the image shows the scene read, not its replacement");
+}
+
+#[test]
+fn a_png_of_other_settings_is_not_finished() {
+    let dir = TempDir::new("provenance", "png");
+    let manifest = dir.join("jobs.json");
+    let write = |settings: &str| {
+        let job = format!(r#"{{"jobs": [{{"output": "out/a.png", "size": "8x8", {settings}}}]}}"#);
+        std::fs::write(&manifest, job).unwrap();
+    };
+    let m = manifest.to_str().unwrap();
+    write(r#""spp": 1"#);
+    let first = kelvin(&["batch", m]);
+    assert!(first.status.success(), "{}", text(&first));
+    assert_eq!(planned(m)["done"], true);
+    write(r#""spp": 2"#);
+    let entry = planned(m);
+    assert_eq!(entry["done"], false, "{entry}");
+    assert!(entry["stale"].as_str().unwrap().contains("its settings is"), "{entry}");
+    // The exposure changes a PNG's pixels (an EXR's not).
+    write(r#""spp": 1, "settings": {"exposure": 1.5}"#);
+    let entry = planned(m);
+    assert_eq!(entry["done"], false, "{entry}");
+    assert!(entry["stale"].as_str().unwrap().contains("its exposure is auto"), "{entry}");
+}

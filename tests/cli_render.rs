@@ -311,3 +311,40 @@ fn contradictory_light_options_are_refused() {
     assert!(!dir.join("both.exr").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `kelvin render` of the default scene into `out` (64x64, 1 spp), run by `sh` with a file size
+/// limit of `limit_blocks` 512-byte blocks when given, SIGXFSZ ignored (so a write past it fails
+/// with EFBIG, as one on a full disk fails with ENOSPC, instead of killing kelvin).
+fn render_limited(out: &std::path::Path, scene: Option<&str>, limit_blocks: Option<u32>) -> std::process::Output {
+    let limit = limit_blocks.map_or(String::new(), |b| format!("ulimit -f {b}; "));
+    let script = format!("trap '' XFSZ; {limit}exec \"$@\"");
+    let mut args = vec!["render".to_owned()];
+    args.extend(scene.map(str::to_owned));
+    args.extend(["--size", "64x64", "--spp", "1", "-o", out.to_str().unwrap()].map(str::to_owned));
+    Command::new("sh")
+        .args(["-c", &script, "sh", env!("CARGO_BIN_EXE_kelvin")])
+        .args(args)
+        .output()
+        .expect("sh runs kelvin")
+}
+
+#[test]
+fn exit_codes_say_a_full_disk_is_the_machines_and_a_missing_scene_the_inputs() {
+    let dir = std::env::temp_dir().join(format!("kelvin-cli-render-exit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let full = render_limited(&dir.join("full.exr"), None, Some(8));
+    let log = String::from_utf8_lossy(&full.stderr);
+    assert_eq!(full.status.code(), Some(3), "a full disk is an environment failure: {log}");
+    assert!(log.contains("cannot write"), "{log}");
+    assert!(!dir.join("full.exr").exists(), "no partial output under the output's name");
+    let bad = render_limited(&dir.join("bad.exr"), Some(dir.join("missing.gltf").to_str().unwrap()), None);
+    let log = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(2), "a missing scene is bad input: {log}");
+    assert!(log.contains("missing.gltf"), "{log}");
+    let fine = render_limited(&dir.join("fine.exr"), None, None);
+    assert!(fine.status.success(), "{}", String::from_utf8_lossy(&fine.stderr));
+    let help = Command::new(env!("CARGO_BIN_EXE_kelvin")).arg("--help").output().unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("Exit codes:") && help.contains("3 environment or I/O"), "{help}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -17,17 +17,20 @@ lightmaps (or volume) byte for byte as one `kelvin bake` writes them.
 A chunk of frames (`"chunk"` in the manifest) is one task that renders its frames whole in one process
 (`kelvin render --frames A,B,C`) and returns their files, written beside the job's output pattern.
 
-Failures are sorted. A task whose kelvin was killed by a signal (the OOM killer, say), timed out, could not be
-executed (exit code 126/127), or whose worker, node or result was lost, is retried (--max-retries) on another
-node where one is alive: the driver pins the retry away from every node the task failed on. A task that kelvin
-itself refuses (exit code 1 or 2: a bad scene, bad settings) fails its job at once with kelvin's message; the
-other jobs go on.
+Failures are sorted by kelvin's exit code (kelvin_exit.py; `kelvin --help`), never by its message. A task whose
+kelvin failed for its node's sake (exit code 3: disk full, permission, read-only file system, out of memory; 130:
+interrupted; killed by a signal, the OOM killer say; timed out; could not be executed, 126/127), or whose worker,
+node or result was lost, is retried (--max-retries) on another node where one is alive: the driver pins the retry
+away from every node the task failed on. A task that kelvin itself refuses (exit code 2: a bad scene, bad settings;
+1; 101, a panic) fails its job at once with kelvin's message; the other jobs go on.
 
 Every finished tile is written at once, durably, into a staging folder beside the job's output
 (`OUTPUT.tiles/X0_Y0_X1_Y1.exr`; a bake's parts go to kelvin's parts folder as `part-K-of-N.kbake`), so a driver
-restarted after a crash renders only the tiles that are missing. The staging folder is removed once merged; if
-the merge refuses the staged tiles (made by another build or for other settings), it is removed too and the job
-reported failed, so that a rerun renders it fresh.
+restarted after a crash renders only the tiles that are missing. A staged piece is checked before it is trusted
+(its header decodes and records this tile, this build and files the plan lists; a part's checksum matches): one that
+is not is moved into `STAGING.quarantine/` with a `.why` file, and rendered again. The staging folder is removed
+once merged; if the merge refuses the staged tiles (made for other settings), they are moved to the quarantine
+folder too and the job reported failed, so that a rerun renders it fresh. A failed job keeps its staged pieces.
 
 The exit code is 0 only if every job succeeded or was already finished. The kelvin binary and the scenes must be
 at the same paths on every node (as in one container image); tiles travel through Ray, not a shared disk. Each task
@@ -50,10 +53,14 @@ from dataclasses import dataclass, field
 import ray
 from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 
+import kelvin_exit
+import kelvin_staged
 import kelvin_tasks
 from kelvin_tasks import TaskFault, TileFailed, Whereabouts, bake_part, digest, render_chunk, render_tile
 
 # The tasks' code travels with them, so nodes need not have this folder on their path.
+ray.cloudpickle.register_pickle_by_value(kelvin_exit)
+ray.cloudpickle.register_pickle_by_value(kelvin_staged)
 ray.cloudpickle.register_pickle_by_value(kelvin_tasks)
 
 # How long one ray.wait may block: completions are handled in batches this often at most.
@@ -134,8 +141,22 @@ class Piece:
     failed_on: set = field(default_factory=set)  # nodes it failed on
     retries: int = 0
 
-    def staged(self):
-        return os.path.exists(self.path)
+    @property
+    def kind(self):
+        return self.what.split(" ")[0]  # "tile", "part" or "frames"
+
+    def staged(self, build, planned, staging):
+        """Whether the piece is staged and sound: it decodes, and records this piece, this build and files the
+        plan lists (kelvin_staged.check). One that is not is quarantined (moved aside with the reason)."""
+        if not os.path.exists(self.path):
+            return False
+        why = kelvin_staged.check("chunk" if self.kind == "frames" else self.kind, self.path, self.spec, build,
+                                  planned)
+        if why:
+            where = kelvin_staged.quarantine(staging, self.path, f"{self.what}: {why}")
+            print(f"{self.what} staged at {self.path} {why}: moved to {where}, rendered again", flush=True)
+            return False
+        return True
 
 
 @dataclass
@@ -265,7 +286,10 @@ class Farm:
             if entry.get("untileable") and not job.chunk:
                 print(f"{job.name}: one tile: {entry['untileable']}", flush=True)
             remove_temporaries(job.staging)
-            missing = [p for p in job.pieces if not p.staged()]
+            if job.bake:
+                self.quarantine_other_splits(job)
+            planned = job.entry.get("inputs", {})
+            missing = [p for p in job.pieces if not p.staged(self.build, planned, job.staging)]
             job.have = len(job.pieces) - len(missing)
             self.resumed += job.have
             if job.have:
@@ -276,6 +300,17 @@ class Farm:
             if not missing:
                 self.finish(job)
         self.tasks = len(self.pending)
+
+    def quarantine_other_splits(self, job):
+        """Moves aside the part files of another split of the bake (`kelvin bake --merge` reads every part file
+        of the folder): a bake split anew resumes from its own parts only."""
+        if not os.path.isdir(job.staging):
+            return
+        mine = {os.path.basename(p.path) for p in job.pieces}
+        for name in sorted(os.listdir(job.staging)):
+            if name.endswith(".kbake") and name not in mine:
+                kelvin_staged.quarantine(job.staging, os.path.join(job.staging, name),
+                                         f"a part of another split than {len(job.pieces)} parts")
 
     def submit(self, piece, node=None):
         """Starts a task for `piece`, pinned to `node` if given. Ray does not retry it itself (max_retries=0):
@@ -353,8 +388,7 @@ class Farm:
         if node:
             piece.failed_on.add(node)
         if piece.retries >= self.opts.max_retries:
-            self.fail(job, f"job {job.index} ({job.name}): {piece.what} failed {piece.retries + 1} times, last: {message}",
-                      keep=True)
+            self.fail(job, f"job {job.index} ({job.name}): {piece.what} failed {piece.retries + 1} times, last: {message}")
             return
         piece.retries += 1
         target = self.other_node(piece.failed_on)
@@ -379,30 +413,35 @@ class Farm:
                if n["Alive"] and n["Resources"].get("CPU", 0) >= self.opts.threads and n["NodeID"] not in avoid]
         return min(fit, key=lambda n: self.pinned.get(n, 0), default=None)
 
-    def fail(self, job, detail, keep=False):
-        """Fails one job: cancels its tasks in flight (no other job's). Its staged pieces stay (`keep`) when
-        the job itself is sound and its nodes failed, so that a rerun renders only the missing ones (the merge
-        checks their provenance); they are removed when the job failed, since a fixed job would not merge with
-        them."""
-        job.status = ("FAILED", detail + (f" (its finished pieces stay staged in {job.staging})" if keep else ""))
+    def fail(self, job, detail):
+        """Fails one job: cancels its tasks in flight (no other job's). Its staged pieces stay, whatever failed:
+        a rerun renders only the missing ones, and checks those it finds (`Piece.staged`, then the merge's
+        provenance check), so a piece that a fixed job would not use is moved aside then, not lost now."""
+        staged = sum(os.path.exists(p.path) for p in job.pieces)
+        job.status = ("FAILED", detail + (f" (its {staged} finished pieces stay staged in {job.staging})"
+                                          if staged else ""))
         for ref, (piece, _, _) in list(self.pending.items()):
             if piece.job == job.index:
                 ray.cancel(ref)
-        if not keep:
-            shutil.rmtree(job.staging, ignore_errors=True)
 
     def finish(self, job):
-        """Merges a job whose pieces are all staged. A refused merge (pieces of another build or other
-        settings, say) removes them, so that a rerun renders the job fresh."""
+        """Merges a job whose pieces are all staged. A refused merge (pieces of other settings, say, that the
+        staged check cannot see) moves them into the quarantine folder with merge's message, so that a rerun
+        renders the job fresh and nothing is deleted."""
         if job.bake:
+            self.quarantine_other_splits(job)
             error = merge_bake(self.kelvin, job)
         else:
             error = unpack_chunk(job) if job.chunk else merge(self.kelvin, job)
-        shutil.rmtree(job.staging, ignore_errors=True)
         if error:
-            job.status = ("FAILED", f"job {job.index} ({job.name}): {error}; its staged pieces are removed")
+            for piece in job.pieces:
+                if os.path.exists(piece.path):
+                    kelvin_staged.quarantine(job.staging, piece.path, f"{piece.what}: refused: {error}")
+            job.status = ("FAILED", f"job {job.index} ({job.name}): {error}; its staged pieces are moved to "
+                                    f"{job.staging.rstrip(os.sep)}.quarantine")
         else:
             job.status = ("rendered", job.entry["output"])
+        shutil.rmtree(job.staging, ignore_errors=True)
 
     def time_out(self):
         """Cancels what is left; the staged pieces stay for a rerun."""

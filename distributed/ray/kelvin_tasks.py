@@ -25,15 +25,18 @@ import time
 
 import ray
 
+import kelvin_exit
+
 
 class TileFailed(Exception):
-    """kelvin itself refused or failed a tile: retrying would fail the same way, anywhere."""
+    """kelvin itself refused or failed a tile (bad input or settings, a bug): retrying would fail the same way,
+    anywhere."""
 
 
 class TaskFault(Exception):
-    """The tile failed for a reason of its node, not of the job (kelvin killed, timed out or not executable, or the
-    node's binary, scene or map not the planned file): worth retrying elsewhere. Carries the node so that the driver
-    can avoid it."""
+    """The tile failed for a reason of its node, not of the job (kelvin killed, interrupted, timed out or not
+    executable, an environment or I/O failure such as a full disk, or the node's binary, scene or map not the
+    planned file): worth retrying elsewhere. Carries the node so that the driver can avoid it."""
 
     def __init__(self, node, message):
         super().__init__(node, message)
@@ -66,7 +69,8 @@ def die_with_parent():
 
 
 def run_kelvin(cmd, what, timeout, node):
-    """Runs one kelvin command; raises TaskFault for failures of the node and TileFailed for kelvin's own."""
+    """Runs one kelvin command; raises TaskFault for failures of the node and TileFailed for kelvin's own, told
+    apart by kelvin's exit code alone (kelvin_exit)."""
     preexec = die_with_parent if sys.platform.startswith("linux") else None
     try:
         run = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, preexec_fn=preexec)
@@ -74,15 +78,21 @@ def run_kelvin(cmd, what, timeout, node):
         raise TaskFault(node, f"{what}: kelvin took over {timeout} s")
     except OSError as e:
         raise TaskFault(node, f"{what}: cannot run {cmd[0]}: {e}")
-    lines = [l for l in run.stderr.splitlines() if l.strip()]
+    check_exit(run.returncode, run.stderr, what, node)
+
+
+def check_exit(returncode, stderr, what, node):
+    """Raises for a kelvin that failed: TaskFault for a code that is the node's fault (a signal, interrupted, an
+    environment or I/O failure, not executable), TileFailed for the rest (bad input or settings, a panic: kelvin is
+    deterministic, so they repeat anywhere). The message quotes kelvin's last line; the code alone decides."""
+    if returncode == 0:
+        return
+    lines = [l for l in (stderr or "").splitlines() if l.strip()]
     last = lines[-1] if lines else "no message"
-    if run.returncode < 0:
-        raise TaskFault(node, f"{what}: kelvin was killed by {signal.Signals(-run.returncode).name}")
-    if run.returncode in (126, 127):
-        raise TaskFault(node, f"{what}: {cmd[0]} could not be executed (exit code {run.returncode}): {last}")
-    if run.returncode != 0:
-        # kelvin's own errors (1, 2) and panics (101) repeat on any node: kelvin is deterministic.
-        raise TileFailed(f"{what}: {last}")
+    message = f"{what}: kelvin {kelvin_exit.describe(returncode)}: {last}"
+    if kelvin_exit.is_transient(returncode):
+        raise TaskFault(node, message)
+    raise TileFailed(message)
 
 
 # The digests this worker process has computed, by (path, inode, size, modification time): a file is hashed once per

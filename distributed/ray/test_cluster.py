@@ -350,7 +350,11 @@ def section_resume(ctx):
     check(sum(n["tiles"] for n in result["nodes"].values()) == result["tiles"], f"{result['nodes']}")
     detail = result["jobs"][str(victim)]["detail"]
     check(result["jobs"][str(victim)]["status"] == "FAILED" and "settings" in detail, detail)
-    check(not os.path.exists(jobs[victim]["output"] + ".tiles"), "the refused tiles are removed")
+    check(not os.path.exists(jobs[victim]["output"] + ".tiles"), "the refused tiles leave the staging folder")
+    quarantined = jobs[victim]["output"] + ".tiles.quarantine"
+    kept = [n for n in os.listdir(quarantined) if n.endswith(".exr")] if os.path.isdir(quarantined) else []
+    check(len(kept) == len(pieces(jobs[victim])) and all(os.path.exists(os.path.join(quarantined, n + ".why")) for n in kept),
+          f"the refused tiles are moved aside with the reason, not deleted: {kept}")
     victim_out = jobs[victim]["output"]
     same_images({k: v for k, v in sec.refs.items() if k not in (victim_out, png_of(victim_out))})
 

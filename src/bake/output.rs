@@ -21,7 +21,11 @@ const ZSTD_LEVEL: i32 = 9;
 /// Writes every lightmap of `report` into `dir` (created if missing), then `lightmaps.json` last,
 /// so that a folder with the index holds a finished bake. Returns the files written.
 pub fn write_lightmaps(dir: &Path, report: &BakeReport, opts: &LightmapOptions) -> Result<Vec<PathBuf>, BakeError> {
-    let io = |path: &Path, e: std::io::Error| ImageIoError::Io { what: path.display().to_string(), msg: e.to_string() };
+    let io = |path: &Path, e: std::io::Error| ImageIoError::Io {
+        what: path.display().to_string(),
+        msg: e.to_string(),
+        kind: e.kind(),
+    };
     std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
     let mut written = Vec::new();
     let mut entries = serde_json::Map::new();
@@ -104,7 +108,11 @@ pub fn write_volume(path: &Path, volume: &IrradianceVolume) -> Result<Vec<PathBu
     });
     let json_path = path.with_extension("json");
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        let io = |e: std::io::Error| ImageIoError::Io { what: dir.display().to_string(), msg: e.to_string() };
+        let io = |e: std::io::Error| ImageIoError::Io {
+            what: dir.display().to_string(),
+            msg: e.to_string(),
+            kind: e.kind(),
+        };
         std::fs::create_dir_all(dir).map_err(io)?;
     }
     write_file(path, &path.display().to_string(), &bytes)?;

@@ -6,7 +6,8 @@
 //!
 //! A part file is `MAGIC`, a little-endian u32 length, a JSON header (the range, samples, counts,
 //! warnings, and a caller's provenance that a merge compares), then per cell three f64 sums, three
-//! f64 sums of squares and two u32 counts, little-endian.
+//! f64 sums of squares and two u32 counts, little-endian, then the SHA-256 of everything before it
+//! (32 bytes): a part copied between machines with a bit flipped is refused, not merged.
 
 use std::ops::Range;
 
@@ -19,8 +20,10 @@ use crate::render::renderer::RenderStats;
 
 /// The first bytes of a part file.
 pub const MAGIC: &[u8; 16] = b"kelvin bake part";
-/// The version of the part format this build writes and reads.
-const FORMAT: u32 = 1;
+/// The version of the part format this build writes and reads (2: with the checksum).
+const FORMAT: u32 = 2;
+/// Bytes of the trailing checksum (SHA-256).
+const CHECKSUM_BYTES: usize = 32;
 /// Bytes per cell after the header.
 const CELL_BYTES: usize = 6 * 8 + 2 * 4;
 
@@ -153,6 +156,8 @@ impl BakePart {
             out.extend_from_slice(&valid.to_le_bytes());
             out.extend_from_slice(&leaked.to_le_bytes());
         }
+        let checksum = checksum(&out);
+        out.extend_from_slice(&checksum);
         out
     }
 
@@ -160,6 +165,15 @@ impl BakePart {
     pub fn from_bytes(bytes: &[u8], what: &str) -> Result<Self, BakeError> {
         let bad = |why: String| BakeError::Invalid(format!("{what}: not a kelvin bake part: {why}"));
         let rest = bytes.strip_prefix(MAGIC.as_slice()).ok_or_else(|| bad("wrong magic".into()))?;
+        // Checked first: nothing of a damaged file is trusted, its header included.
+        let body = bytes.len().checked_sub(CHECKSUM_BYTES).filter(|&n| n >= MAGIC.len());
+        let body = body.ok_or_else(|| bad("truncated (no checksum)".into()))?;
+        if checksum(&bytes[..body]) != bytes[body..] {
+            return Err(BakeError::Invalid(format!(
+                "{what}: corrupt bake part: its checksum does not match its bytes (damaged or cut short)"
+            )));
+        }
+        let rest = &rest[..rest.len() - CHECKSUM_BYTES];
         let (len, rest) = rest.split_first_chunk::<4>().ok_or_else(|| bad("truncated header".into()))?;
         let len = u32::from_le_bytes(*len) as usize;
         let (json, cells) = rest.split_at_checked(len).ok_or_else(|| bad("truncated header".into()))?;
@@ -253,6 +267,12 @@ pub(super) fn join(
         return invalid(format!("cells {next}..{cells} are in no part"));
     }
     Ok((sums, stats))
+}
+
+/// The SHA-256 of `bytes`, a part file's checksum.
+fn checksum(bytes: &[u8]) -> [u8; CHECKSUM_BYTES] {
+    use sha2::Digest;
+    sha2::Sha256::digest(bytes).as_slice().try_into().expect("SHA-256 is 32 bytes")
 }
 
 /// Ok if `a` and `b` record the same provenance; otherwise the first field (as a JSON path) where

@@ -4,6 +4,7 @@
 //! take `--env`/`--sky` as `kelvin render` does, and split over machines with `--part K/N` (each
 //! part's sums into the output's parts folder) and `--merge` (the finished bake, bit for bit).
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
@@ -158,17 +159,23 @@ impl BakeArgs {
         }
     }
 
-    /// The files the bake reads by name (scene, environment map).
-    pub(super) fn input_files(&self) -> Vec<&Path> {
-        let (scene, common) = match &self.command {
-            BakeCommand::Lightmaps(a) => (&a.scene, &a.common),
-            BakeCommand::Volume(a) => (&a.scene, &a.common),
-        };
-        std::iter::once(scene).chain(&common.lighting.env).map(PathBuf::as_path).collect()
+    fn scene_and_common(&self) -> (&Path, &CommonArgs) {
+        match &self.command {
+            BakeCommand::Lightmaps(a) => (a.scene.as_path(), &a.common),
+            BakeCommand::Volume(a) => (a.scene.as_path(), &a.common),
+        }
+    }
+
+    /// The files the bake reads by name (scene, environment map) and those the scene references.
+    pub(super) fn input_files(&self) -> Vec<PathBuf> {
+        let (scene, common) = self.scene_and_common();
+        let referenced = kelvin::scene::gltf::referenced_files(scene);
+        std::iter::once(scene.to_path_buf()).chain(common.lighting.env.clone()).chain(referenced).collect()
     }
 
     /// Whether the bake is finished: its index file (lightmaps.json, or the volume's .json), which is
-    /// written last, exists and records this bake's provenance (scene, options, kelvin's version).
+    /// written last, exists and records this bake's provenance (options, kelvin's version, and the
+    /// inputs: each file it lists hashed again now; the program may differ, as for renders).
     /// Otherwise, for an existing index, why it is not this bake's.
     pub(super) fn finished(&self) -> (bool, Option<String>) {
         let index = index_path(&self.command);
@@ -178,18 +185,29 @@ impl BakeArgs {
         let recorded = std::fs::read(&index)
             .map_err(|e| e.to_string())
             .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).map_err(|e| e.to_string()));
-        let recorded = match recorded {
+        let mut recorded = match recorded {
             Ok(json) => json.get("provenance").cloned().unwrap_or_default(),
             Err(e) => return (false, Some(format!("{} does not read back: {e}", index.display()))),
         };
-        let wanted = match &self.command {
-            BakeCommand::Lightmaps(a) => a.provenance(),
-            BakeCommand::Volume(a) => a.provenance(),
+        let (scene, common) = self.scene_and_common();
+        let listed = recorded.get("inputs").and_then(|i| i.as_object()).map(|i| i.keys().cloned().collect());
+        let listed: Vec<String> = listed.unwrap_or_default();
+        let inputs = match super::render::inputs_now(Some(scene), common.lighting.env.as_deref(), listed.iter()) {
+            Ok(inputs) => inputs,
+            Err(e) => return (false, Some(e)),
         };
-        match wanted.map(|w| check_provenance(&w, &recorded)) {
-            Ok(Ok(())) => (true, None),
-            Ok(Err(field)) => (false, Some(format!("{} records another bake: {field}", index.display()))),
-            Err(e) => (false, Some(e.to_string())),
+        let mut wanted = match &self.command {
+            BakeCommand::Lightmaps(a) => a.provenance(inputs),
+            BakeCommand::Volume(a) => a.provenance(inputs),
+        };
+        for p in [&mut recorded, &mut wanted] {
+            if let Some(p) = p.as_object_mut() {
+                p.remove("program");
+            }
+        }
+        match check_provenance(&wanted, &recorded) {
+            Ok(()) => (true, None),
+            Err(field) => (false, Some(format!("{} records another bake: {field}", index.display()))),
         }
     }
 }
@@ -220,19 +238,17 @@ impl CommonArgs {
         PathDepth { max_depth: self.max_depth, ..PathDepth::DEFAULT }
     }
 
-    /// What a part records about how it was made, `settings` the command's own: a merge compares it.
-    fn provenance(&self, scene: &Path, settings: serde_json::Value) -> Result<serde_json::Value, CliError> {
-        let hash = |p: &Path| kelvin::provenance::file_sha256(p).map_err(|e| format!("{}: {e}", p.display()));
-        let env = match &self.lighting.env {
-            Some(p) => json!({ "file": p.file_name().map(|n| n.to_string_lossy()), "sha256": hash(p)? }),
-            None => serde_json::Value::Null,
-        };
-        Ok(json!({
+    /// What a part (and the finished bake's index) records about how it was made, `settings` the
+    /// command's own and `inputs` the digests of the files read, as read
+    /// ([`kelvin::provenance::Inputs::entries`]): a merge compares all of it, the program included.
+    fn provenance(&self, settings: serde_json::Value, inputs: BTreeMap<String, String>) -> serde_json::Value {
+        json!({
             "kelvin": env!("CARGO_PKG_VERSION"),
-            "scene": { "file": scene.file_name().map(|n| n.to_string_lossy()), "sha256": hash(scene)? },
-            "env": env,
+            "program": kelvin::provenance::program(),
+            "inputs": inputs,
             "settings": {
                 "command": settings,
+                "time": self.time,
                 "max_depth": self.max_depth,
                 "light": format!("{:?}", self.light),
                 "seed": self.seed,
@@ -241,7 +257,7 @@ impl CommonArgs {
                 "sky": self.lighting.sky,
                 "sky_intensity": self.lighting.sky_intensity,
             },
-        }))
+        })
     }
 }
 
@@ -265,7 +281,7 @@ fn part_path(folder: &Path, part: Part) -> PathBuf {
 
 /// Writes `part` with `provenance` into `folder` (created).
 fn write_part(folder: &Path, mut part: BakePart, provenance: serde_json::Value) -> Result<(), CliError> {
-    std::fs::create_dir_all(folder).map_err(|e| format!("{}: {e}", folder.display()))?;
+    std::fs::create_dir_all(folder).map_err(super::exit::io(folder.display()))?;
     let path = part_path(folder, part.part());
     part.set_provenance(provenance);
     write_file(&path, &path.display().to_string(), &part.to_bytes())?;
@@ -274,23 +290,64 @@ fn write_part(folder: &Path, mut part: BakePart, provenance: serde_json::Value) 
     Ok(())
 }
 
-/// Every part file in `folder`, each checked to have been made as `provenance` says.
+/// The parts to merge from `folder`: every part file, each checked to have been made as
+/// `provenance` says (and whole: its checksum), of the one split (N) whose every part is there;
+/// parts of another split, left by an earlier run split otherwise, are ignored with a warning.
 fn read_parts(folder: &Path, provenance: &serde_json::Value) -> Result<Vec<BakePart>, CliError> {
     let entries = std::fs::read_dir(folder).map_err(|e| format!("{}: no parts to merge: {e}", folder.display()))?;
-    let mut parts = Vec::new();
+    let mut splits: BTreeMap<u32, Vec<BakePart>> = BTreeMap::new();
     for entry in entries {
-        let path = entry.map_err(|e| format!("{}: {e}", folder.display()))?.path();
+        let path = entry.map_err(super::exit::io(folder.display()))?.path();
         if path.extension().is_none_or(|e| e != "kbake") {
             continue;
         }
         let what = path.display().to_string();
-        let bytes = std::fs::read(&path).map_err(|e| format!("{what}: {e}"))?;
+        let bytes = std::fs::read(&path).map_err(super::exit::io(&what))?;
         let part = BakePart::from_bytes(&bytes, &what)?;
         check_provenance(provenance, part.provenance())
             .map_err(|f| format!("{what} was not made by this bake (scene, options or build): {f}"))?;
-        parts.push(part);
+        splits.entry(part.part().count).or_default().push(part);
     }
-    Ok(parts)
+    let complete = |parts: &Vec<BakePart>, n: u32| {
+        let mut have: Vec<u32> = parts.iter().map(|p| p.part().index).collect();
+        have.sort_unstable();
+        have.dedup();
+        have.len() == n as usize
+    };
+    let whole: Vec<u32> = splits.iter().filter(|(n, p)| complete(p, **n)).map(|(n, _)| *n).collect();
+    let Some(&n) = whole.first().filter(|_| whole.len() == 1 || splits.len() == 1) else {
+        // None complete (the merge names the missing cells), or several: all go to the merge, which refuses them.
+        return Ok(splits.into_values().flatten().collect());
+    };
+    for (other, parts) in splits.iter().filter(|(other, _)| **other != n) {
+        eprintln!(
+            "warning: {}: {} parts of a split into {other} ignored (merging the split into {n})",
+            folder.display(),
+            parts.len()
+        );
+    }
+    Ok(splits.remove(&n).unwrap_or_default())
+}
+
+/// Whether `part` is already baked in `folder` as `provenance` says (whole, and made by this bake):
+/// a rerun of a split bake resumes per part.
+fn part_done(folder: &Path, part: kelvin::bake::Part, provenance: &serde_json::Value) -> bool {
+    let path = part_path(folder, part);
+    let Ok(bytes) = std::fs::read(&path) else { return false };
+    match BakePart::from_bytes(&bytes, &path.display().to_string()) {
+        Ok(p) => p.part() == part && check_provenance(provenance, p.provenance()).is_ok(),
+        Err(e) => {
+            eprintln!("warning: {e}; baking it again");
+            false
+        }
+    }
+}
+
+/// Whether the `--part` asked for is already baked (then said so): nothing to do.
+fn skip_done_part(common: &CommonArgs, folder: &Path, provenance: &serde_json::Value) -> bool {
+    let Some(part) = common.part.filter(|p| part_done(folder, *p, provenance)) else { return false };
+    println!("part {} of {} is already baked in {}: kept", part.index + 1, part.count, folder.display());
+    true
 }
 
 /// The file a finished bake writes last: lightmaps.json, or the volume's .json.
@@ -305,8 +362,7 @@ fn index_path(command: &BakeCommand) -> PathBuf {
 /// and renamed, so a stop in between leaves an index without it: not finished, baked again).
 fn record_provenance(index: &Path, provenance: serde_json::Value) -> Result<(), CliError> {
     let what = index.display().to_string();
-    let mut json: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(index).map_err(|e| format!("{what}: {e}"))?)?;
+    let mut json: serde_json::Value = serde_json::from_slice(&std::fs::read(index).map_err(super::exit::io(&what))?)?;
     json["provenance"] = provenance;
     let text = serde_json::to_string_pretty(&json)? + "\n";
     write_file(index, &what, text.as_bytes())?;
@@ -315,20 +371,20 @@ fn record_provenance(index: &Path, provenance: serde_json::Value) -> Result<(), 
 
 impl VolumeArgs {
     /// What the volume's parts and index record about how it was made.
-    fn provenance(&self) -> Result<serde_json::Value, CliError> {
+    fn provenance(&self, inputs: BTreeMap<String, String>) -> serde_json::Value {
         let settings = json!({
             "volume": self.resolution.to_array(),
             "bounds": self.bounds.map(|(lo, hi)| [lo.to_array(), hi.to_array()]),
             "node": self.node,
             "spp": self.spp,
         });
-        self.common.provenance(&self.scene, settings)
+        self.common.provenance(settings, inputs)
     }
 }
 
 impl LightmapArgs {
     /// What the lightmaps' parts and index record about how they were made.
-    fn provenance(&self) -> Result<serde_json::Value, CliError> {
+    fn provenance(&self, inputs: BTreeMap<String, String>) -> serde_json::Value {
         let opts = self.options();
         let settings = json!({
             "lightmaps": opts.size,
@@ -336,7 +392,7 @@ impl LightmapArgs {
             "spp": opts.spp,
             "margin": opts.margin,
         });
-        self.common.provenance(&self.scene, settings)
+        self.common.provenance(settings, inputs)
     }
 
     fn options(&self) -> LightmapOptions {
@@ -371,8 +427,11 @@ fn volume(args: VolumeArgs) -> Result<(), CliError> {
         bounds,
         time: common.time,
     };
-    let provenance = args.provenance()?;
+    let provenance = args.provenance(loaded.inputs.entries());
     let folder = args.output.with_extension("parts");
+    if skip_done_part(common, &folder, &provenance) {
+        return Ok(());
+    }
     let scene = args.scene.display();
     let volume = if common.merge {
         let parts = read_parts(&folder, &provenance)?;
@@ -419,10 +478,13 @@ fn volume(args: VolumeArgs) -> Result<(), CliError> {
 fn lightmaps(args: LightmapArgs) -> Result<(), CliError> {
     let common = &args.common;
     let opts = args.options();
-    // After the load, which names a missing or broken scene or map better than hashing it would.
     let mut loaded = common.load(&args.scene)?;
-    let provenance = args.provenance()?;
+    // The digests of the files as the load read them.
+    let provenance = args.provenance(loaded.inputs.entries());
     let folder = args.output.join("parts");
+    if skip_done_part(common, &folder, &provenance) {
+        return Ok(());
+    }
     let scene = args.scene.display();
     let report = if common.merge {
         let parts = read_parts(&folder, &provenance)?;

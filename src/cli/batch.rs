@@ -6,6 +6,7 @@
 use std::path::PathBuf;
 
 use super::CliError;
+use super::exit::{self, Exit};
 use super::manifest::{PlannedJob, plan};
 
 #[derive(clap::Args)]
@@ -35,7 +36,8 @@ pub struct BatchArgs {
 enum Outcome {
     Rendered(f64),
     Skipped,
-    Failed(String),
+    /// Why, and what kind of failure it was (the exit code it gives).
+    Failed(String, Exit),
 }
 
 pub fn run(args: BatchArgs) -> Result<(), CliError> {
@@ -90,7 +92,7 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
                 skipped += 1;
                 println!("{:<9} {:<24} {:>9}  {out} (exists; --force renders it again)", "skipped", job.name, "-");
             }
-            Outcome::Failed(e) => {
+            Outcome::Failed(e, _) => {
                 failed += 1;
                 println!("{:<9} {:<24} {:>9}  {e}", "FAILED", job.name, "-");
             }
@@ -98,14 +100,18 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
     }
     println!("{n} jobs: {rendered} rendered, {skipped} skipped, {failed} failed");
     if failed > 0 {
-        return Err(format!("{failed} of {n} jobs failed").into());
+        // One kind of failure (`--task`: one job) gives its own code, so a farm can tell; mixed ones 1.
+        let mut kinds = outcomes.iter().filter_map(|o| if let Outcome::Failed(_, k) = o { Some(*k) } else { None });
+        let first = kinds.next().unwrap_or(Exit::Failed);
+        let exit = if kinds.all(|k| k == first) { first } else { Exit::Failed };
+        return Err(Box::new(exit::Coded { exit, message: format!("{failed} of {n} jobs failed") }));
     }
     Ok(())
 }
 
 fn run_job(job: &PlannedJob, force: bool, progress: impl FnMut(f32) + Send) -> Outcome {
     if let Some(e) = &job.error {
-        return Outcome::Failed(e.clone());
+        return Outcome::Failed(e.clone(), Exit::Input);
     }
     if job.done && !force {
         return Outcome::Skipped;
@@ -114,29 +120,29 @@ fn run_job(job: &PlannedJob, force: bool, progress: impl FnMut(f32) + Send) -> O
         let start = std::time::Instant::now();
         return match bake(job) {
             Ok(()) => Outcome::Rendered(start.elapsed().as_secs_f64()),
-            Err(e) => Outcome::Failed(format!("job {} ({}): {e}", job.index, job.name)),
+            Err(e) => Outcome::Failed(format!("job {} ({}): {e}", job.index, job.name), exit::classify(&*e)),
         };
     }
-    let result = job.render_args(&job.output).map_err(|e| e.to_string()).and_then(|render| {
+    let result = job.render_args(&job.output).map_err(CliError::from).and_then(|render| {
         if let Some(dir) = job.output.parent() {
-            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            std::fs::create_dir_all(dir).map_err(exit::io(dir.display()))?;
         }
-        super::render::render_to_files(&render, progress).map_err(|e| e.to_string())
+        super::render::render_to_files(&render, progress)
     });
     match result {
         Ok(frames) => Outcome::Rendered(frames.iter().map(|r| r.stats.seconds).sum()),
-        Err(e) => Outcome::Failed(format!("job {} ({}): {e}", job.index, job.name)),
+        Err(e) => Outcome::Failed(format!("job {} ({}): {e}", job.index, job.name), exit::classify(&*e)),
     }
 }
 
 /// Runs a bake job: whole, or its parts one after another and then their merge (as a farm would
 /// spread them).
-fn bake(job: &PlannedJob) -> Result<(), String> {
+fn bake(job: &PlannedJob) -> Result<(), CliError> {
     let output = ["-o".to_owned(), job.output.display().to_string()];
     let run = |extra: &[String]| {
         let argv: Vec<String> = job.args.iter().chain(extra).chain(&output).cloned().collect();
         let args = super::bake::parse(&argv)?;
-        super::bake::run(args).map_err(|e| e.to_string())
+        super::bake::run(args)
     };
     if job.parts <= 1 {
         return run(&[]);

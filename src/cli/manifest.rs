@@ -341,7 +341,7 @@ struct Digests(std::cell::RefCell<std::collections::HashMap<PathBuf, String>>);
 
 impl Digests {
     /// Each of `files` with its digest.
-    fn of(&self, files: &[&Path]) -> Result<BTreeMap<PathBuf, String>, String> {
+    fn of(&self, files: &[PathBuf]) -> Result<BTreeMap<PathBuf, String>, String> {
         let mut known = self.0.borrow_mut();
         let mut digest = |f: &Path| -> Result<String, String> {
             if let Some(d) = known.get(f) {
@@ -356,23 +356,25 @@ impl Digests {
 }
 
 /// Whether `output` is a finished render of `args` (frame `frame`): it reads back and records
-/// the same scene, settings and frame (the program may differ: a rebuilt kelvin renders the same
-/// image). Otherwise, for an existing file, why not.
+/// the same settings, frame and inputs (the scene, its buffers, images and IES profiles, the
+/// environment map: each file it lists hashed again now). The program may differ: a rebuilt kelvin
+/// renders the same image (tiles of different builds are refused by `kelvin merge`). Otherwise, for
+/// an existing file, why not.
 fn finished(output: &Path, args: &RenderArgs, frame: Option<u32>) -> (bool, Option<String>) {
-    use kelvin::render::film_io::read_exr_tile_and_provenance;
+    use kelvin::render::film_io::{read_exr_tile_and_provenance, read_png_provenance};
     if !output.exists() {
         return (false, None);
     }
-    if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-        return (true, None);
-    }
-    let recorded = match read_exr_tile_and_provenance(output) {
-        Ok((_, p)) => p,
+    let png = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    let recorded = if png { read_png_provenance(output) } else { read_exr_tile_and_provenance(output).map(|(_, p)| p) };
+    let recorded = match recorded {
+        Ok(p) if p.0.is_empty() => return (false, Some("it records no provenance".into())),
+        Ok(p) => p,
         Err(e) => return (false, Some(format!("does not read back: {e}"))),
     };
-    let wanted = match args.provenance(frame, None) {
-        Ok(p) => p,
-        Err(e) => return (false, Some(e.to_string())),
+    let wanted = match args.inputs_now(&recorded) {
+        Ok(inputs) => args.provenance(frame, None, inputs),
+        Err(e) => return (false, Some(e)),
     };
     let ignore = ["program", "version", "animation", "animation_name"];
     if let Some((key, was, now)) = recorded.difference(&wanted, &ignore) {

@@ -38,7 +38,11 @@ pub fn run(args: MergeArgs) -> Result<(), CliError> {
     }
     let (width, height, rgb) = merge_tiles(&tiles)?;
     let exposure = args.exposure.unwrap_or_else(|| kelvin::render::film_io::auto_exposure(&rgb));
-    let merged = provenance.into_iter().next().unwrap_or_default().without("tile");
+    let mut merged = provenance.into_iter().next().unwrap_or_default().without("tile");
+    // A PNG's pixels depend on its exposure too (as `kelvin render` records it).
+    if args.output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        merged = merged.with("exposure", args.exposure.map_or("auto".to_owned(), |e| e.to_string()));
+    }
     super::render::write_outputs(&args.output, width, height, &rgb, exposure, &merged)?;
     println!("merged {} tiles into {width}x{height}", tiles.len());
     Ok(())

@@ -3,6 +3,7 @@ mod bake;
 mod bake_jobs;
 mod batch;
 mod bench;
+mod exit;
 mod frames;
 mod ies;
 pub mod manifest; // pub for the manifest fuzz target, which includes this module
@@ -17,7 +18,7 @@ use clap::{Parser, Subcommand};
 
 /// kelvin: a physically based light system (PBR's "Light Sources", on an ECS).
 #[derive(Parser)]
-#[command(name = "kelvin", version, about)]
+#[command(name = "kelvin", version, about, after_help = exit::HELP)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -45,6 +46,11 @@ enum Command {
 
 /// Errors the CLI reports: a message that names what failed.
 pub type CliError = Box<dyn std::error::Error>;
+
+/// The process's exit code for `error` ([`exit`]).
+pub fn exit_code(error: &(dyn std::error::Error + 'static)) -> u8 {
+    exit::classify(error) as u8
+}
 
 /// Runs the chosen subcommand.
 pub fn run(cli: Cli) -> Result<(), CliError> {

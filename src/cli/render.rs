@@ -4,12 +4,13 @@
 //! [--neighbours K] [--radius PX] [--biased-reuse]] [--color rgb|spectral] [--seed S] [--pattern sobol|independent]
 //! [--threads T] [--report] [--crop X0,Y0,X1,Y1] [--frames 0..47|1-100x2|1,5,10-20 [--fps F] [--animation NAME|INDEX]]`.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use bevy_ecs::prelude::*;
 use indicatif::{ProgressBar, ProgressStyle};
-use kelvin::provenance::{Provenance, file_sha256};
-use kelvin::render::film_io::{auto_exposure, write_exr_tile, write_exr_with, write_png};
+use kelvin::provenance::{INPUT_PREFIX, Provenance, file_sha256};
+use kelvin::render::film_io::{auto_exposure, write_exr_tile, write_exr_with, write_png_with};
 use kelvin::render::job::{self, IntegratorChoice, LoadedJob, RenderJob, SamplerChoice};
 use kelvin::render::path::PathDepth;
 use kelvin::render::renderer::{RenderOptions, RenderStats, render_with};
@@ -191,24 +192,23 @@ impl RenderArgs {
     }
 
     /// What an output of frame `frame` (None without --frames) of the animation `clip` (its index
-    /// and name, once resolved) records: the program, the scene's and environment map's SHA-256,
-    /// every setting that shapes the pixels, the frame, the clip and the tile. Tiles of one image
-    /// differ in `tile` only.
+    /// and name, once resolved) records: the program, `inputs` (the SHA-256 of each file the render
+    /// read, as read: [`kelvin::provenance::Inputs::entries`]), every setting that shapes the pixels
+    /// (a PNG's exposure too), the frame, the clip and the tile. Tiles of one image differ in `tile` only.
     pub(super) fn provenance(
         &self,
         frame: Option<u32>,
         clip: Option<(usize, Option<&str>)>,
-    ) -> Result<Provenance, CliError> {
-        let hash = |p: &Path| file_sha256(p).map_err(|e| format!("{}: {e}", p.display()));
+        inputs: BTreeMap<String, String>,
+    ) -> Provenance {
         // Paths differ between machines; the files' contents are what matter.
         let job = RenderJob { scene: None, env: None, crop: None, ..self.job() };
-        let mut p = Provenance::of_program().with("settings", format!("{job:?}"));
-        p = match &self.scene {
-            Some(scene) => p.with("scene", hash(scene)?),
-            None => p.with("scene", "the embedded default scene"),
-        };
-        if let Some(env) = &self.lighting.env {
-            p = p.with("env", hash(env)?);
+        let mut p = Provenance::of_program().with("settings", format!("{job:?}")).with_all(inputs);
+        if self.scene.is_none() {
+            p = p.with("scene", "the embedded default scene");
+        }
+        if self.output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+            p = p.with("exposure", self.exposure.map_or("auto".to_owned(), |e| e.to_string()));
         }
         if let Some(f) = frame {
             p = p.with("frame", f.to_string()).with("fps", self.fps.to_string());
@@ -219,13 +219,22 @@ impl RenderArgs {
         if let Some(crop) = self.crop {
             p = p.with("tile", crop.to_string());
         }
-        Ok(p)
+        p
     }
 
-    /// The files the render reads by name (scene, environment map): what each machine of a farm must
-    /// hold with the same contents.
-    pub(super) fn input_files(&self) -> Vec<&Path> {
-        self.scene.iter().chain(&self.lighting.env).map(PathBuf::as_path).collect()
+    /// The input entries an output recording `recorded` would have if made now: the scene and
+    /// environment map this job names, and each file `recorded` lists (`input <path>`, beside the
+    /// scene), hashed now. A done-check compares them with what was recorded when read.
+    pub(super) fn inputs_now(&self, recorded: &Provenance) -> Result<BTreeMap<String, String>, String> {
+        inputs_now(self.scene.as_deref(), self.lighting.env.as_deref(), recorded.0.keys())
+    }
+
+    /// The files the render reads by name (scene, environment map) and those the scene references
+    /// (buffers, images, IES profiles, from its JSON): what each machine of a farm must hold with
+    /// the same contents.
+    pub(super) fn input_files(&self) -> Vec<PathBuf> {
+        let referenced = self.scene.iter().flat_map(|s| kelvin::scene::gltf::referenced_files(s));
+        self.scene.iter().chain(&self.lighting.env).cloned().chain(referenced).collect()
     }
 
     /// Why this render cannot be split into tiles that merge into it (None: it can).
@@ -234,6 +243,31 @@ impl RenderArgs {
         let whole = RenderOptions { crop: Some(Crop { x0: 0, y0: 0, x1: 1, y1: 1 }), ..job.options() };
         whole.check_tiling(&job.selection()).err().map(|e| e.to_string())
     }
+}
+
+/// The input entries ([`kelvin::provenance::Inputs::entries`]) of `scene`, `env` and each
+/// `input <path>` among `recorded` keys (beside the scene), hashed now: what a done-check
+/// compares with the digests an output recorded when its inputs were read.
+pub(super) fn inputs_now<'a>(
+    scene: Option<&Path>,
+    env: Option<&Path>,
+    recorded: impl Iterator<Item = &'a String>,
+) -> Result<BTreeMap<String, String>, String> {
+    let hash = |p: &Path| file_sha256(p).map_err(|e| format!("{}: {e}", p.display()));
+    let mut now = BTreeMap::new();
+    if let Some(scene) = scene {
+        now.insert("scene".to_owned(), hash(scene)?);
+    }
+    if let Some(env) = env {
+        now.insert("env".to_owned(), hash(env)?);
+    }
+    let base = scene.and_then(Path::parent).unwrap_or(Path::new(""));
+    for key in recorded {
+        if let Some(rel) = key.strip_prefix(INPUT_PREFIX) {
+            now.insert(key.clone(), hash(&base.join(rel))?);
+        }
+    }
+    Ok(now)
 }
 
 /// Loads the job's world, printing the loader's warnings and the scene's summary.
@@ -276,12 +310,12 @@ pub(super) fn write_outputs(
     match ext.as_str() {
         "exr" => {
             let preview = path.with_extension("png");
-            write_png(&preview, w as usize, h as usize, rgb, exposure)?;
+            write_png_with(&preview, w as usize, h as usize, rgb, exposure, Some(provenance))?;
             write_exr_with(path, w as usize, h as usize, rgb, provenance)?;
             eprintln!("wrote {} and {}", path.display(), preview.display());
         }
         "png" => {
-            write_png(path, w as usize, h as usize, rgb, exposure)?;
+            write_png_with(path, w as usize, h as usize, rgb, exposure, Some(provenance))?;
             eprintln!("wrote {}", path.display());
         }
         _ => return Err(format!("{}: unsupported output extension; use .exr or .png", path.display()).into()),
@@ -330,7 +364,9 @@ pub(super) fn render_to_files(
         }
         None => vec![None],
     };
-    let LoadedJob { mut world, mut schedule, file, .. } = build_world(&job)?;
+    let LoadedJob { mut world, mut schedule, file, inputs, .. } = build_world(&job)?;
+    // Hashed when read: a file replaced during the render does not speak for this image.
+    let inputs = inputs.entries();
     let clip = if args.frames.is_some() { Some(chosen_clip(&world, file, args)?) } else { None };
     let camera = job.camera();
     let mut rendered = Vec::with_capacity(frames.len());
@@ -358,7 +394,7 @@ pub(super) fn render_to_files(
         };
         let clip = clip.map(|c| (c, clip_name(c)));
         let clip = clip.as_ref().map(|(c, n)| (*c, n.as_deref()));
-        write_image(args, &output, &film.pixels(), &args.provenance(frame, clip)?)?;
+        write_image(args, &output, &film.pixels(), &args.provenance(frame, clip, inputs.clone()))?;
         rendered.push(Rendered { frame, pose_seconds, stats });
     }
     Ok(rendered)

@@ -78,6 +78,8 @@ pub enum ImageIoError {
         what: String,
         /// The operating system's message.
         msg: String,
+        /// Its kind (a full disk, a permission): whether another machine could do better.
+        kind: std::io::ErrorKind,
     },
     /// An EXR could not be read or decoded, or its windows do not describe a tile of an image.
     #[error("{what}: cannot read: {msg}")]
@@ -279,6 +281,19 @@ fn read_exr_image(bytes: &[u8], what: &str) -> Result<(ExrRgb, Vec<Vec3>), Image
 
 /// Writes a tone-mapped 8-bit sRGB PNG; `exposure` is in stops (0 = unchanged). See the module docs.
 pub fn write_png(path: &Path, width: usize, height: usize, rgb: &[Vec3], exposure: f32) -> Result<(), ImageIoError> {
+    write_png_with(path, width, height, rgb, exposure, None)
+}
+
+/// [`write_png`] recording `provenance` in a `tEXt` chunk whose keyword is [`ATTRIBUTE`] (the
+/// same JSON object an EXR's attribute holds), in the one file: no sidecar to fall out of step.
+pub fn write_png_with(
+    path: &Path,
+    width: usize,
+    height: usize,
+    rgb: &[Vec3],
+    exposure: f32,
+    provenance: Option<&Provenance>,
+) -> Result<(), ImageIoError> {
     use image::ImageEncoder;
     let what = path.display().to_string();
     check_dimensions(&what, width, height, rgb, u32::MAX as usize)?;
@@ -288,7 +303,28 @@ pub fn write_png(path: &Path, width: usize, height: usize, rgb: &[Vec3], exposur
     image::codecs::png::PngEncoder::new(&mut bytes)
         .write_image(&data, width as u32, height as u32, image::ExtendedColorType::Rgb8)
         .map_err(|e| ImageIoError::Encode { what: what.clone(), format: "PNG", msg: e.to_string() })?;
+    if let Some(p) = provenance {
+        let json = serde_json::to_string(&p.0).map_err(|e| ImageIoError::Encode {
+            what: what.clone(),
+            format: "PNG",
+            msg: e.to_string(),
+        })?;
+        bytes = super::png_text::with_text(&bytes, ATTRIBUTE, &json);
+    }
     write_file(path, &what, &bytes)
+}
+
+/// The provenance a PNG written by [`write_png_with`] records (an empty one if it records none).
+pub fn read_png_provenance(path: &Path) -> Result<Provenance, ImageIoError> {
+    let what = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| ImageIoError::Read { what: what.clone(), msg: e.to_string() })?;
+    let bad = |msg: String| ImageIoError::Read { what: what.clone(), msg };
+    match super::png_text::text(&bytes, ATTRIBUTE).map_err(bad)? {
+        Some(json) => {
+            Ok(Provenance(serde_json::from_str(&json).map_err(|e| bad(format!("its {ATTRIBUTE} text: {e}")))?))
+        }
+        None => Ok(Provenance::default()),
+    }
 }
 
 /// Writes a Radiance RGBE (.hdr) file; negative and NaN values are written as 0.
@@ -385,7 +421,7 @@ fn check_dimensions(
 /// old file or the whole new one, never empty or cut short. `what` names the file in the error.
 pub fn write_file(path: &Path, what: &str, bytes: &[u8]) -> Result<(), ImageIoError> {
     use std::io::Write;
-    let io = |e: std::io::Error| ImageIoError::Io { what: what.into(), msg: e.to_string() };
+    let io = |e: std::io::Error| ImageIoError::Io { what: what.into(), msg: e.to_string(), kind: e.kind() };
     // A temporary name in the same directory, so the rename stays on one file system.
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let temp = path.with_file_name(format!(".{name}.{}.partial", std::process::id()));

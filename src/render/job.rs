@@ -180,6 +180,9 @@ pub struct LoadedJob {
     pub cameras: Vec<crate::scene::gltf::CameraData>,
     /// The scene file's mesh entities with their glTF names and lightmap uvs (what `kelvin bake` reads).
     pub primitives: Vec<crate::scene::spawn::SpawnedPrimitive>,
+    /// Every file the load read (scene, what it references, environment map), hashed as read: what
+    /// an output's provenance records.
+    pub inputs: crate::provenance::Inputs,
 }
 
 fn check_in<T: PartialOrd + std::fmt::Display>(name: &str, v: T, range: RangeInclusive<T>) -> Result<(), JobError> {
@@ -345,6 +348,7 @@ impl RenderJob {
         world.insert_resource(self.settings());
         LightingPlugin::build(&mut world, &mut schedule);
         let (mut lights, mut cameras, mut primitives) = (Vec::new(), Vec::new(), Vec::new());
+        let mut inputs = crate::provenance::Inputs::default();
         let (mut warnings, file, summary) = match &self.scene {
             Some(path) => {
                 let start = std::time::Instant::now();
@@ -362,6 +366,9 @@ impl RenderJob {
                     (None, _) => {}
                 }
                 let mut report = crate::scene::spawn::spawn_gltf(&mut world, &scene);
+                let mut read = std::mem::take(&mut scene.inputs).into_iter();
+                inputs.scene = read.next();
+                inputs.referenced = read.chain(std::mem::take(&mut report.inputs)).collect();
                 (lights, cameras, primitives) = (scene.lights, scene.cameras, std::mem::take(&mut report.primitives));
                 let summary = format!(
                     "scene {} (loaded in {:.1} ms): {} meshes ({} triangles, {} emissive), {} lights, {} cameras, {} animations",
@@ -382,12 +389,14 @@ impl RenderJob {
             }
         };
         if let Some(path) = &self.env {
-            warnings.extend(super::scene_file::spawn_env_map(&mut world, path, self.env_intensity)?);
+            let (env_warnings, read) = super::scene_file::spawn_env_map_recorded(&mut world, path, self.env_intensity)?;
+            warnings.extend(env_warnings);
+            inputs.env = Some(read);
         }
         if let Some(light) = sky {
             world.spawn(light);
         }
-        Ok(LoadedJob { world, schedule, file, warnings, summary, lights, cameras, primitives })
+        Ok(LoadedJob { world, schedule, file, warnings, summary, lights, cameras, primitives, inputs })
     }
 }
 

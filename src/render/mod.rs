@@ -8,6 +8,7 @@ pub mod job;
 pub mod material;
 mod normal_map;
 pub mod path;
+mod png_text;
 pub mod renderer;
 pub mod scene_file;
 mod shade;

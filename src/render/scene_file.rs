@@ -25,9 +25,18 @@ pub fn spawn_gltf_file(world: &mut World, path: &Path) -> Result<SpawnReport, Gl
 /// `ImageInfiniteLight` of scale `intensity` (the luminance, nit, of a texel of value 1).
 /// Returns the loader's warnings.
 pub fn spawn_env_map(world: &mut World, path: &Path, intensity: f32) -> Result<Vec<String>, ImageError> {
-    let loaded = crate::scene::image::load_image(path)?;
+    spawn_env_map_recorded(world, path, intensity).map(|(warnings, _)| warnings)
+}
+
+/// [`spawn_env_map`], with the record of the file's bytes as read.
+pub fn spawn_env_map_recorded(
+    world: &mut World,
+    path: &Path,
+    intensity: f32,
+) -> Result<(Vec<String>, crate::provenance::InputFile), ImageError> {
+    let (loaded, read) = crate::scene::image::load_image_recorded(path)?;
     let mut light = ImageInfiniteLight::new(Arc::new(loaded.image));
     light.scale = intensity;
     world.spawn((light, Transform::IDENTITY));
-    Ok(loaded.warnings)
+    Ok((loaded.warnings, read))
 }

@@ -356,6 +356,11 @@ pub fn lat_long_of<F: Real3>(dir: F::Vector) -> [F; 2] {
 
 /// Loads an image file; the format comes from the extension (see the module docs for the checks made).
 pub fn load_image(path: &Path) -> Result<LoadedImage, ImageError> {
+    load_image_recorded(path).map(|(image, _)| image)
+}
+
+/// [`load_image`], with the record of the bytes it decoded (their SHA-256, hashed as read).
+pub fn load_image_recorded(path: &Path) -> Result<(LoadedImage, crate::provenance::InputFile), ImageError> {
     let what = path.display().to_string();
     let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
     // Check the extension first so a typo in it is reported as such even when the file is missing.
@@ -366,7 +371,7 @@ pub fn load_image(path: &Path) -> Result<LoadedImage, ImageError> {
         std::io::ErrorKind::NotFound => ImageError::NotFound { what: what.clone() },
         _ => ImageError::Io { what: what.clone(), msg: e.to_string() },
     })?;
-    load_image_from_bytes(&bytes, &ext, &what)
+    Ok((load_image_from_bytes(&bytes, &ext, &what)?, crate::provenance::InputFile::read(path, &bytes)))
 }
 
 /// Loads an image held in memory (glTF embedded textures, fuzzing). `format_hint` is an extension or MIME type

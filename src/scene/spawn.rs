@@ -45,6 +45,8 @@ pub struct SpawnReport {
     pub warnings: Vec<String>,
     /// Every spawned mesh entity, in the order spawned, with where it came from in the file.
     pub primitives: Vec<SpawnedPrimitive>,
+    /// The IES profile files read while spawning, each with the SHA-256 of the bytes parsed.
+    pub inputs: Vec<crate::provenance::InputFile>,
 }
 
 /// A mesh entity spawned from a glTF mesh primitive, with what a lightmap baker needs that the
@@ -189,7 +191,7 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
             LightKind::Directional => {
                 e.insert((DistantLight { amount: Amount::Lux(luminous), spectrum, ..Default::default() }, transform));
             }
-            LightKind::Ies => match load_ies(light.ies.as_ref()) {
+            LightKind::Ies => match load_ies(light.ies.as_ref(), &mut report.inputs) {
                 Ok(profile) => {
                     // The multiplier scales the profile's candela values; the colour weighs them by its
                     // luminance, as for the other kinds (a black colour gives no light).
@@ -221,9 +223,16 @@ pub fn spawn_gltf(world: &mut World, scene: &GltfScene) -> SpawnReport {
     report
 }
 
-fn load_ies(source: Option<&IesSource>) -> Result<IesProfile, String> {
+/// The profile of an IES light; a file's bytes are recorded in `inputs` as read.
+fn load_ies(source: Option<&IesSource>, inputs: &mut Vec<crate::provenance::InputFile>) -> Result<IesProfile, String> {
     match source {
-        Some(IesSource::File(path)) => IesProfile::from_file(path).map_err(|e| e.to_string()),
+        Some(IesSource::File(path)) => {
+            let what = path.display().to_string();
+            let bytes = std::fs::read(path).map_err(|e| format!("{what}: {e}"))?;
+            inputs.push(crate::provenance::InputFile::read(path, &bytes));
+            // As IesProfile::from_file reads it: bytes that are not UTF-8 (Latin-1 keywords) are replaced.
+            IesProfile::parse(&String::from_utf8_lossy(&bytes), &what).map_err(|e| e.to_string())
+        }
         Some(IesSource::Embedded { bytes, what }) => {
             let text = std::str::from_utf8(bytes).map_err(|_| format!("{what}: not UTF-8 text"))?;
             IesProfile::parse(text, what).map_err(|e| e.to_string())

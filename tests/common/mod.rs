@@ -7,6 +7,7 @@ pub mod chi_square;
 pub mod files;
 pub mod gltf_doc;
 pub mod lobe_grid;
+pub mod room_files;
 
 use kelvin::light::ColorQuery;
 use kelvin::spectrum::SampledSpectrum;

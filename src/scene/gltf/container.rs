@@ -4,8 +4,10 @@ use std::path::{Path, PathBuf};
 
 use base64::Engine;
 use serde_json::Value;
+use sha2::{Digest, Sha256};
 
 use super::{GltfError, MAX_BUFFER_BYTES, Warnings};
+use crate::provenance::InputFile;
 
 /// GLB header magic, "glTF" (glTF 2.0 spec, section 4.4 "Binary glTF Layout").
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -177,6 +179,7 @@ pub(super) fn load_buffers(
     bin: Option<&[u8]>,
     base_dir: Option<&Path>,
     what: &str,
+    inputs: &mut Vec<InputFile>,
 ) -> Result<Vec<Vec<u8>>, GltfError> {
     let mut buffers = Vec::with_capacity(root.buffers.len());
     for (index, buffer) in root.buffers.iter().enumerate() {
@@ -209,7 +212,8 @@ pub(super) fn load_buffers(
                 Ok(UriTarget::Data { bytes, .. }) => (bytes, "its data: URI".to_string()),
                 Ok(UriTarget::File(path)) => {
                     let name = path.display().to_string();
-                    let data = read_external(&path, declared).map_err(|msg| missing(&name, msg))?;
+                    let (data, read) = read_external(&path, declared).map_err(|msg| missing(&name, msg))?;
+                    inputs.push(read);
                     (data, name)
                 }
                 Err(msg) => return Err(missing(&shorten(uri), msg)),
@@ -230,16 +234,49 @@ pub(super) fn load_buffers(
     Ok(buffers)
 }
 
-/// Reads an external buffer file, at most `declared` bytes plus a little slack (so a huge wrong file is not read).
-fn read_external(path: &Path, declared: u64) -> Result<Vec<u8>, String> {
+/// Reads an external buffer file, keeping at most `declared` bytes plus a little slack (so a huge wrong file is
+/// not held), and the SHA-256 of the whole file as read now (the rest streamed through the hash): what a
+/// done-check hashing the file again compares with.
+fn read_external(path: &Path, declared: u64) -> Result<(Vec<u8>, InputFile), String> {
     use std::io::Read;
-    let file = std::fs::File::open(path).map_err(|e| match e.kind() {
+    let mut file = std::fs::File::open(path).map_err(|e| match e.kind() {
         std::io::ErrorKind::NotFound => "file not found".to_string(),
         _ => e.to_string(),
     })?;
     let mut data = Vec::new();
-    file.take(declared.saturating_add(4)).read_to_end(&mut data).map_err(|e| e.to_string())?;
-    Ok(data)
+    (&mut file).take(declared.saturating_add(4)).read_to_end(&mut data).map_err(|e| e.to_string())?;
+    let mut hasher = Sha256::new_with_prefix(&data);
+    let mut rest = vec![0u8; 1 << 16];
+    loop {
+        match file.read(&mut rest).map_err(|e| e.to_string())? {
+            0 => break,
+            n => hasher.update(&rest[..n]),
+        }
+    }
+    Ok((data, InputFile::hashed(path, hasher)))
+}
+
+/// The files a `.gltf` / `.glb` at `path` names by relative URI (buffers, images, EXT_lights_ies profiles) that
+/// exist, from its JSON alone (nothing decoded): what a farm checks each machine holds. A superset of what a load
+/// reads (an unused image is listed too); empty when the file does not parse.
+pub fn referenced_files(path: &Path) -> Vec<PathBuf> {
+    let Ok(bytes) = std::fs::read(path) else { return Vec::new() };
+    let mut warnings = Warnings { what: String::new(), list: Vec::new() };
+    let Ok(json) = split(&bytes, "", &mut warnings).and_then(|c| parse_json(c.json, "")) else { return Vec::new() };
+    let base = path.parent();
+    let uris = ["/buffers", "/images", "/extensions/EXT_lights_ies/lights"].into_iter().flat_map(|list| {
+        let items = json.pointer(list).and_then(Value::as_array).map(Vec::as_slice).unwrap_or_default();
+        items.iter().filter_map(|item| item.get("uri").and_then(Value::as_str))
+    });
+    let mut files: Vec<PathBuf> = uris
+        .filter_map(|uri| match resolve_uri(uri, base) {
+            Ok(UriTarget::File(p)) if p.is_file() => Some(p),
+            _ => None,
+        })
+        .collect();
+    files.sort();
+    files.dedup();
+    files
 }
 
 /// A URI short enough for a message (data: URIs can be megabytes long).

@@ -286,7 +286,10 @@ fn load_texture_image(doc: &Doc, index: usize, encoding: Encoding, warnings: &mu
                     return None;
                 }
                 match std::fs::read(&path) {
-                    Ok(bytes) => (bytes, hint, name),
+                    Ok(bytes) => {
+                        doc.inputs.borrow_mut().push(crate::provenance::InputFile::read(&path, &bytes));
+                        (bytes, hint, name)
+                    }
                     Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
                         warnings.push(&pointer, format!("{name}: file not found; {fallback}"));
                         return None;

@@ -131,6 +131,9 @@ pub struct GltfScene {
     pub sky: Option<crate::light::SunSkyLight>,
     /// What was ignored, fixed or dropped, one line each: `<file>: <JSON pointer>: <what and the fallback>`.
     pub warnings: Vec<String>,
+    /// Every file the load read, each with the SHA-256 of the bytes it parsed: the scene file first (by
+    /// [`load_gltf`]), then external buffers and images. (IES profiles are read when spawned.)
+    pub inputs: Vec<crate::provenance::InputFile>,
 }
 
 /// A mesh: a list of triangle primitives.
@@ -423,8 +426,12 @@ pub enum GltfError {
 pub fn load_gltf(path: &Path) -> Result<GltfScene, GltfError> {
     let what = path.display().to_string();
     let bytes = container::read_file(path, &what)?;
-    load_gltf_from_bytes(&bytes, path.parent(), &what)
+    let mut scene = load_gltf_from_bytes(&bytes, path.parent(), &what)?;
+    scene.inputs.insert(0, crate::provenance::InputFile::read(path, &bytes));
+    Ok(scene)
 }
+
+pub use container::referenced_files;
 
 /// Loads a `.gltf` (JSON) or `.glb` held in memory. `base_dir` resolves relative URIs (without it, external
 /// buffers are an error and external images a warning); `what` names the source in errors and warnings.
@@ -437,8 +444,9 @@ pub fn load_gltf_from_bytes(bytes: &[u8], base_dir: Option<&Path>, what: &str) -
     let root = ::gltf::json::Root::deserialize(&json)
         .map_err(|e| GltfError::Schema { what: what.to_string(), msg: e.to_string() })?;
     check_extensions(&root, &mut warnings);
-    let buffers = container::load_buffers(&root, &json, container.bin, base_dir, what)?;
-    let doc = Doc { what, base_dir, root: &root, json: &json, buffers };
+    let mut inputs = Vec::new();
+    let buffers = container::load_buffers(&root, &json, container.bin, base_dir, what, &mut inputs)?;
+    let doc = Doc { what, base_dir, root: &root, json: &json, buffers, inputs: std::cell::RefCell::new(inputs) };
 
     let meshes = mesh::read_meshes(&doc, &mut warnings)?;
     let (materials, textures) = material::read_materials(&doc, &mut warnings);
@@ -456,6 +464,7 @@ pub fn load_gltf_from_bytes(bytes: &[u8], base_dir: Option<&Path>, what: &str) -
         animations: placed.tree,
         sky,
         warnings: warnings.list,
+        inputs: doc.inputs.into_inner(),
     })
 }
 
@@ -468,6 +477,8 @@ struct Doc<'a> {
     json: &'a serde_json::Value,
     /// One per glTF buffer, exactly `byteLength` bytes long.
     buffers: Vec<Vec<u8>>,
+    /// The external files read so far (buffers, then images as the readers reach them).
+    inputs: std::cell::RefCell<Vec<crate::provenance::InputFile>>,
 }
 
 impl Doc<'_> {

@@ -1,0 +1,41 @@
+"""kelvin's exit codes (src/cli/exit.rs; `kelvin --help` lists them) and what the Ray driver does with each: the one
+place that reads them, so that a failure is classified by its code, never by the text kelvin printed.
+
+No Ray here: the classification is tested alone (test_exit_codes.py) and sent to the workers by value.
+"""
+
+import signal
+
+SUCCESS = 0
+FAILED = 1  # failed otherwise (`kelvin batch`: some of its jobs failed)
+INPUT = 2  # bad input or settings (clap's usage errors too): fails the same way on any node
+ENVIRONMENT = 3  # environment or I/O: disk full, file too large, permission, read-only file system, out of memory
+INTERRUPTED = 130  # 128 + SIGINT
+PANIC = 101  # Rust's exit code for a panic: a bug, which repeats anywhere
+NOT_EXECUTABLE, NOT_FOUND = 126, 127  # the shell's codes for a binary that cannot run or is missing
+
+# Codes that are the node's fault: worth retrying on another node.
+TRANSIENT = {ENVIRONMENT, INTERRUPTED, NOT_EXECUTABLE, NOT_FOUND}
+
+MEANING = {
+    FAILED: "failed",
+    INPUT: "bad input or settings",
+    ENVIRONMENT: "environment or I/O failure",
+    INTERRUPTED: "interrupted",
+    PANIC: "panicked (a bug)",
+    NOT_EXECUTABLE: "could not be executed",
+    NOT_FOUND: "not found",
+}
+
+
+def is_transient(returncode):
+    """Whether a kelvin that ended with `returncode` (subprocess's: negative for a signal) failed for a reason of
+    its node: killed by a signal (the OOM killer, say), interrupted, or an environment or I/O failure."""
+    return returncode < 0 or returncode in TRANSIENT
+
+
+def describe(returncode):
+    """What the code means, for messages."""
+    if returncode < 0:
+        return f"killed by {signal.Signals(-returncode).name}"
+    return f"exit code {returncode}: {MEANING.get(returncode, 'unknown failure')}"
