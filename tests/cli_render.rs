@@ -287,17 +287,11 @@ fn contradictory_light_options_are_refused() {
     }
     assert!(!out.exists(), "a refused render wrote its output");
     // Each is accepted alone, and with the sampler it belongs to.
-    for args in [&["--all-lights"][..], &["--light-sampler", "ris", "--candidates", "4"], &[
-        "--light-sampler",
-        "restir",
-        "--candidates",
-        "2",
-        "--neighbours",
-        "2",
-        "--radius",
-        "3",
-        "--biased-reuse",
-    ]] {
+    for args in [
+        &["--all-lights"][..],
+        &["--light-sampler", "ris", "--candidates", "4"],
+        &["--light-sampler", "restir", "--candidates", "2", "--neighbours", "2", "--radius", "3", "--biased-reuse"],
+    ] {
         let run = kelvin(&[&["render", "-o", o, "--size", "8x8", "--spp", "1"], args].concat());
         assert!(run.status.success(), "{args:?}: {}", String::from_utf8_lossy(&run.stderr));
     }
