@@ -57,7 +57,7 @@ fn child() -> Affine3A {
 /// made orthogonal to it, right completing a right-handed frame.
 fn expected_frame(m: &Affine3A) -> (Vec3, Vec3, Vec3) {
     let forward = (m.matrix3 * Vec3::NEG_Z).normalize();
-    let y = Vec3::from(m.matrix3 * Vec3::Y);
+    let y = m.matrix3 * Vec3::Y;
     let up = (y - forward * forward.dot(y)).normalize();
     (forward.cross(up), up, forward)
 }
@@ -188,7 +188,7 @@ fn a_floor_lit_and_seen_through_mirrored_parents_reads_e_over_pi() {
         let scale = Affine3A::from_scale(Vec3::from(parent));
         doc.parent(light, scale);
         doc.parent(camera, scale);
-        let path = dir.join(&format!("{}.gltf", name.replace([' ', ','], "_")));
+        let path = dir.join(format!("{}.gltf", name.replace([' ', ','], "_")));
         doc.write(&path);
         let job = RenderJob {
             scene: Some(path),
