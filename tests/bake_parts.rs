@@ -229,14 +229,21 @@ fn the_back_of_a_double_sided_lamp_lights_what_it_faces_and_is_no_leak() {
     assert!(one_sided.leaked_samples == 16 * 64, "every sample meets the lamp's back: {}", one_sided.leaked_samples);
 }
 
+/// The room's files written into `dir`, its maps' folder and `kelvin bake lightmaps` of it at 8 px, 2 spp.
+fn room_bake(dir: &TempDir) -> (std::path::PathBuf, Vec<String>) {
+    let scene = common::room_files::write(&dir.join(""));
+    let out = dir.join("maps");
+    let args = ["bake", "lightmaps", scene.to_str().unwrap(), "--size", "8", "--spp", "2", "-o", out.to_str().unwrap()];
+    (out.clone(), args.map(str::to_owned).to_vec())
+}
+
 /// A part whose bytes were damaged on the way (one bit flipped in its sums) is refused by the
 /// merge, naming the file, instead of baking wrong light into the maps.
 #[test]
 fn a_bake_part_with_a_flipped_bit_is_refused() {
     let dir = TempDir::new("bake-parts", "flipped");
-    let scene = common::room_files::write(&dir.join(""));
-    let out = dir.join("maps");
-    let base = ["bake", "lightmaps", scene.to_str().unwrap(), "--size", "8", "--spp", "2", "-o", out.to_str().unwrap()];
+    let (out, base) = room_bake(&dir);
+    let base: Vec<&str> = base.iter().map(String::as_str).collect();
     ok(&[&base[..], &["--part", "1/2"]].concat());
     ok(&[&base[..], &["--part", "2/2"]].concat());
     let part = out.join("parts/part-1-of-2.kbake");
@@ -254,9 +261,8 @@ fn a_bake_part_with_a_flipped_bit_is_refused() {
 #[test]
 fn bake_parts_of_another_buffer_are_refused() {
     let dir = TempDir::new("bake-parts", "inputs");
-    let scene = common::room_files::write(&dir.join(""));
-    let out = dir.join("maps");
-    let base = ["bake", "lightmaps", scene.to_str().unwrap(), "--size", "8", "--spp", "2", "-o", out.to_str().unwrap()];
+    let (_, base) = room_bake(&dir);
+    let base: Vec<&str> = base.iter().map(String::as_str).collect();
     ok(&[&base[..], &["--part", "1/2"]].concat());
     common::room_files::change(&dir.join(""), "box.bin");
     ok(&[&base[..], &["--part", "2/2"]].concat());
@@ -269,9 +275,8 @@ fn bake_parts_of_another_buffer_are_refused() {
 #[test]
 fn split_bakes_resume_per_part_and_ignore_parts_of_another_split() {
     let dir = TempDir::new("bake-parts", "resume");
-    let scene = common::room_files::write(&dir.join(""));
-    let out = dir.join("maps");
-    let base = ["bake", "lightmaps", scene.to_str().unwrap(), "--size", "8", "--spp", "2", "-o", out.to_str().unwrap()];
+    let (out, base) = room_bake(&dir);
+    let base: Vec<&str> = base.iter().map(String::as_str).collect();
     ok(&[&base[..], &["--part", "1/3"]].concat());
     ok(&[&base[..], &["--part", "1/2"]].concat());
     let first = std::fs::read(out.join("parts/part-1-of-2.kbake")).unwrap();
