@@ -65,9 +65,26 @@ pub fn line_plot(path: &Path, spec: &PlotSpec, series: &[Series]) -> Result<(), 
     let size = if spec.equal_aspect { (720, 720) } else { (960, 600) };
     match ext.as_str() {
         "svg" => draw(SVGBackend::new(path, size).into_drawing_area(), spec, series).map_err(err),
-        "png" => draw(BitMapBackend::new(path, size).into_drawing_area(), spec, series).map_err(err),
+        "png" => png_plot(path, size, |area| draw(area, spec, series)).map_err(err),
         _ => Err(err(format!("unsupported extension '{ext}'; use .svg or .png"))),
     }
+}
+
+/// Draws a plot of `size` pixels into a buffer and writes it to `path` as a PNG through the `image`
+/// crate the renderer already uses (plotters' own PNG encoder would build a second, older `image`).
+pub(crate) fn png_plot(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(DrawingArea<BitMapBackend<'_>, Shift>) -> Result<(), String>,
+) -> Result<(), String> {
+    let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
+    {
+        let area = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+        draw(area.clone())?;
+        area.present().map_err(|e| e.to_string())?;
+    }
+    image::save_buffer_with_format(path, &rgb, size.0, size.1, image::ExtendedColorType::Rgb8, image::ImageFormat::Png)
+        .map_err(|e| e.to_string())
 }
 
 fn draw<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, spec: &PlotSpec, series: &[Series]) -> Result<(), String>
@@ -118,4 +135,28 @@ where
     }
     area.present().map_err(|x| e(&x))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A PNG plot is written through the renderer's own `image` crate: the file decodes at the
+    /// plot's size, the background is white and the first series is drawn in the palette's first
+    /// colour.
+    #[test]
+    fn png_plot_decodes_with_its_curve() {
+        let path = std::env::temp_dir().join(format!("kelvin-plot-{}.png", std::process::id()));
+        let series = [Series { name: "line".into(), points: (0..50).map(|i| (i as f64, (i * i) as f64)).collect() }];
+        let spec = PlotSpec { title: "t", x_label: "x", y_label: "y", equal_aspect: false };
+        line_plot(&path, &spec, &series).unwrap();
+        let image = image::open(&path).unwrap().to_rgb8();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(image.dimensions(), (960, 600));
+        assert_eq!(image.get_pixel(2, 2).0, [255, 255, 255]);
+        let RGBColor(r, g, b) = PALETTE[0];
+        assert!(image.pixels().filter(|p| p.0 == [r, g, b]).count() > 100, "the curve is drawn");
+        let bad = line_plot(&path.with_extension("gif"), &spec, &series).unwrap_err();
+        assert!(bad.to_string().contains("unsupported extension"), "{bad}");
+    }
 }

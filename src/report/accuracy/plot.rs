@@ -17,7 +17,7 @@ pub fn error_vs_time(path: &Path, report: &SceneReport) -> Result<(), PlotError>
     let err = |e: String| PlotError { path: path.display().to_string(), msg: e };
     let size = (1280, 560);
     match path.extension().and_then(|e| e.to_str()) {
-        Some("png") => draw(BitMapBackend::new(path, size).into_drawing_area(), report).map_err(err),
+        Some("png") => crate::report::plot::png_plot(path, size, |area| draw(area, report)).map_err(err),
         _ => draw(SVGBackend::new(path, size).into_drawing_area(), report).map_err(err),
     }
 }
