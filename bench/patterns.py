@@ -3,7 +3,7 @@
 per scene, the noise and the time of `kelvin render` at equal spp under `--pattern sobol` and `--pattern
 independent`, and the efficiency (time to equal noise) that follows.
 
-    /tmp/mitsuba-venv/bin/python bench/patterns.py [--kelvin target/release/kelvin] [--size 128x128] [--spp 16]
+    /tmp/mitsuba-venv/bin/python bench/patterns.py [--kelvin target/dist/kelvin] [--size 128x128] [--spp 16]
         [--integrator path] [--seeds 8] [--scenes a,b] [--out-dir /tmp/peers/patterns] [--json-out FILE]
 
 Per scene and pattern: --seeds K renders at N spp (seeds 0..K, K even). Noise = the mean over the pairs of seeds
@@ -61,7 +61,7 @@ def render(a, scene, extra, pattern, seed, out):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--kelvin", default=str(REPO / "target" / "release" / "kelvin"))
+    ap.add_argument("--kelvin", default=str(REPO / "target" / "dist" / "kelvin"))
     ap.add_argument("--size", default="128x128")
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--integrator", default="path")

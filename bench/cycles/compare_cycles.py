@@ -39,7 +39,7 @@ def cycles_render(a, scene, depth, spp, seed, out):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cycles-python", default="/tmp/cycles-venv/bin/python")
-    ap.add_argument("--kelvin", default=str(REPO / "target" / "release" / "kelvin"))
+    ap.add_argument("--kelvin", default=str(REPO / "target" / "dist" / "kelvin"))
     ap.add_argument("--scene", default=str(REPO / "tests" / "data" / "gltf" / "bevy" / "CornellBox.glb"))
     ap.add_argument("--size", default="128x128")
     ap.add_argument("--spp", type=int, default=64)

@@ -2,7 +2,7 @@
 """kelvin against Mitsuba 3 on the render suite: camera samples per second on the same files.
 
     python3 bench/mitsuba/compare.py --python /tmp/mitsuba-venv/bin/python [--size 128x128] [--spp N]
-        [--scenes a,b] [--rounds 1] [--repeat 3] [--kelvin target/release/kelvin] [--json-out FILE]
+        [--scenes a,b] [--rounds 1] [--repeat 3] [--kelvin target/dist/kelvin] [--json-out FILE]
         [--integrator direct|path] [--max-depth 5]
 
 For each scene of `kelvin bench render --list`, one renderer at a time: kelvin's
@@ -17,7 +17,7 @@ geometric mean of the ratios. Progress and both renderers' logs go to stderr.
 
 The Mitsuba Python (a venv with mitsuba==3.9.1 drjit==1.5.0 numpy pygltflib, see README.md) comes from --python or
 the MITSUBA_PYTHON environment variable. Python 3 standard library only; build kelvin first
-(`cargo build --release`).
+(`cargo build --profile dist`).
 """
 
 import argparse
@@ -58,7 +58,7 @@ def suite_names(kelvin):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--python", default=os.environ.get("MITSUBA_PYTHON"), help="Python of the Mitsuba venv")
-    ap.add_argument("--kelvin", default=str(REPO / "target" / "release" / "kelvin"), help="the kelvin binary")
+    ap.add_argument("--kelvin", default=str(REPO / "target" / "dist" / "kelvin"), help="the kelvin binary")
     ap.add_argument("--size", default="128x128")
     ap.add_argument("--spp", type=int, default=None, help="spp for every scene (default: each scene's own)")
     ap.add_argument("--scenes", default=None, help="comma-separated suite scenes (default: all)")
@@ -73,7 +73,7 @@ def main(argv=None):
         raise SystemExit("give the Mitsuba venv's python with --python or MITSUBA_PYTHON (see README.md)")
     kelvin = Path(args.kelvin)
     if not kelvin.is_file():
-        raise SystemExit(f"{kelvin}: not found; run `cargo build --release` first")
+        raise SystemExit(f"{kelvin}: not found; run `cargo build --profile dist` first")
     env = dict(os.environ)
     if "DRJIT_LIBLLVM_PATH" not in env and Path(LLVM).is_file():
         env["DRJIT_LIBLLVM_PATH"] = LLVM

@@ -171,7 +171,7 @@ def speed(a, name, scene, env, results):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--kelvin", default=str(REPO / "target" / "release" / "kelvin"))
+    ap.add_argument("--kelvin", default=str(REPO / "target" / "dist" / "kelvin"))
     ap.add_argument("--size", default="128x128")
     ap.add_argument("--spp", type=int, default=64, help="spp of the compared renders (default 64)")
     ap.add_argument("--ref-mult", type=int, default=16, help="the reference has spp x this (default 16)")

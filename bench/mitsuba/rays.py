@@ -102,15 +102,15 @@ def main():
     ap.add_argument("--scene", default=os.path.join(ROOT, "tests/data/gltf/bench/sphere_65k.glb"))
     ap.add_argument("--rays", type=int, default=1 << 20, help="rays per set (default 1M)")
     ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--kelvin", default=os.path.join(ROOT, "target/release/examples/ray_throughput"),
-                    help="the built example (cargo build --release --example ray_throughput)")
+    ap.add_argument("--kelvin", default=os.path.join(ROOT, "target/dist/examples/ray_throughput"),
+                    help="the built example (cargo build --profile dist --example ray_throughput)")
     ap.add_argument("--mitsuba-child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("files", nargs="*", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.mitsuba_child:
         return mitsuba_child(a.files[0], a.files[1:], a.repeat)
     if not os.path.isfile(a.kelvin):
-        sys.exit(f"rays.py: {a.kelvin} is missing: cargo build --release --example ray_throughput")
+        sys.exit(f"rays.py: {a.kelvin} is missing: cargo build --profile dist --example ray_throughput")
     tmp = tempfile.mkdtemp(prefix="kelvin-rays-")
     files = {}
     for kind in ("coherent", "incoherent"):
