@@ -27,7 +27,6 @@ pub use env_tables::{EnvTables, build_env_tables, plan_env_tables};
 pub use geometry::{BvhWork, GeometryIndex, plan_bvh, update_scene_bvh};
 pub use plan::Work;
 pub use sample::{MAX_NEIGHBOURS, Reservoirs, ShadowRays, ShadowTarget, sample_direct_lighting};
-pub use shadows::trace_shadow_rays;
 pub use sync_lights::{
     remove_lights, sync_area_lights, sync_distant_lights, sync_goniometric_lights, sync_image_infinite_lights,
     sync_point_lights, sync_projection_lights, sync_spot_lights, sync_sun_sky_lights, sync_uniform_infinite_lights,
@@ -44,13 +43,9 @@ pub enum LightingSet {
     SyncLights,
     /// After this set, the light sampler matches the `LightTable`.
     UpdateSampler,
-    /// After this set, `DirectLighting` holds one unoccluded light sample per point (or per point
-    /// and light) and `ShadowRays` the segments to test.
+    /// After this set, `DirectLighting` holds one light sample per point (or per point and light),
+    /// its shadow ray traced (occluded entries zeroed), ready to read.
     SampleLights,
-    /// After this set, every shadow ray has an occluded flag.
-    TraceShadows,
-    /// After this set, `DirectLighting` has visibility applied and is ready to read.
-    WriteResults,
 }
 
 /// Adds kelvin's resources to a `World` and its systems to a `Schedule`: the one entry an app
@@ -130,10 +125,6 @@ fn add_systems<P: Placement>(schedule: &mut Schedule) {
             LightingSet::UpdateSampler,
             // Light selection uses the updated sampler.
             LightingSet::SampleLights,
-            // Shadow rays are the segments the sampling step produced.
-            LightingSet::TraceShadows,
-            // Visibility is applied once every ray is traced.
-            LightingSet::WriteResults,
         )
             .chain(),
     );
@@ -176,10 +167,4 @@ fn add_systems<P: Placement>(schedule: &mut Schedule) {
             .chain()
             .in_set(LightingSet::SampleLights),
     );
-    schedule.add_systems(
-        (shadows::plan_shadows, trace_shadow_rays.run_if(plan::planned(|w| w.shadows)))
-            .chain()
-            .in_set(LightingSet::TraceShadows),
-    );
-    schedule.add_systems(sample::apply_visibility.in_set(LightingSet::WriteResults));
 }

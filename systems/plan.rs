@@ -15,8 +15,6 @@ pub struct Work {
     pub sampler: bool,
     /// Sample direct lighting (there are points and lights).
     pub sampling: bool,
-    /// Trace shadow rays (shadows are on, there are rays and geometry to block them).
-    pub shadows: bool,
     /// Rebuild, refit or keep the scene BVH.
     pub bvh: super::geometry::BvhWork,
     /// Build environment-map sampling tables (an image infinite light was added or changed).

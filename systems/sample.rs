@@ -1,16 +1,19 @@
-//! Choosing lights and evaluating Sample_Li for the whole shading batch (rayon over chunks), the
-//! shadow rays that follow, and applying their answers.
+//! Choosing lights and evaluating Sample_Li for the whole shading batch (rayon over chunks), and
+//! tracing each block's shadow rays as soon as the block is sampled.
 
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use super::shadows::Shadows;
+use crate::geometry::SceneBvh;
 use crate::lanes::LANES;
 use crate::light::{ColorQuery, LiSample, LightFlags, LightId, LightKind, LightSampleContext, LightTable};
 use crate::light_sampler::LightSampler;
 use crate::rng::SampleStream;
 use crate::shading::{
-    ColorMode, DirectLighting, LightPrecision, LightSelection, LightUpdates, RunReport, Settings, ShadingBatch,
+    ColorMode, DirectLighting, LightPrecision, LightSelection, LightUpdates, RunReport, SceneBounds, Settings,
+    ShadingBatch,
 };
 
 use crate::spectrum::SampledSpectrum;
@@ -37,12 +40,18 @@ pub enum ShadowTarget {
     Infinity,
 }
 
-/// The shadow ray of each `DirectLighting` entry, written by the sampling step in the same pass
-/// as the entry. Entry `e` starts at point `e / entries_per_point` of the `ShadingBatch` (its
-/// position, error bound and normal give the offset origin), so no column repeats the batch.
-/// Invariant: all columns have one slot per entry.
+/// The shadow rays of the last sampling run: how many there were and were blocked and, when an app
+/// sets `keep`, each `DirectLighting` entry's segment and answer. The sampling pass traces a
+/// block's rays as soon as it has sampled the block; without `keep` their ends live in scratch
+/// of the task and the columns below stay empty. Entry `e` starts at point
+/// `e / entries_per_point` of the `ShadingBatch` (its position, error bound and normal give the
+/// offset origin), so no column repeats the batch.
+/// Invariant: with `keep`, all columns have one slot per entry; without, they are empty.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct ShadowRays {
+    /// Keep every entry's segment and answer in the columns below (off by default: they cost
+    /// memory traffic that the light system itself does not need).
+    pub keep: bool,
     /// Entries per batch point (entry `e` starts at point `e / entries_per_point`).
     pub entries_per_point: usize,
     /// Where each entry's ray ends (`None`: the entry has no ray).
@@ -52,24 +61,25 @@ pub struct ShadowRays {
     pub target: Vec<Vec3>,
     /// The light's surface normal at the target, written for `Surface` entries only.
     pub target_normal: Vec<Vec3>,
-    /// Answers, filled by the trace step (false for entries without a ray).
+    /// The answers (false for entries without a ray, and for every entry when shadows are off or
+    /// no geometry can block a ray).
     pub occluded: Vec<bool>,
     /// Number of entries with a ray.
     rays: usize,
-    /// Number of rays found blocked (set by the trace step).
-    pub(super) blocked: usize,
+    /// Number of rays found blocked.
+    blocked: usize,
 }
 
 impl ShadowRays {
-    /// Number of rays to trace (entries whose kind is not `None`).
+    /// Number of rays traced (entries with a ray).
     pub fn len(&self) -> usize {
         self.rays
     }
-    /// True with no rays to trace.
+    /// True when no ray was traced.
     pub fn is_empty(&self) -> bool {
         self.rays == 0
     }
-    /// Number of rays the trace step found blocked (the `true` entries of `occluded`).
+    /// Number of rays found blocked (the `true` entries of `occluded` under `keep`).
     pub fn blocked(&self) -> usize {
         self.blocked
     }
@@ -81,16 +91,23 @@ impl ShadowRays {
         self.occluded.clear();
         (self.rays, self.blocked) = (0, 0);
     }
-    /// Sizes the columns for `entries` entries of `entries_per_point` each; the kinds, targets
-    /// and count are then written by the sampling step, and the answers reset to unoccluded.
+    /// Sizes the columns for `entries` entries of `entries_per_point` each (empties them without
+    /// `keep`); the kinds, targets and answers are then written by the sampling pass.
     fn resize(&mut self, entries: usize, entries_per_point: usize) {
         self.entries_per_point = entries_per_point;
+        (self.rays, self.blocked) = (0, 0);
+        if !self.keep {
+            self.kind.clear();
+            self.target.clear();
+            self.target_normal.clear();
+            self.occluded.clear();
+            return;
+        }
         self.kind.resize(entries, ShadowTarget::None);
         self.target.resize(entries, Vec3::ZERO);
         self.target_normal.resize(entries, Vec3::ZERO);
         self.occluded.clear();
         self.occluded.resize(entries, false);
-        self.blocked = 0;
     }
 }
 
@@ -126,12 +143,12 @@ fn entries_per_point(settings: &Settings, n_lights: usize) -> usize {
 }
 
 /// For every point of the batch, chooses lights and evaluates Sample_Li, writing one
-/// `DirectLighting` entry per sample (unoccluded) and, in the same pass, the entry's shadow ray.
+/// `DirectLighting` entry per sample and, in the same pass, tracing the entry's shadow ray (a
+/// block of entries at a time): a blocked entry is zeroed and marked occluded.
 pub fn sample_direct_lighting(
     batch: Res<ShadingBatch>,
-    table: Res<LightTable>,
-    sampler: Res<LightSampler>,
-    settings: Res<Settings>,
+    (table, sampler, settings): (Res<LightTable>, Res<LightSampler>, Res<Settings>),
+    (bvh, bounds): (Res<SceneBvh>, Res<SceneBounds>),
     mut out: ResMut<DirectLighting>,
     mut rays: ResMut<ShadowRays>,
     (mut reservoirs, mut report): (ResMut<Reservoirs>, ResMut<RunReport>),
@@ -185,9 +202,21 @@ pub fn sample_direct_lighting(
         report.record_count("reuse_reservoirs", true, reuse::summary(&restir, &batch, reservoirs), m as u64, "entries");
     }
     let sampling = Sampling { reservoirs: &reservoirs.next, ..sampling };
+    let shadows = Shadows::new(&batch, &bvh, &settings, &bounds, k);
     let chunk = CHUNK * k.max(1);
     let rays = &mut *rays;
-    rays.rays = (
+    // Each task's shadow-ray ends: the kept columns, or scratch of the task's own.
+    let kept: Vec<Option<RayColumns>> = if rays.keep {
+        let columns =
+            (rays.kind.chunks_mut(chunk), rays.target.chunks_mut(chunk), rays.target_normal.chunks_mut(chunk));
+        let columns = columns.0.zip(columns.1).zip(columns.2).zip(rays.occluded.chunks_mut(chunk));
+        columns
+            .map(|(((kind, target), target_normal), occluded)| Some((kind, target, target_normal, occluded)))
+            .collect()
+    } else {
+        (0..out.pdf.chunks(chunk).len()).map(|_| None).collect()
+    };
+    (rays.rays, rays.blocked) = (
         out.offsets[..n].par_chunks_mut(CHUNK),
         out.radiance.par_chunks_mut(chunk),
         out.wi.par_chunks_mut(chunk),
@@ -195,36 +224,88 @@ pub fn sample_direct_lighting(
         out.light.par_chunks_mut(chunk),
         out.delta.par_chunks_mut(chunk),
         out.occluded.par_chunks_mut(chunk),
-        rays.kind.par_chunks_mut(chunk),
-        rays.target.par_chunks_mut(chunk),
-        rays.target_normal.par_chunks_mut(chunk),
+        kept,
     )
         .into_par_iter()
         .enumerate()
-        .map(|(c, (offsets, radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal))| {
+        .map(|(c, (offsets, radiance, wi, pdf, light, delta, occluded, kept))| {
             let first_entry = c * chunk;
             for (j, offset) in offsets.iter_mut().enumerate() {
                 *offset = ((c * CHUNK + j) * k) as u32;
             }
-            let mut cols = EntryColumns { radiance, wi, pdf, light, delta, occluded, ray_kind, target, target_normal };
+            let (mut kinds, mut targets, mut normals) = (Vec::new(), Vec::new(), Vec::new());
+            let (ray_kind, target, target_normal, ray_occluded) = match kept {
+                Some((kind, target, normal, occluded)) => (kind, target, normal, Some(occluded)),
+                None => {
+                    kinds.resize(pdf.len(), ShadowTarget::None);
+                    targets.resize(pdf.len(), Vec3::ZERO);
+                    normals.resize(pdf.len(), Vec3::ZERO);
+                    (&mut kinds[..], &mut targets[..], &mut normals[..], None)
+                }
+            };
+            let mut cols = EntryColumns {
+                radiance,
+                wi,
+                pdf,
+                light,
+                delta,
+                occluded,
+                ray_kind,
+                target,
+                target_normal,
+                ray_occluded,
+            };
+            let shadows = shadows.as_ref();
             if lanes {
                 crate::lanes::widest(
                     #[inline(always)]
                     || {
                         // A plain loop: iterator adapters may not inline into the wide code.
-                        let (mut traced, mut e) = (0, 0);
+                        let (mut traced, mut blocked, mut e) = (0, 0, 0);
                         while e < cols.len() {
-                            traced += sampling.lane_block(first_entry, e, &mut cols);
+                            let rays = sampling.lane_block(first_entry, e, &mut cols);
+                            if rays > 0 {
+                                blocked += cols.trace(shadows, first_entry, e);
+                            }
+                            traced += rays;
                             e += LANES;
                         }
-                        traced
+                        (traced, blocked)
                     },
                 )
             } else {
-                (0..cols.len()).map(|e| sampling.entry(first_entry, e, &mut cols) as usize).sum()
+                let (mut traced, mut blocked, mut e) = (0, 0, 0);
+                while e < cols.len() {
+                    let end = cols.len().min(e + LANES);
+                    let rays: usize = (e..end).map(|e| sampling.entry(first_entry, e, &mut cols) as usize).sum();
+                    if rays > 0 {
+                        blocked += crate::lanes::widest(
+                            #[inline(always)]
+                            || cols.trace(shadows, first_entry, e),
+                        );
+                    }
+                    traced += rays;
+                    e = end;
+                }
+                (traced, blocked)
             }
         })
-        .sum();
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    if shadows.is_none() || rays.rays == 0 {
+        let why = if !settings.shadows {
+            "shadows are off in Settings"
+        } else if shadows.is_none() {
+            "no occluding geometry"
+        } else {
+            "no shadow rays (no samples, every light has casts_shadows = false, or nothing can block them)"
+        };
+        // Rays that were not traced are not counted.
+        rays.rays = 0;
+        report.record("trace_shadow_rays", false, why);
+    } else {
+        let why = format!("{} rays against {} primitives", rays.rays, bvh.primitive_count());
+        report.record_count("trace_shadow_rays", true, why, rays.rays as u64, "rays");
+    }
     // Other selections leave the history as it is (an app may interleave a reference run).
     match settings.selection {
         LightSelection::Restir(r) if r.temporal => reservoirs.keep_history(&batch, &table, k),
@@ -400,6 +481,9 @@ impl Sampling<'_> {
     }
 }
 
+/// A task's chunk of the kept `ShadowRays` columns: kinds, targets, target normals, answers.
+type RayColumns<'a> = (&'a mut [ShadowTarget], &'a mut [Vec3], &'a mut [Vec3], &'a mut [bool]);
+
 /// One chunk of the columns the sampling pass writes, indexed by entry within the chunk.
 struct EntryColumns<'a> {
     radiance: &'a mut [SampledSpectrum],
@@ -408,30 +492,39 @@ struct EntryColumns<'a> {
     light: &'a mut [LightId],
     delta: &'a mut [bool],
     occluded: &'a mut [bool],
+    /// The shadow rays' ends: the kept `ShadowRays` columns, or the task's scratch.
     ray_kind: &'a mut [ShadowTarget],
     target: &'a mut [Vec3],
     target_normal: &'a mut [Vec3],
+    /// The kept answers (`ShadowRays::keep`).
+    ray_occluded: Option<&'a mut [bool]>,
 }
 
 impl EntryColumns<'_> {
     fn len(&self) -> usize {
         self.pdf.len()
     }
-}
 
-/// Zeroes the radiance of entries whose shadow ray was blocked.
-pub fn apply_visibility(rays: Res<ShadowRays>, mut out: ResMut<DirectLighting>) {
-    if rays.blocked == 0 {
-        // Nothing to zero (the usual case for a lit floor): no pass over the entries.
-        return;
-    }
-    let out = &mut *out;
-    let columns = (out.radiance.par_iter_mut(), out.occluded.par_iter_mut(), rays.occluded.par_iter());
-    columns.into_par_iter().with_min_len(CHUNK).for_each(|(radiance, occluded, &blocked)| {
-        if blocked {
-            (*radiance, *occluded) = (SampledSpectrum::default(), true);
+    /// Traces the shadow rays of entries `e..e + LANES` (or to the chunk's end) of the chunk
+    /// starting at global entry `first`, just sampled, and zeroes the blocked ones; returns how
+    /// many were blocked (0 without a tracer: shadows off, or no geometry).
+    #[inline(always)]
+    fn trace(&mut self, shadows: Option<&Shadows>, first: usize, e: usize) -> usize {
+        let Some(shadows) = shadows else { return 0 };
+        let end = self.len().min(e + LANES);
+        let (kind, target, normal) = (&self.ray_kind[e..end], &self.target[e..end], &self.target_normal[e..end]);
+        let blocked = shadows.trace_block(first + e, kind, target, normal);
+        let mut left = blocked;
+        while left != 0 {
+            let l = e + left.trailing_zeros() as usize;
+            (self.radiance[l], self.occluded[l]) = (SampledSpectrum::default(), true);
+            if let Some(kept) = self.ray_occluded.as_deref_mut() {
+                kept[l] = true;
+            }
+            left &= left - 1;
         }
-    });
+        blocked.count_ones() as usize
+    }
 }
 
 mod lane_block;

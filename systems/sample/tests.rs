@@ -16,6 +16,7 @@ fn slot_without_point_gets_no_light() {
         let mut schedule = Schedule::default();
         world.insert_resource(Settings { selection, samples_per_point: 2, ..Default::default() });
         crate::systems::LightingPlugin::build(&mut world, &mut schedule);
+        world.resource_mut::<ShadowRays>().keep = true;
         world.spawn((UniformInfiniteLight::default(), Transform::default()));
         world.spawn((DistantLight { amount: Amount::Lux(1.0), ..Default::default() }, Transform::default()));
         world.spawn((PointLight::candela(10.0), Transform::from_translation(Vec3::Y)));
@@ -119,6 +120,8 @@ fn lane_path_matches_entry_by_entry() {
             let light = crate::light::AreaLight { two_sided: true, ..Default::default() };
             world.spawn((light, disk, at(2.0, 3.0, -1.0)));
         }
+        // The segments are compared below.
+        world.resource_mut::<ShadowRays>().keep = true;
         {
             let mut settings = world.resource_mut::<Settings>();
             (settings.samples_per_point, settings.light_sampler) = (samples_per_point, light_sampler);
@@ -182,9 +185,10 @@ fn lane_path_matches_entry_by_entry() {
             ray_kind: &mut ray_kind,
             target: &mut target,
             target_normal: &mut target_normal,
+            ray_occluded: None,
         };
         let traced: usize = (0..m).map(|e| sampling.entry(0, e, &mut cols) as usize).sum();
-        assert_eq!(traced, rays.len());
+        assert_eq!(traced, rays.kind.iter().filter(|&&k| k != ShadowTarget::None).count());
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         let vec_bits = |v: &[Vec3]| v.iter().flat_map(|x| x.to_array()).map(f32::to_bits).collect::<Vec<_>>();
         let spectrum_bits = |v: &[SampledSpectrum]| v.iter().flat_map(|x| x.0).map(f32::to_bits).collect::<Vec<_>>();
@@ -306,4 +310,101 @@ fn restir_reservoirs_in_lanes_equal_one_entry_at_a_time() {
         assert!(kinds.contains(&kind), "{kind:?} never chosen");
     }
     assert_eq!(scalar.initial()[37].bits().0, NO_LIGHT);
+}
+
+/// The sampling pass traces each block's shadow rays as soon as it has sampled the block: its
+/// answers must be those of each kept segment traced alone (`SceneBvh::occluded_from`), entry by
+/// entry, and the entries must not depend on whether an app keeps the segments. Hard cases: one
+/// entry per point in whole and partial blocks of lanes (packets from a lane kernel's segments),
+/// three per point (a block spans points: the entry-to-point map), points spread over the scene
+/// (one ray at a time), rays to points, to a light's surface and to infinity, a light that casts no
+/// shadows, a slot with no point.
+#[test]
+fn shadow_rays_traced_in_the_sampling_pass_match_one_ray_at_a_time() {
+    use crate::geometry::{Mesh, SceneBvh, SurfacePoint};
+    for (samples_per_point, spread, mixed) in [(1, 0.2, false), (1, 0.2, true), (3, 0.2, true), (1, 8.0, true)] {
+        let run = |keep: bool| {
+            let mut world = World::new();
+            let mut schedule = Schedule::default();
+            crate::systems::LightingPlugin::build(&mut world, &mut schedule);
+            world.resource_mut::<Settings>().samples_per_point = samples_per_point;
+            world.resource_mut::<ShadowRays>().keep = keep;
+            let at = |x, y, z| Transform::from_translation(Vec3::new(x, y, z));
+            world.spawn((PointLight::candela(1e3), at(0.0, 3.0, 0.0)));
+            world.spawn((PointLight::candela(1e3), at(2.0, 3.0, 1.0)));
+            if mixed {
+                world.spawn((PointLight { casts_shadows: false, ..PointLight::candela(1e3) }, at(-2.0, 3.0, 0.0)));
+                world.spawn((UniformInfiniteLight::default(), Transform::default()));
+                let disk = crate::geometry::Disk { radius: 0.5, inner_radius: 0.0 };
+                let light = crate::light::AreaLight { two_sided: true, ..Default::default() };
+                world.spawn((light, disk, at(-1.0, 3.5, -1.0)));
+            }
+            // Occluders between the points and the lights: a grid of small squares at y = 1.5.
+            let mut squares = Vec::new();
+            for i in 0..12 {
+                for j in 0..12 {
+                    let (x, z) = (i as f32 * 0.7 - 4.0, j as f32 * 0.7 - 4.0);
+                    let [a, b, c, d] =
+                        [(0.0, 0.0), (0.4, 0.0), (0.4, 0.4), (0.0, 0.4)].map(|(u, v)| Vec3::new(x + u, 1.5, z + v));
+                    squares.extend([[a, b, c], [a, c, d]]);
+                }
+            }
+            world.spawn((Mesh::from_triangles(&squares).unwrap(), Transform::IDENTITY));
+            {
+                let mut batch = world.resource_mut::<ShadingBatch>();
+                let mut rng = SplitMix64::new(11);
+                // 37 pixels of 16 samples each, around centres over the floor; one slot with no point.
+                for pixel in 0..37u32 {
+                    let centre = Vec3::new(rng.f32() * 6.0 - 3.0, 0.0, rng.f32() * 6.0 - 3.0);
+                    for sample in 0..16 {
+                        let jitter = Vec3::new(rng.f32() - 0.5, 0.0, rng.f32() - 0.5) * spread;
+                        let p = if pixel == 5 && sample == 3 { Vec3::NAN } else { centre + jitter };
+                        batch.push(p, Vec3::Y, pixel, sample);
+                    }
+                }
+            }
+            schedule.run(&mut world);
+            world
+        };
+        let (kept, unkept) = (run(true), run(false));
+        let case = format!("{samples_per_point} per point, spread {spread}, mixed {mixed}");
+        let (lit, rays) = (kept.resource::<DirectLighting>(), kept.resource::<ShadowRays>());
+        let (batch, bvh, offset) =
+            (kept.resource::<ShadingBatch>(), kept.resource::<SceneBvh>(), kept.resource::<Settings>().shadow_offset);
+        let k = rays.entries_per_point;
+        let (mut traced, mut blocked) = (0, 0);
+        for e in 0..rays.kind.len() {
+            let i = e / k;
+            let from = SurfacePoint { p: batch.position[i], p_error: batch.position_error[i], n: batch.normal[i] };
+            let ray = match rays.kind[e] {
+                ShadowTarget::None => {
+                    assert!(!rays.occluded[e] && !lit.occluded[e], "{case}: entry {e} has no ray");
+                    continue;
+                }
+                ShadowTarget::Point => offset.spawn_ray_to_point(&from, rays.target[e]),
+                ShadowTarget::Infinity => offset.spawn_ray(&from, (rays.target[e] - from.p).normalize()),
+                ShadowTarget::Surface => {
+                    offset.spawn_ray_to(&from, &SurfacePoint::from_point(rays.target[e], rays.target_normal[e]))
+                }
+            };
+            let alone = bvh.occluded_from(&ray, batch.geometry_of(i));
+            assert_eq!(rays.occluded[e], alone, "{case}: entry {e}");
+            assert_eq!(lit.occluded[e], alone, "{case}: entry {e}");
+            if alone {
+                assert_eq!(lit.radiance[e], SampledSpectrum::default(), "{case}: entry {e} is blocked");
+            }
+            (traced, blocked) = (traced + 1, blocked + alone as usize);
+        }
+        assert_eq!((rays.len(), rays.blocked()), (traced, blocked), "{case}");
+        assert!(blocked > 0 && blocked < traced, "{case}: {blocked} of {traced} blocked");
+        // Without `keep`: no columns, the same entries bit for bit.
+        let (other, other_rays) = (unkept.resource::<DirectLighting>(), unkept.resource::<ShadowRays>());
+        assert!(other_rays.kind.is_empty() && other_rays.occluded.is_empty());
+        assert_eq!((other_rays.len(), other_rays.blocked()), (traced, blocked), "{case}");
+        let bits = |d: &DirectLighting| {
+            let radiance = d.radiance.iter().flat_map(|r| r.0).map(f32::to_bits).collect::<Vec<_>>();
+            (radiance, d.pdf.iter().map(|p| p.to_bits()).collect::<Vec<_>>(), d.occluded.clone())
+        };
+        assert!(bits(lit) == bits(other), "{case}: kept and unkept segments give other entries");
+    }
 }
