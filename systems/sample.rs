@@ -256,37 +256,32 @@ pub fn sample_direct_lighting(
                 ray_occluded,
             };
             let shadows = shadows.as_ref();
+            // The task samples its chunk, then traces the chunk's rays while its entries are still
+            // in cache: interleaving the two per block of lanes kept neither loop's code hot (a
+            // directional light's scene lost 7%; docs/performance.md, issue 58 step 2).
             if lanes {
                 crate::lanes::widest(
                     #[inline(always)]
                     || {
-                        // A plain loop: iterator adapters may not inline into the wide code.
-                        let (mut traced, mut blocked, mut e) = (0, 0, 0);
+                        // Plain loops: iterator adapters may not inline into the wide code.
+                        let (mut traced, mut e) = (0, 0);
                         while e < cols.len() {
-                            let rays = sampling.lane_block(first_entry, e, &mut cols);
-                            if rays > 0 {
-                                blocked += cols.trace(shadows, first_entry, e);
-                            }
-                            traced += rays;
+                            traced += sampling.lane_block(first_entry, e, &mut cols);
                             e += LANES;
                         }
-                        (traced, blocked)
+                        (traced, if traced > 0 { cols.trace_all(shadows, first_entry) } else { 0 })
                     },
                 )
             } else {
-                let (mut traced, mut blocked, mut e) = (0, 0, 0);
-                while e < cols.len() {
-                    let end = cols.len().min(e + LANES);
-                    let rays: usize = (e..end).map(|e| sampling.entry(first_entry, e, &mut cols) as usize).sum();
-                    if rays > 0 {
-                        blocked += crate::lanes::widest(
-                            #[inline(always)]
-                            || cols.trace(shadows, first_entry, e),
-                        );
-                    }
-                    traced += rays;
-                    e = end;
-                }
+                let traced = (0..cols.len()).map(|e| sampling.entry(first_entry, e, &mut cols) as usize).sum();
+                let blocked = if traced > 0 {
+                    crate::lanes::widest(
+                        #[inline(always)]
+                        || cols.trace_all(shadows, first_entry),
+                    )
+                } else {
+                    0
+                };
                 (traced, blocked)
             }
         })
@@ -505,14 +500,30 @@ impl EntryColumns<'_> {
         self.pdf.len()
     }
 
-    /// Traces the shadow rays of entries `e..e + LANES` (or to the chunk's end) of the chunk
-    /// starting at global entry `first`, just sampled, and zeroes the blocked ones; returns how
-    /// many were blocked (0 without a tracer: shadows off, or no geometry).
+    /// Traces the shadow rays of the chunk (starting at global entry `first`), just sampled, a
+    /// block of lanes at a time, and zeroes the blocked entries; returns how many were blocked (0
+    /// without a tracer: shadows off, or no geometry).
     #[inline(always)]
-    fn trace(&mut self, shadows: Option<&Shadows>, first: usize, e: usize) -> usize {
+    fn trace_all(&mut self, shadows: Option<&Shadows>, first: usize) -> usize {
         let Some(shadows) = shadows else { return 0 };
+        // A plain loop: iterator adapters may not inline into the wide code.
+        let (mut blocked, mut e) = (0, 0);
+        while e < self.len() {
+            blocked += self.trace(shadows, first, e);
+            e += LANES;
+        }
+        blocked
+    }
+
+    /// Traces the shadow rays of entries `e..e + LANES` (or to the chunk's end) of the chunk
+    /// starting at global entry `first` and zeroes the blocked ones; returns how many were blocked.
+    #[inline(always)]
+    fn trace(&mut self, shadows: &Shadows, first: usize, e: usize) -> usize {
         let end = self.len().min(e + LANES);
         let (kind, target, normal) = (&self.ray_kind[e..end], &self.target[e..end], &self.target_normal[e..end]);
+        if kind.iter().all(|&k| k == ShadowTarget::None) {
+            return 0;
+        }
         let blocked = shadows.trace_block(first + e, kind, target, normal);
         let mut left = blocked;
         while left != 0 {
