@@ -257,8 +257,8 @@ pub fn sample_direct_lighting(
             };
             let shadows = shadows.as_ref();
             // The task samples its chunk, then traces the chunk's rays while its entries are still
-            // in cache: interleaving the two per block of lanes kept neither loop's code hot (a
-            // directional light's scene lost 7%; docs/performance.md, issue 58 step 2).
+            // in cache (interleaving the two per block of lanes was no faster; docs/performance.md,
+            // "Shadow rays in the sampling pass").
             if lanes {
                 crate::lanes::widest(
                     #[inline(always)]
