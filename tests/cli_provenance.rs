@@ -78,14 +78,26 @@ fn batch_renders_again_what_is_not_its_jobs_and_clears_stale_temporaries() {
     std::fs::write(&room, &bytes[..bytes.len() / 2]).unwrap();
     let plan: serde_json::Value = serde_json::from_slice(&kelvin(&["batch", m, "--plan"]).stdout).unwrap();
     assert!(plan["jobs"][0]["stale"].as_str().unwrap().contains("does not read back"), "{}", plan["jobs"][0]);
-    // A killed writer's temporary (its process gone) is removed; a live one's is kept.
-    let stale = dir.join("out/.room.exr.4000000.partial");
-    let live = dir.join(format!("out/.room.png.{}.partial", std::process::id()));
-    std::fs::write(&stale, b"half").unwrap();
-    std::fs::write(&live, b"half").unwrap();
+    // Temporaries are named `.<name>.<host>.<pid>.<random>.partial`. One of a killed writer on this
+    // host (its process gone) is removed, a live writer's is kept; another host's (storage shared
+    // between machines) is kept while it is recent, however its process id reads here, and removed
+    // once untouched for an hour.
+    let host = kelvin::render::partial::this_host();
+    let temp =
+        |name: &str, host: &str, pid: u32| dir.join(format!("out/.{name}.{host}.{pid}.0123456789abcdef.partial"));
+    let stale = temp("room.exr", host, 4_000_000);
+    let live = temp("room.png", host, std::process::id());
+    let elsewhere = temp("room.exr", "render-node-7", 4_000_000);
+    let abandoned = temp("room.png", "render-node-7", std::process::id());
+    for file in [&stale, &live, &elsewhere, &abandoned] {
+        std::fs::write(file, b"half").unwrap();
+    }
+    let two_hours_ago = std::time::SystemTime::now() - std::time::Duration::from_secs(7200);
+    std::fs::File::options().write(true).open(&abandoned).unwrap().set_modified(two_hours_ago).unwrap();
     let log = text(&kelvin(&["batch", m]));
     assert!(log.contains("1 jobs: 1 rendered"), "{log}");
     assert!(!stale.exists() && live.exists(), "{log}");
+    assert!(elsewhere.exists() && !abandoned.exists(), "{log}");
     assert!(std::fs::read(&room).unwrap().len() > bytes.len() / 2);
 }
 

@@ -61,6 +61,7 @@ const BAD_OPTIONS: &[(&[&str], &str, &str, &str)] = &[
     (&["merge", "tile.exr"], "--output", "", "output"),
     (&["batch", "jobs.json"], "--threads", "4096", "1..=1024"),
     (&["batch", "jobs.json"], "--task", "x", "invalid digit"),
+    (&["batch", "jobs.json"], "--frames", "1-5x0", "step of 0"),
     (&["report", "accuracy"], "--threads", "0", "1..=1024"),
     (&["bench", "lights"], "--counts", "0", "1..=100000000"),
     (&["bench", "lights"], "--points", "0", "1..=16777216"),
@@ -111,7 +112,8 @@ const BAD_OPTIONS: &[(&[&str], &str, &str, &str)] = &[
 ];
 
 /// Options whose value is a path the command writes or a folder it reads at the end of its work,
-/// checked where it is used; the reason is what a reader of this list needs.
+/// or a name looked up in a file, checked where it is used; the reason is what a reader of this list
+/// needs.
 const PATH_OPTIONS: &[(&[&str], &str, &str)] = &[
     (&["spectrum"], "--plot", "the plot's path; the extension is checked with the spectrum's"),
     (&["ies"], "--plot", "the plot's path"),
@@ -119,6 +121,8 @@ const PATH_OPTIONS: &[(&[&str], &str, &str)] = &[
     (&["report", "accuracy"], "--data", "read only for the env-map scene"),
     (&["bench", "lights"], "--out", "an output folder, created"),
     (&["bench", "render"], "--data", "read when each scene loads"),
+    (&["batch"], "--log", "the task's log, opened (its folder created) once the manifest is planned"),
+    (&["batch"], "--job", "a job's name, looked up in the manifest (tests/cli_farm.rs: an unknown one is refused)"),
     (&["bake", "lightmaps"], "--output", "an output folder, created after the bake"),
     (&["bake", "volume"], "--output", "the .ktx2 written after the bake; its extension is checked first"),
 ];

@@ -32,7 +32,10 @@ is not is moved into `STAGING.quarantine/` with a `.why` file, and rendered agai
 once merged; if the merge refuses the staged tiles (made for other settings), they are moved to the quarantine
 folder too and the job reported failed, so that a rerun renders it fresh. A failed job keeps its staged pieces.
 
-The exit code is 0 only if every job succeeded or was already finished. The kelvin binary and the scenes must be
+The driver's own kelvin commands (the plan, each merge) have timeouts too; a merge that times out, or fails with a
+transient code, fails its job but keeps its staged pieces for a rerun (nothing is quarantined). The exit code is 0
+only if every job succeeded or was already finished; 3 (kelvin's environment code) if the plan itself failed for a
+reason of this machine (timed out, kelvin could not run), so that running the driver again may succeed. The kelvin binary and the scenes must be
 at the same paths on every node (as in one container image); tiles travel through Ray, not a shared disk. Each task
 checks first that its node's binary is the driver's and its scene and environment map are the ones planned (their
 SHA-256, from the plan's `inputs`): a node that differs, or lacks one, is a node failure, retried elsewhere.
@@ -43,8 +46,9 @@ import argparse
 import json
 import math
 import os
+import secrets
 import shutil
-import subprocess
+import socket
 import sys
 import tarfile
 import time
@@ -65,6 +69,9 @@ ray.cloudpickle.register_pickle_by_value(kelvin_tasks)
 
 # How long one ray.wait may block: completions are handled in batches this often at most.
 WAIT_SECONDS = 0.5
+# Seconds the driver's own kelvin commands may take: `kelvin batch --plan` (it hashes every input), and a merge.
+PLAN_TIMEOUT = 600
+MERGE_TIMEOUT = 600
 
 
 def tile_grid(width, height, tiles):
@@ -90,11 +97,14 @@ def tile_grid(width, height, tiles):
 
 
 def plan(kelvin, manifest):
-    """The manifest's jobs as kelvin plans them (frames expanded, outputs checked), so none is interpreted here."""
-    run = subprocess.run([kelvin, "batch", manifest, "--plan"], capture_output=True, text=True, timeout=120)
-    if run.returncode != 0:
-        sys.exit(f"kelvin batch --plan {manifest}: {run.stderr.strip()}")
-    return json.loads(run.stdout)["jobs"]
+    """The manifest's jobs as kelvin plans them (frames expanded, outputs checked), so none is interpreted here.
+    Exits if kelvin cannot plan: with code 3 for a transient failure (a timeout), else 1."""
+    out, failure = kelvin_exit.run_local([kelvin, "batch", manifest, "--plan"], f"kelvin batch {manifest} --plan",
+                                         PLAN_TIMEOUT)
+    if failure:
+        print(failure, file=sys.stderr)
+        sys.exit(kelvin_exit.ENVIRONMENT if failure.transient else 1)
+    return json.loads(out)["jobs"]
 
 
 def classify(err):
@@ -116,7 +126,9 @@ def write_durably(path, data):
     under its final name is always whole, whenever the driver or the machine stops."""
     folder = os.path.dirname(path)
     os.makedirs(folder, exist_ok=True)
-    tmp = os.path.join(folder, f".{os.path.basename(path)}.{os.getpid()}.tmp")
+    # Unique to this host, process and call: two drivers on storage shared between machines never share one.
+    tmp = os.path.join(folder, f".{os.path.basename(path)}.{socket.gethostname()}.{os.getpid()}."
+                               f"{secrets.token_hex(8)}.tmp")
     with open(tmp, "wb") as f:
         f.write(data)
         f.flush()
@@ -211,17 +223,17 @@ def remove_temporaries(folder):
 
 
 def merge(kelvin, job):
-    """Joins the job's staged tiles with `kelvin merge`; None or the error."""
+    """Joins the job's staged tiles with `kelvin merge`; None or the kelvin_exit.Failure."""
     os.makedirs(os.path.dirname(job.entry["output"]) or ".", exist_ok=True)
     # The job's exposure, so that the PNG preview is the one `kelvin render` writes.
     exposure = [] if job.entry.get("exposure") is None else ["--exposure", repr(job.entry["exposure"])]
     cmd = [kelvin, "merge", *(p.path for p in job.pieces), "-o", job.entry["output"], *exposure]
-    run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    return None if run.returncode == 0 else f"kelvin merge: {run.stderr.strip()}"
+    return kelvin_exit.run_local(cmd, "kelvin merge", MERGE_TIMEOUT)[1]
 
 
 def unpack_chunk(job):
-    """Writes the frames of a chunk's staged tar beside its output pattern, each durably; None or the error."""
+    """Writes the frames of a chunk's staged tar beside its output pattern, each durably; None or the
+    kelvin_exit.Failure (transient if the driver's disk failed, not the tar)."""
     folder = os.path.dirname(job.entry["output"]) or "."
     os.makedirs(folder, exist_ok=True)
     try:
@@ -230,16 +242,15 @@ def unpack_chunk(job):
                 name = os.path.basename(member.name)
                 write_durably(os.path.join(folder, name), tar.extractfile(member).read())
     except (OSError, tarfile.TarError) as e:
-        return f"unpacking {job.pieces[0].path}: {e}"
+        return kelvin_exit.Failure(f"unpacking {job.pieces[0].path}: {e}", isinstance(e, OSError))
     return None
 
 
 def merge_bake(kelvin, job):
     """Joins the bake's staged parts with `kelvin bake --merge` (which removes its parts folder); None or the
-    error."""
+    kelvin_exit.Failure."""
     cmd = [kelvin, "bake", *job.entry["args"], "--merge", "-o", job.entry["output"]]
-    run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    return None if run.returncode == 0 else f"kelvin bake --merge: {run.stderr.strip()}"
+    return kelvin_exit.run_local(cmd, "kelvin bake --merge", MERGE_TIMEOUT)[1]
 
 
 def check_threads(threads):
@@ -427,12 +438,17 @@ class Farm:
     def finish(self, job):
         """Merges a job whose pieces are all staged. A refused merge (pieces of other settings, say, that the
         staged check cannot see) moves them into the quarantine folder with merge's message, so that a rerun
-        renders the job fresh and nothing is deleted."""
+        renders the job fresh and nothing is deleted. A merge that failed for a reason of this machine (timed
+        out, a full disk) fails the job keeping its pieces staged: a rerun merges them."""
         if job.bake:
             self.quarantine_other_splits(job)
             error = merge_bake(self.kelvin, job)
         else:
             error = unpack_chunk(job) if job.chunk else merge(self.kelvin, job)
+        if error and error.transient:
+            job.status = ("FAILED", f"job {job.index} ({job.name}): {error}; its staged pieces stay in "
+                                    f"{job.staging} for a rerun")
+            return
         if error:
             for piece in job.pieces:
                 if os.path.exists(piece.path):

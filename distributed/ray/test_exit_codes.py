@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """kelvin's exit codes as the Ray driver reads them (kelvin_exit.py), with a real kelvin: a full disk (here a file
 size limit: the write fails with EFBIG, as it would with ENOSPC) exits with the environment code, which the driver
-retries on another node; a scene that does not exist exits with the bad-input code, which it does not retry.
+retries on another node; a scene that does not exist exits with the bad-input code, which it does not retry. The
+driver's own commands (`run_local`: its plan and merges) report a timeout as a transient failure.
 
     KELVIN_BIN=target/debug/kelvin python3 distributed/ray/test_exit_codes.py
 
@@ -41,7 +42,20 @@ def main():
         assert bad.returncode == kelvin_exit.INPUT, (bad.returncode, bad.stderr)
         assert not kelvin_exit.is_transient(bad.returncode), "bad input fails anywhere: not retried"
         assert kelvin_exit.is_transient(-signal.SIGKILL) and not kelvin_exit.is_transient(kelvin_exit.PANIC)
-    print("exit codes: ok (full disk -> 3, retried; missing scene -> 2, not retried)")
+        # The driver's own commands (plan, merges): a timeout or a binary that cannot run is transient, kelvin's
+        # refusal is not; none raises.
+        slow = os.path.join(tmp, "slow-kelvin")
+        with open(slow, "w") as f:
+            f.write("#!/bin/sh\nexec sleep 30\n")
+        os.chmod(slow, 0o755)
+        _, timed_out = kelvin_exit.run_local([slow, "merge"], "kelvin merge", 0.5)
+        assert timed_out.transient and "timed out after 0.5 s" in str(timed_out), timed_out
+        _, missing = kelvin_exit.run_local([os.path.join(tmp, "no-kelvin")], "kelvin merge", 5)
+        assert missing.transient and "cannot run" in str(missing), missing
+        _, refused = kelvin_exit.run_local([KELVIN, "merge", os.path.join(tmp, "missing.exr"), "-o",
+                                            os.path.join(tmp, "m.exr")], "kelvin merge", 300)
+        assert not refused.transient and "missing.exr" in str(refused), refused
+    print("exit codes: ok (full disk -> 3, retried; missing scene -> 2, not retried; a timeout is transient)")
 
 
 if __name__ == "__main__":

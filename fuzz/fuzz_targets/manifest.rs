@@ -1,6 +1,6 @@
 //! Batch manifests, as `kelvin batch` (and `--plan`, `--task N`, the Ray driver) read them: bytes
-//! (lossy UTF-8) -> `plan_text` with the manifest in `tests/data`, so that relative scenes, env maps
-//! and IES files can name real files. The `kelvin` program's own `cli` module is compiled in, since
+//! (lossy UTF-8) -> `plan_text_selected` (every job) with the manifest in `tests/data`, so that
+//! relative scenes, env maps and IES files can name real files. The `kelvin` program's own `cli` module is compiled in, since
 //! the manifest is parsed by its `render` and `bake` argument definitions. An error is fine; a panic
 //! is a crash, and so is an accepted job that breaks the plan's promises: a render job has a .exr or
 //! .png output, a size and arguments that parse again; no two accepted jobs write one file (a
@@ -20,7 +20,8 @@ use libfuzzer_sys::fuzz_target;
 fuzz_target!(|data: &[u8]| {
     let text = String::from_utf8_lossy(data);
     let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/fuzz_manifest.json"));
-    let Ok(jobs) = cli::manifest::plan_text(&text, &path) else { return };
+    let every = cli::manifest::Selection::default();
+    let Ok(jobs) = cli::manifest::plan_text_selected(&text, &path, &every) else { return };
     serde_json::to_string(&serde_json::json!({ "jobs": jobs })).expect("the plan prints");
     let mut outputs = HashSet::new();
     for job in jobs.iter().filter(|j| j.error.is_none()) {

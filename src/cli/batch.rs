@@ -1,13 +1,23 @@
-//! `kelvin batch MANIFEST [--plan] [--force] [--threads T]`: renders (and bakes) a manifest's jobs
-//! one after another with a progress bar and a summary. A job whose output exists is finished (images are
-//! written under a temporary name and renamed, the .exr after its .png preview) and is skipped, so
-//! a rerun resumes; a job that fails says why and the others still run.
+//! `kelvin batch MANIFEST [--plan] [--force] [--threads T] [--task N | --job NAME [--frames LIST]]
+//! [--log FILE]`: renders (and bakes) a manifest's jobs one after another with a progress bar and a
+//! summary. A job whose output exists is finished (images are written under a temporary name and
+//! renamed, the .exr after its .png preview) and is skipped, so a rerun resumes; a job that fails
+//! says why and the others still run. `--job` and `--frames` select a farm task's work by the job's
+//! name and frame numbers, which stay the same when the manifest gains jobs (`--task N` shifts).
 
 use std::path::PathBuf;
 
 use super::CliError;
 use super::exit::{self, Exit};
-use super::manifest::{PlannedJob, plan};
+use super::frames::{FrameRange, task_frames};
+use super::manifest::{PlannedJob, Selection, plan_selected};
+use super::task_log::TaskLog;
+
+/// The text `kelvin batch --help` ends with: a farm task's command line.
+pub const FARM_HELP: &str = "A render farm's task names its job and frames: \
+kelvin batch jobs.json --job walk --frames <STARTFRAME>-<ENDFRAME> --log logs/walk_<STARTFRAME>.log (Deadline), \
+--frames #FRAMESPEC# (OpenCue). Exit codes: 2 bad input or settings (do not retry); 3 environment or I/O and 130 \
+interrupted (retry, on another machine); see kelvin --help.";
 
 #[derive(clap::Args)]
 pub struct BatchArgs {
@@ -21,13 +31,29 @@ pub struct BatchArgs {
     /// instead of rendering them: what a distributed driver reads.
     #[arg(long)]
     plan: bool,
-    /// Render finished jobs again.
+    /// Render finished jobs (and, with --frames, finished frames) again.
     #[arg(long)]
     force: bool,
     /// Run only entry N (from 0) of the plan (`--plan` lists them; a job's frames are entries of
-    /// their own): what a render farm's task runner calls.
+    /// their own). N shifts when jobs are added before it: a farm's task is better named by --job.
     #[arg(long, value_name = "N", conflicts_with = "plan")]
     task: Option<usize>,
+    /// Run only the job of this name (its `name` in the manifest; a job without one by its `output`
+    /// as written there): a farm task names its job, and still finds it when the manifest gains jobs.
+    #[arg(long, value_name = "NAME", conflicts_with = "task")]
+    job: Option<String>,
+    /// Run only the job's frames among these (--job, or the manifest's only job), in one process,
+    /// each frame the image it is alone; frames already finished are skipped, others of the list
+    /// named and left out, none at all an error. The frame list a farm hands its task: Deadline's
+    /// `<STARTFRAME>-<ENDFRAME>`, OpenCue's `#FRAMESPEC#` or `#FRAME_START#-#FRAME_END#` (a list as
+    /// `render --frames` takes it, but no `A-B:S`: OpenCue's interleave, Open Job Description's step).
+    #[arg(long, value_name = "FRAMES", allow_hyphen_values = true, conflicts_with = "task", value_parser = task_frames)]
+    frames: Option<FrameRange>,
+    /// Append each job's start, progress (`progress N%` lines, every 5% and at least every 30 s) and
+    /// outcome, and the summary, to this file (its folder created), a line at a time with the UTC
+    /// time, for a farm's monitor to tail. The same lines go to stderr when it is not a terminal.
+    #[arg(long, value_name = "FILE")]
+    log: Option<PathBuf>,
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = super::values::threads())]
     threads: Option<usize>,
@@ -46,7 +72,8 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         return Ok(());
     }
     let Some(manifest) = &args.manifest else { return Err("no manifest given".into()) };
-    let mut jobs = plan(manifest)?;
+    let selection = Selection { job: args.job.as_deref(), frames: args.frames.as_ref(), redo_finished: args.force };
+    let mut jobs = plan_selected(manifest, &selection)?;
     if let Some(n) = args.task {
         if n >= jobs.len() {
             return Err(format!("--task {n}: the plan has {} entries (0..{})", jobs.len(), jobs.len()).into());
@@ -57,26 +84,59 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         println!("{}", serde_json::to_string_pretty(&serde_json::json!({ "jobs": jobs }))?);
         return Ok(());
     }
+    let log = TaskLog::open(args.log.as_deref())?;
     if let Some(t) = args.threads {
         rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
     }
-    for job in &jobs {
-        remove_stale_temporaries(&job.output);
-    }
     let n = jobs.len();
+    log.line(&format!(
+        "kelvin batch {}: {n} entries, host {}, pid {}",
+        manifest.display(),
+        kelvin::render::partial::this_host(),
+        std::process::id()
+    ));
+    for job in &jobs {
+        remove_stale_temporaries(&job.output, &log);
+    }
     let mut outcomes = Vec::with_capacity(n);
     for (k, job) in jobs.iter().enumerate() {
         if let (Some(why), false) = (&job.stale, args.force) {
-            eprintln!(
+            log.note(&format!(
                 "{}: {} exists but is not this job's output ({why}); rendering it again",
                 job.name,
                 job.output.display()
-            );
+            ));
         }
-        let bar = super::render::progress_bar();
-        bar.set_message(format!("[{}/{n}] {} ", k + 1, job.name));
-        let outcome = run_job(job, args.force, |f| bar.set_position((f * 1000.0) as u64));
-        bar.finish_and_clear();
+        if let Some(wanted) = &args.frames {
+            let others: Vec<String> = wanted
+                .iter()
+                .filter(|f| !job.frames.contains(f) && !job.finished.contains(f))
+                .map(|f| f.to_string())
+                .collect();
+            if let (Some(first), None) = (others.first(), &job.error) {
+                let last = others.last().unwrap_or(first);
+                let which = if others.len() > 1 {
+                    format!("{} frames, {first} to {last},", others.len())
+                } else {
+                    format!("frame {first}")
+                };
+                log.note(&format!("[{}/{n}] {}: --frames: {which} not the job's, left out", k + 1, job.name));
+            }
+        }
+        // A farm task's frames that a killed attempt of it finished (a manifest chunk renders its own again).
+        let kept: Vec<String> = job.finished.iter().filter(|f| !job.frames.contains(f)).map(i32::to_string).collect();
+        if !kept.is_empty() {
+            log.line(&format!("[{}/{n}] {}: frames {} are finished already", k + 1, job.name, kept.join(",")));
+        }
+        let mut progress = log.job(k, n, &job.name);
+        let outcome = run_job(job, args.force, |f| progress.set(f));
+        progress.finish();
+        let label = format!("[{}/{n}] {}", k + 1, job.name);
+        log.line(&match &outcome {
+            Outcome::Rendered(s) => format!("{label}: rendered in {s:.2} s: {}", job.output.display()),
+            Outcome::Skipped => format!("{label}: skipped, {} is finished", job.output.display()),
+            Outcome::Failed(e, code) => format!("{label}: FAILED (exit code {}): {e}", *code as u8),
+        });
         outcomes.push(outcome);
     }
     let (mut rendered, mut skipped, mut failed) = (0, 0, 0);
@@ -98,7 +158,9 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
             }
         }
     }
-    println!("{n} jobs: {rendered} rendered, {skipped} skipped, {failed} failed");
+    let summary = format!("{n} jobs: {rendered} rendered, {skipped} skipped, {failed} failed");
+    println!("{summary}");
+    log.line(&summary);
     if failed > 0 {
         // One kind of failure (`--task`: one job) gives its own code, so a farm can tell; mixed ones 1.
         let mut kinds = outcomes.iter().filter_map(|o| if let Outcome::Failed(_, k) = o { Some(*k) } else { None });
@@ -153,9 +215,12 @@ fn bake(job: &PlannedJob) -> Result<(), CliError> {
     run(&["--merge".to_owned()])
 }
 
-/// Removes what a killed writer left beside `output` (and inside it, for a bake's folder): files
-/// `.<name>.<pid>.partial` (see `film_io::write_file`) of a process that no longer runs.
-fn remove_stale_temporaries(output: &std::path::Path) {
+/// Removes what a killed writer left beside `output` (and inside it, for a bake's folder): the
+/// temporaries of `film_io::write_file` that `partial::abandoned` judges left by a writer that stopped
+/// (on this host a process that no longer runs; on any host one untouched for an hour), so that a
+/// batch on storage shared with other machines never removes what another is writing.
+fn remove_stale_temporaries(output: &std::path::Path, log: &TaskLog) {
+    use kelvin::render::partial;
     let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let beside = output.parent().map(|d| (d.to_path_buf(), format!(".{stem}")));
     let inside = output.is_dir().then(|| (output.to_path_buf(), ".".to_owned()));
@@ -163,11 +228,11 @@ fn remove_stale_temporaries(output: &std::path::Path) {
         let Ok(entries) = std::fs::read_dir(&dir) else { continue };
         for path in entries.filter_map(|e| e.ok()).map(|e| e.path()) {
             let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            let Some(rest) = name.strip_prefix(&prefix).and_then(|r| r.strip_suffix(".partial")) else { continue };
-            let pid = rest.rsplit('.').next().and_then(|p| p.parse::<u32>().ok());
-            let running = pid.is_some_and(|p| std::path::Path::new(&format!("/proc/{p}")).exists());
-            if !running && std::fs::remove_file(&path).is_ok() {
-                eprintln!("removed {}, left by a writer that stopped", path.display());
+            if !(name.starts_with(&prefix) && name.ends_with(partial::SUFFIX)) {
+                continue;
+            }
+            if partial::abandoned(&path) && std::fs::remove_file(&path).is_ok() {
+                log.note(&format!("removed {}, left by a writer that stopped", path.display()));
             }
         }
     }

@@ -90,9 +90,9 @@ pub struct PlannedJob {
     /// The job's place in the manifest (the frames of one job share it).
     pub index: usize,
     /// The frame this job renders (the first, for a chunk), for a job with `frames`.
-    pub frame: Option<u32>,
+    pub frame: Option<i32>,
     /// Every frame it renders (more than one for a chunk); empty without `frames`.
-    pub frames: Vec<u32>,
+    pub frames: Vec<i32>,
     pub name: String,
     /// Resolved output path (empty when the job did not parse).
     pub output: PathBuf,
@@ -120,6 +120,10 @@ pub struct PlannedJob {
     /// preview `kelvin render` would.
     pub exposure: Option<f32>,
     pub error: Option<String>,
+    /// Frames of a chunk whose files are finished. A farm task's entry (`kelvin batch --frames`)
+    /// leaves them out of `frames`; a chunk of the manifest renders them again with the others.
+    #[serde(skip)]
+    pub finished: Vec<i32>,
 }
 
 impl PlannedJob {
@@ -159,26 +163,47 @@ fn parse_render_args(args: &[String], output: &Path) -> Result<RenderArgs, Strin
     Ok(parsed.args)
 }
 
-/// Reads the manifest at `path`: an error if it is not a manifest at all; otherwise every job,
-/// with its own error if it has one.
-pub fn plan(path: &Path) -> Result<Vec<PlannedJob>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-    plan_text(&text, path)
+/// The part of a manifest a farm task runs (`kelvin batch --job NAME --frames LIST`), chosen by what
+/// stays the same when the manifest gains jobs: the job's name and frame numbers.
+#[derive(Default)]
+pub struct Selection<'a> {
+    /// The job's `name` (a job without one: its `output` as written).
+    pub job: Option<&'a str>,
+    /// Frames of that job, planned as one entry (one process) of the frames not finished yet.
+    pub frames: Option<&'a FrameRange>,
+    /// Keep finished frames in that entry (`--force`).
+    pub redo_finished: bool,
 }
 
-/// [`plan`] of a manifest's text, `path` naming it and its folder (the base of relative paths).
-pub fn plan_text(text: &str, path: &Path) -> Result<Vec<PlannedJob>, String> {
+/// Reads the manifest at `path`: an error if it is not a manifest at all, or `selection` (default:
+/// every job) names no job or two; otherwise the jobs chosen, each with its own error if it has one.
+pub fn plan_selected(path: &Path, selection: &Selection) -> Result<Vec<PlannedJob>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    plan_text_selected(&text, path, selection)
+}
+
+/// [`plan_selected`] of a manifest's text, `path` naming it and its folder (the base of relative
+/// paths).
+pub fn plan_text_selected(text: &str, path: &Path, selection: &Selection) -> Result<Vec<PlannedJob>, String> {
     let what = path.display();
     let manifest: Manifest = serde_json::from_str(text).map_err(|e| format!("{what}: not a manifest: {e}"))?;
     if let Some(v) = manifest.version.filter(|v| *v != VERSION) {
         return Err(format!("{what}: manifest version {v}; this kelvin reads version {VERSION}"));
     }
+    let chosen = chosen_job(&manifest.jobs, selection).map_err(|e| format!("{what}: {e}"))?;
     // Absolute paths in the arguments, so that they mean the same from any working directory.
     let base = std::path::absolute(path).map_err(|e| format!("{what}: {e}"))?;
     let base = base.parent().unwrap_or(Path::new("/"));
     let digests = Digests::default();
-    let mut jobs: Vec<PlannedJob> =
-        manifest.jobs.into_iter().enumerate().flat_map(|(i, job)| plan_frames(i, job, base, &digests)).collect();
+    let mut jobs: Vec<PlannedJob> = Vec::new();
+    for (i, job) in manifest.jobs.into_iter().enumerate() {
+        jobs.extend(match chosen {
+            // The other jobs' outputs only, for the check below: not their scenes, inputs or files.
+            Some(c) if c != i => plan_frames(i, job, base, &digests, Depth::Outputs),
+            Some(_) if selection.frames.is_some() => plan_task_frames(i, job, base, &digests, selection),
+            _ => plan_frames(i, job, base, &digests, Depth::Full),
+        });
+    }
     // Two jobs writing one output would overwrite each other (and the second would find the first's
     // file "done"): both are errors, named.
     let mut writers: std::collections::HashMap<PathBuf, Vec<usize>> = std::collections::HashMap::new();
@@ -198,13 +223,85 @@ pub fn plan_text(text: &str, path: &Path) -> Result<Vec<PlannedJob>, String> {
             jobs[k].error.get_or_insert_with(|| what.clone());
         }
     }
+    if let Some(c) = chosen {
+        jobs.retain(|j| j.index == c);
+    }
     Ok(jobs)
 }
 
-/// A job, or one job per frame of its `frames` (per `chunk` frames, with a chunk).
-fn plan_frames(index: usize, job: serde_json::Value, base: &Path, digests: &Digests) -> Vec<PlannedJob> {
+/// The index of the job `selection` chooses (None: every job), or why there is none.
+fn chosen_job(jobs: &[serde_json::Value], selection: &Selection) -> Result<Option<usize>, String> {
+    let Some(name) = selection.job else {
+        return match (selection.frames, jobs.len()) {
+            (None, _) => Ok(None),
+            (Some(_), 1) => Ok(Some(0)),
+            (Some(_), n) => Err(format!("--frames needs --job NAME: the manifest has {n} jobs")),
+        };
+    };
+    let named = |job: &serde_json::Value| match job.get("name") {
+        Some(n) => n.as_str() == Some(name),
+        None => job.get("output").and_then(|o| o.as_str()) == Some(name),
+    };
+    let found: Vec<usize> = jobs.iter().enumerate().filter(|(_, j)| named(j)).map(|(i, _)| i).collect();
+    match found[..] {
+        [i] => Ok(Some(i)),
+        [] => {
+            let names: Vec<&str> =
+                jobs.iter().filter_map(|j| j.get("name").or(j.get("output"))?.as_str()).take(NAMED_JOBS).collect();
+            let more = if jobs.len() > NAMED_JOBS { ", ..." } else { "" };
+            Err(format!("--job {name}: no job is named so (the jobs: {}{more})", names.join(", ")))
+        }
+        [a, b, ..] => Err(format!("--job {name}: jobs {a} and {b} are both named so; give each a name of its own")),
+    }
+}
+
+/// Most job names a "no job is named so" error lists.
+const NAMED_JOBS: usize = 10;
+
+/// The entry of a farm task: the job's frames among `selection`'s, less those finished (unless
+/// `redo_finished`), as one entry rendered in one process; an error entry if there are none.
+fn plan_task_frames(
+    index: usize,
+    job: serde_json::Value,
+    base: &Path,
+    digests: &Digests,
+    selection: &Selection,
+) -> Vec<PlannedJob> {
+    let failed = |why: String| {
+        let mut failed = plan_job(index, &[], job.clone(), base, digests, Depth::Outputs);
+        failed.error = Some(format!("job {index} ({}): {why}", failed.name));
+        vec![failed]
+    };
+    let Some(wanted) = selection.frames else { return plan_frames(index, job, base, digests, Depth::Full) };
+    let Some(spec) = job.get("frames") else { return failed("--frames: the job has no frames".into()) };
+    let Some(spec) = spec.as_str() else {
+        return failed(format!("frames: {spec} is not a string like \"0..47\" or \"1-100x2\""));
+    };
+    let range = match spec.parse::<FrameRange>() {
+        Ok(range) => range,
+        Err(e) => return failed(format!("frames: {e}")),
+    };
+    // The job's frames in the list: a task's `<STARTFRAME>-<ENDFRAME>` also spans frames a stepped job
+    // skips, and OpenCue's last `#FRAME_END#` of a job can pass its end (OpenCue issue 1129).
+    let frames: Vec<i32> = wanted.iter().filter(|&f| range.contains(f)).collect();
+    if frames.is_empty() {
+        return failed(format!("--frames: none of its frames is among the job's frames {spec}"));
+    }
+    let planned = plan_job(index, &frames, job.clone(), base, digests, Depth::Full);
+    if selection.redo_finished || planned.done || planned.error.is_some() || planned.finished.is_empty() {
+        return vec![planned];
+    }
+    // A retried task renders only what it has not finished (each frame's file says which).
+    let todo: Vec<i32> = frames.into_iter().filter(|f| !planned.finished.contains(f)).collect();
+    let mut rest = plan_job(index, &todo, job, base, digests, Depth::Full);
+    rest.finished = planned.finished;
+    vec![rest]
+}
+
+/// A job, or one job per frame of its `frames` (per `chunk` frames, with a chunk), planned to `depth`.
+fn plan_frames(index: usize, job: serde_json::Value, base: &Path, digests: &Digests, depth: Depth) -> Vec<PlannedJob> {
     let frames = match job.get("frames") {
-        None => return vec![plan_job(index, &[], job, base, digests)],
+        None => return vec![plan_job(index, &[], job, base, digests, depth)],
         Some(f) => f.as_str().ok_or_else(|| format!("frames: {f} is not a string like \"0..47\" or \"1-100x2\"")),
     };
     let chunk = match job.get("chunk") {
@@ -217,11 +314,11 @@ fn plan_frames(index: usize, job: serde_json::Value, base: &Path, digests: &Dige
     let range = frames.and_then(|f| f.parse::<FrameRange>().map_err(|e| format!("frames: {e}")));
     match range.and_then(|r| Ok((r, chunk?))) {
         Ok((range, chunk)) => {
-            let frames: Vec<u32> = range.iter().collect();
-            frames.chunks(chunk as usize).map(|c| plan_job(index, c, job.clone(), base, digests)).collect()
+            let frames: Vec<i32> = range.iter().collect();
+            frames.chunks(chunk as usize).map(|c| plan_job(index, c, job.clone(), base, digests, depth)).collect()
         }
         Err(e) => {
-            let mut failed = plan_job(index, &[], serde_json::Value::Null, base, digests);
+            let mut failed = plan_job(index, &[], serde_json::Value::Null, base, digests, Depth::Outputs);
             failed.error = Some(format!("job {index}: {e}"));
             vec![failed]
         }
@@ -231,9 +328,25 @@ fn plan_frames(index: usize, job: serde_json::Value, base: &Path, digests: &Dige
 /// Most frames in one chunk.
 const MAX_CHUNK: u64 = 10_000;
 
+/// How much of a job [`plan_job`] plans.
+#[derive(Clone, Copy, PartialEq)]
+enum Depth {
+    /// Its name and outputs: all that the check for outputs written twice needs.
+    Outputs,
+    /// Everything: arguments, inputs and their digests, finished or not.
+    Full,
+}
+
 /// Plans `job`, for `frames` of its animation (none: a still; one: that frame; more: a chunk,
 /// whose output is the job's pattern of '#').
-fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path, digests: &Digests) -> PlannedJob {
+fn plan_job(
+    index: usize,
+    frames: &[i32],
+    job: serde_json::Value,
+    base: &Path,
+    digests: &Digests,
+    depth: Depth,
+) -> PlannedJob {
     let name = job.get("name").and_then(|n| n.as_str()).map(str::to_owned);
     let pattern = job.get("output").and_then(|o| o.as_str()).map(|o| base.join(o));
     let frame = frames.first().copied();
@@ -266,6 +379,7 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path, d
         inputs: BTreeMap::new(),
         exposure: None,
         error: None,
+        finished: Vec::new(),
     };
     if name.is_none()
         && let Some(file) = output.as_ref().and_then(|o| o.file_name())
@@ -276,6 +390,9 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path, d
             ([_, _, ..], Some(l)) => format!("{file} {l}"),
             _ => file.into_owned(),
         };
+    }
+    if depth == Depth::Outputs {
+        return planned;
     }
     if job.get("bake").is_some() {
         planned.command = "bake";
@@ -305,7 +422,7 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path, d
                 return planned;
             }
             (planned.done, planned.stale) = (true, None);
-            let outputs: Vec<(PathBuf, Option<u32>)> = match (frames, &pattern) {
+            let outputs: Vec<(PathBuf, Option<i32>)> = match (frames, &pattern) {
                 ([_, _, ..], Some(p)) => {
                     frames.iter().filter_map(|&k| Some((frame_path(p, k).ok()?, Some(k)))).collect()
                 }
@@ -316,6 +433,9 @@ fn plan_job(index: usize, frames: &[u32], job: serde_json::Value, base: &Path, d
                 let (done, stale) = finished(&output, &parsed, k);
                 planned.done &= done;
                 planned.stale = planned.stale.or(stale);
+                if let (true, Some(k), [_, _, ..]) = (done, k, frames) {
+                    planned.finished.push(k);
+                }
             }
             if frames.len() > 1 {
                 planned.untileable =
@@ -360,7 +480,7 @@ impl Digests {
 /// environment map: each file it lists hashed again now). The program may differ: a rebuilt kelvin
 /// renders the same image (tiles of different builds are refused by `kelvin merge`). Otherwise, for
 /// an existing file, why not.
-fn finished(output: &Path, args: &RenderArgs, frame: Option<u32>) -> (bool, Option<String>) {
+fn finished(output: &Path, args: &RenderArgs, frame: Option<i32>) -> (bool, Option<String>) {
     use kelvin::render::film_io::{read_exr_tile_and_provenance, read_png_provenance};
     if !output.exists() {
         return (false, None);
@@ -390,7 +510,7 @@ fn finished(output: &Path, args: &RenderArgs, frame: Option<u32>) -> (bool, Opti
 
 /// The job's `kelvin render` arguments (without `-o`) and what its parser made of them; for
 /// `frames` of a job with frames (one, or a chunk).
-fn resolve(job: serde_json::Value, frames: &[u32], base: &Path) -> Result<(Vec<String>, RenderArgs), String> {
+fn resolve(job: serde_json::Value, frames: &[i32], base: &Path) -> Result<(Vec<String>, RenderArgs), String> {
     let spec: JobSpec = serde_json::from_value(job).map_err(|e| e.to_string())?;
     let output = match frames {
         [k] => frame_path(&base.join(&spec.output), *k)?,
@@ -398,7 +518,7 @@ fn resolve(job: serde_json::Value, frames: &[u32], base: &Path) -> Result<(Vec<S
     };
     let mut args = Vec::new();
     if !frames.is_empty() {
-        let list: Vec<String> = frames.iter().map(u32::to_string).collect();
+        let list: Vec<String> = frames.iter().map(i32::to_string).collect();
         args.extend(["--frames".to_owned(), list.join(",")]);
         if let Some(fps) = spec.fps {
             args.extend(["--fps".to_owned(), fps.to_string()]);

@@ -12,6 +12,7 @@ mod render;
 mod report;
 mod settings;
 mod spectrum;
+mod task_log;
 mod values;
 
 use clap::{Parser, Subcommand};
@@ -33,6 +34,7 @@ enum Command {
     /// Render a glTF scene (or the embedded default scene): path traced, or direct lighting.
     Render(render::RenderArgs),
     /// Render a manifest's jobs (JSON); finished outputs are skipped, so a rerun resumes.
+    #[command(after_help = batch::FARM_HELP)]
     Batch(batch::BatchArgs),
     /// Join tiles rendered with `render --crop` into the full image, checking they cover it once.
     Merge(merge::MergeArgs),

@@ -2,7 +2,8 @@
 //! [--sky LAT,LON,YYYY-MM-DDTHH:MM[,TURBIDITY] [--sky-intensity X]] [--integrator path|direct] [--max-depth N]
 //! [--roulette-depth N] [--light-sampler uniform|power|bvh|ris|restir [--candidates M]
 //! [--neighbours K] [--radius PX] [--biased-reuse]] [--color rgb|spectral] [--seed S] [--pattern sobol|independent]
-//! [--threads T] [--report] [--crop X0,Y0,X1,Y1] [--frames 0..47|1-100x2|1,5,10-20 [--fps F] [--animation NAME|INDEX]]`.
+//! [--threads T] [--report] [--crop X0,Y0,X1,Y1] [--frames 0..47|1-100x2|1,5,10-20|-5--1 [--fps F]
+//! [--animation NAME|INDEX]]`.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -97,10 +98,13 @@ pub struct RenderArgs {
     /// in the full render, into an EXR that records its place (`kelvin merge` joins tiles).
     #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = values::crop)]
     crop: Option<Crop>,
-    /// Render these frames of the scene's animation in one process (a frame list as render farms
-    /// write it: 7, 0..47 or 1-100 with both ends included, 1-100x2 every other frame, 1,5,10-20), each frame moving only what the animation moves; the output's run of '#' takes
-    /// the frame number (-o out_####.exr).
-    #[arg(long, value_name = "FRAMES")]
+    /// Render these frames of the scene's animation in one process, in ascending order, each
+    /// moving only what the animation moves; the output's run of '#' takes the frame number
+    /// (-o out_####.exr; its folders are created). A frame list as OpenCue and Deadline write it:
+    /// 7; 0..47 or 1-100, both ends included; -5--1, negative frames (before the clip: its first
+    /// pose); 1-100x2 every other frame; 1-10y3 the frames 1-10x3 leaves out; 1-10:3 all of 1-10
+    /// (an interleave's frames); 100-1x5 and 1:100:5 as Deadline writes them; 1,5,10-20 or 1 5 10-20.
+    #[arg(long, value_name = "FRAMES", allow_hyphen_values = true)]
     frames: Option<FrameRange>,
     /// Frames per second: frame k shows the animation at k / fps seconds.
     #[arg(long, default_value_t = 24.0, value_parser = values::fps)]
@@ -197,7 +201,7 @@ impl RenderArgs {
     /// (a PNG's exposure too), the frame, the clip and the tile. Tiles of one image differ in `tile` only.
     pub(super) fn provenance(
         &self,
-        frame: Option<u32>,
+        frame: Option<i32>,
         clip: Option<(usize, Option<&str>)>,
         inputs: BTreeMap<String, String>,
     ) -> Provenance {
@@ -326,7 +330,7 @@ pub(super) fn write_outputs(
 /// One rendered image: its frame (with --frames), the time posing the frame took, and the
 /// render's statistics.
 pub(super) struct Rendered {
-    pub frame: Option<u32>,
+    pub frame: Option<i32>,
     pub pose_seconds: f64,
     pub stats: RenderStats,
 }
@@ -354,16 +358,16 @@ pub(super) fn render_to_files(
     } else if !matches!(ext.as_deref(), Some("exr" | "png")) {
         return Err(format!("--output {out}: unsupported output extension; use .exr or .png").into());
     }
-    // Checked before the scene loads, so a bad name fails at once.
-    let frames: Vec<Option<u32>> = match &args.frames {
+    // Checked before the scene loads, so a bad name fails at once, and the folders made then, so a
+    // folder that cannot be made fails before the render rather than after its first frame.
+    let (frames, outputs): (Vec<Option<i32>>, Vec<PathBuf>) = match &args.frames {
         Some(range) => {
-            for f in range.iter() {
-                frame_output(&args.output, range, f)?;
-            }
-            range.iter().map(Some).collect()
+            let outputs = range.iter().map(|f| frame_output(&args.output, range, f)).collect::<Result<_, _>>()?;
+            (range.iter().map(Some).collect(), outputs)
         }
-        None => vec![None],
+        None => (vec![None], vec![args.output.clone()]),
     };
+    create_folders(&outputs)?;
     let LoadedJob { mut world, mut schedule, file, inputs, .. } = build_world(&job)?;
     // Hashed when read: a file replaced during the render does not speak for this image.
     let inputs = inputs.entries();
@@ -373,16 +377,16 @@ pub(super) fn render_to_files(
     let n = frames.len() as f32;
     for (k, frame) in frames.into_iter().enumerate() {
         let (output, pose_seconds) = match (frame, &args.frames, clip, file) {
-            (Some(f), Some(range), Some(clip), Some(file)) => {
+            (Some(f), Some(_), Some(clip), Some(file)) => {
                 let start = std::time::Instant::now();
-                let posed = pose_gltf(&mut world, file, clip, (f as f64 / args.fps) as f32)?;
+                let posed = pose_gltf(&mut world, file, clip, (f64::from(f) / args.fps) as f32)?;
                 if k == 0 && posed.frozen > 0 {
                     eprintln!(
                         "warning: {} animated meshes have a singular rest transform and stay at rest",
                         posed.frozen
                     );
                 }
-                (frame_output(&args.output, range, f)?, start.elapsed().as_secs_f64())
+                (outputs[k].clone(), start.elapsed().as_secs_f64())
             }
             _ => (args.output.clone(), 0.0),
         };
@@ -398,6 +402,18 @@ pub(super) fn render_to_files(
         rendered.push(Rendered { frame, pose_seconds, stats });
     }
     Ok(rendered)
+}
+
+/// Creates the folders of `outputs` (once each: a sequence's frames share theirs).
+fn create_folders(outputs: &[PathBuf]) -> Result<(), CliError> {
+    let mut made: Vec<&Path> = Vec::new();
+    for output in outputs {
+        let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty() && !made.contains(d)) else { continue };
+        let what = format!("{}: cannot write: cannot create its folder {}", output.display(), dir.display());
+        std::fs::create_dir_all(dir).map_err(super::exit::io(what))?;
+        made.push(dir);
+    }
+    Ok(())
 }
 
 /// Writes one render: a tile's EXR, or the image and its preview.
@@ -431,15 +447,17 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     if let Some(t) = args.threads {
         rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
     }
-    let bar = progress_bar();
-    let rendered = render_to_files(&args, |f| bar.set_position((f * 1000.0) as u64));
-    bar.finish_and_clear();
+    // A bar on a terminal; progress lines when a farm's task runner reads stderr.
+    let log = super::task_log::TaskLog::open(None)?;
+    let mut progress = log.job(0, 1, &args.output.display().to_string());
+    let rendered = render_to_files(&args, |f| progress.set(f));
+    progress.finish();
     let (width, height) = args.crop.map_or(args.size, |c| (c.width(), c.height()));
     for Rendered { frame, pose_seconds, stats, .. } in rendered? {
         if let Some(f) = frame {
             println!(
                 "frame {f} (t = {:.4} s): pose {:.3} ms, light system update {:.3} ms",
-                f as f64 / args.fps,
+                f64::from(f) / args.fps,
                 pose_seconds * 1e3,
                 stats.update_seconds * 1e3
             );

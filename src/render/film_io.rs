@@ -422,9 +422,9 @@ fn check_dimensions(
 pub fn write_file(path: &Path, what: &str, bytes: &[u8]) -> Result<(), ImageIoError> {
     use std::io::Write;
     let io = |e: std::io::Error| ImageIoError::Io { what: what.into(), msg: e.to_string(), kind: e.kind() };
-    // A temporary name in the same directory, so the rename stays on one file system.
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let temp = path.with_file_name(format!(".{name}.{}.partial", std::process::id()));
+    // A temporary name in the same directory, so the rename stays on one file system; unique to this
+    // host, process and call, so that writers on storage shared between machines never share one.
+    let temp = super::partial::temporary_path(path);
     let written = std::fs::File::create(&temp).and_then(|mut f| {
         f.write_all(bytes)?;
         f.sync_all()
@@ -453,6 +453,27 @@ mod tests {
         assert_eq!(tone_map_srgb8(Vec3::ONE, 1.0), [188, 188, 188]);
         assert_eq!(tone_map_srgb8(Vec3::splat(f32::INFINITY), 1.0), [255, 255, 255]);
         assert_eq!(tone_map_srgb8(Vec3::new(-1.0, 0.0, 0.0), 1.0), [0, 0, 0]);
+    }
+
+    /// Two writers of one output at once (as two hosts sharing a folder, whose process ids may be
+    /// equal) each publish a whole file: neither renames the other's half-written temporary.
+    #[test]
+    fn concurrent_writers_of_one_output_each_publish_a_whole_file() {
+        let dir = std::env::temp_dir().join(format!("kelvin-write-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("out.bin");
+        let contents = [vec![1u8; 1 << 16], vec![2u8; 1 << 16]];
+        for _ in 0..50 {
+            std::thread::scope(|s| {
+                for bytes in &contents {
+                    let path = &path;
+                    s.spawn(move || write_file(path, "out.bin", bytes).unwrap());
+                }
+            });
+            assert!(contents.contains(&std::fs::read(&path).unwrap()), "a whole file of one writer");
+        }
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "no temporary left");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     /// A firefly of infinite or NaN radiance does not take the exposure to -inf (a black PNG):

@@ -7,6 +7,7 @@ pub mod film_io;
 pub mod job;
 pub mod material;
 mod normal_map;
+pub mod partial;
 pub mod path;
 mod png_text;
 pub mod renderer;
