@@ -1,5 +1,5 @@
 //! Choosing lights and evaluating Sample_Li for the whole shading batch (rayon over chunks), and
-//! tracing each block's shadow rays as soon as the block is sampled.
+//! tracing each chunk's shadow rays as soon as the chunk is sampled.
 
 use bevy_ecs::prelude::*;
 use glam::{Vec2, Vec3};
@@ -42,7 +42,7 @@ pub enum ShadowTarget {
 
 /// The shadow rays of the last sampling run: how many there were and were blocked and, when an app
 /// sets `keep`, each `DirectLighting` entry's segment and answer. The sampling pass traces a
-/// block's rays as soon as it has sampled the block; without `keep` their ends live in scratch
+/// chunk's rays as soon as it has sampled the chunk; without `keep` their ends live in scratch
 /// of the task and the columns below stay empty. Entry `e` starts at point
 /// `e / entries_per_point` of the `ShadingBatch` (its position, error bound and normal give the
 /// offset origin), so no column repeats the batch.
@@ -143,8 +143,8 @@ fn entries_per_point(settings: &Settings, n_lights: usize) -> usize {
 }
 
 /// For every point of the batch, chooses lights and evaluates Sample_Li, writing one
-/// `DirectLighting` entry per sample and, in the same pass, tracing the entry's shadow ray (a
-/// block of entries at a time): a blocked entry is zeroed and marked occluded.
+/// `DirectLighting` entry per sample and, in the same task, tracing the entry's shadow ray once
+/// its chunk is sampled: a blocked entry is zeroed and marked occluded.
 pub fn sample_direct_lighting(
     batch: Res<ShadingBatch>,
     (table, sampler, settings): (Res<LightTable>, Res<LightSampler>, Res<Settings>),

@@ -1,5 +1,5 @@
 //! Tracing a block's shadow segments as any-hit queries against the scene BVH, inside the sampling
-//! pass (see `sample_direct_lighting`), while the block's entries are still in cache.
+//! pass (see `sample_direct_lighting`), while the chunk's entries are still in cache.
 
 use glam::Vec3;
 

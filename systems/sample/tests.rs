@@ -312,7 +312,7 @@ fn restir_reservoirs_in_lanes_equal_one_entry_at_a_time() {
     assert_eq!(scalar.initial()[37].bits().0, NO_LIGHT);
 }
 
-/// The sampling pass traces each block's shadow rays as soon as it has sampled the block: its
+/// The sampling pass traces each chunk's shadow rays as soon as it has sampled the chunk: its
 /// answers must be those of each kept segment traced alone (`SceneBvh::occluded_from`), entry by
 /// entry, and the entries must not depend on whether an app keeps the segments. Hard cases: one
 /// entry per point in whole and partial blocks of lanes (packets from a lane kernel's segments),
