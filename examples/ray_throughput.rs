@@ -5,13 +5,15 @@
 //! `ray_intersect_preliminary(..).is_valid()` evaluates). The rays
 //! file holds little-endian f32 records (origin xyz, direction xyz, t_max); `bench/mitsuba/rays.py`
 //! writes it and traces the same rays with Mitsuba.
-//! `cargo run --release --example ray_throughput -- SCENE.glb RAYS.f32 [repeats]`
+//! `cargo run --release --example ray_throughput -- SCENE.glb RAYS.f32 [repeats [query]]`; with a query
+//! (closest, closest_ref, any, closest_packet, any_packet) it runs that one `repeats` times and prints
+//! nothing, for a profiler.
 
 use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
-use kelvin::geometry::{GeometryId, HitLanes, RAY_CHUNK, Ray, SceneBvh, closest_hits, occluded, ray_columns};
+use kelvin::geometry::{GeometryId, HitLanes, RAY_CHUNK, Ray, SceneBvh, closest_hits, occluded, ray_columns, ray_stats};
 use kelvin::lanes::{self, LANES};
 use kelvin::systems::LightingPlugin;
 use rayon::prelude::*;
@@ -90,7 +92,7 @@ fn packet_blocked(bvh: &SceneBvh, rays: &[Ray]) -> usize {
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let [scene, rays_path, ..] = args.as_slice() else {
-        return Err("usage: ray_throughput SCENE.glb RAYS.f32 [repeats]".into());
+        return Err("usage: ray_throughput SCENE.glb RAYS.f32 [repeats [query]]".into());
     };
     let repeats = args.get(2).and_then(|r| r.parse().ok()).unwrap_or(5);
     let rays = read_rays(rays_path)?;
@@ -101,6 +103,20 @@ fn main() -> Result<(), String> {
     schedule.run(&mut world);
     let bvh = world.resource::<SceneBvh>();
     let (mut hit_buf, mut occ_buf) = (Vec::new(), Vec::new());
+    if let Some(query) = args.get(3) {
+        // One query, `repeats` times, for a profiler or an instruction counter (cachegrind).
+        for _ in 0..repeats {
+            match query.as_str() {
+                "closest" => closest_hits(bvh, &rays, &mut hit_buf),
+                "closest_ref" => closest_refs(bvh, &rays, &mut occ_buf),
+                "any" => occluded(bvh, &rays, &mut occ_buf),
+                "closest_packet" => drop(packet_hits(bvh, &rays)),
+                "any_packet" => drop(packet_blocked(bvh, &rays)),
+                _ => return Err(format!("unknown query {query}: closest, closest_ref, any, closest_packet, any_packet")),
+            }
+        }
+        return Ok(());
+    }
     let (closest_s, hits) = best(repeats, || {
         closest_hits(bvh, &rays, &mut hit_buf);
         hit_buf.iter().filter(|h| h.is_some()).count()
@@ -122,8 +138,37 @@ fn main() -> Result<(), String> {
         ));
     }
     let n = rays.len() as f64;
+    // What one ray costs in the walk (feature `ray-stats`): one untimed run of each single-ray query.
+    let per_ray = |run: &mut dyn FnMut()| {
+        ray_stats::take();
+        run();
+        let s = ray_stats::take();
+        format!(
+            "{{\"nodes\": {:.2}, \"blocks\": {:.2}, \"triangles\": {:.2}}}",
+            s.nodes as f64 / n,
+            s.blocks as f64 / n,
+            s.triangles as f64 / n
+        )
+    };
+    // A fingerprint of every closest hit's t bits, ray by ray, so two builds can be checked to
+    // return the same hits bit for bit.
+    let t_bits: u64 = rays
+        .par_iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let bits = bvh.closest_hit_ref(r).map_or(u64::MAX, |h| u64::from(h.t().to_bits()));
+            bits.wrapping_mul(2 * i as u64 + 1).rotate_left(i as u32 % 64)
+        })
+        .reduce(|| 0, u64::wrapping_add);
+    let stats = if ray_stats::COUNTING {
+        let closest = per_ray(&mut || closest_refs(bvh, &rays, &mut occ_buf));
+        let any = per_ray(&mut || occluded(bvh, &rays, &mut occ_buf));
+        format!(", \"closest_walk\": {closest}, \"any_walk\": {any}")
+    } else {
+        String::new()
+    };
     println!(
-        "{{\"rays\": {}, \"hits\": {hits}, \"blocked\": {blocked}, \"threads\": {}, \"closest_per_s\": {:.0}, \"closest_ref_per_s\": {:.0}, \"any_per_s\": {:.0}, \"closest_packet_per_s\": {:.0}, \"any_packet_per_s\": {:.0}}}",
+        "{{\"rays\": {}, \"hits\": {hits}, \"blocked\": {blocked}, \"t_bits\": \"{t_bits:016x}\", \"threads\": {}, \"closest_per_s\": {:.0}, \"closest_ref_per_s\": {:.0}, \"any_per_s\": {:.0}, \"closest_packet_per_s\": {:.0}, \"any_packet_per_s\": {:.0}{stats}}}",
         rays.len(),
         rayon::current_num_threads(),
         n / closest_s,

@@ -8,6 +8,8 @@ kelvin's `examples/ray_throughput.rs` (one ray at a time in parallel batches, an
 f32 file. Both use every core. Prints a Markdown table.
 
   /tmp/mitsuba-venv/bin/python bench/mitsuba/rays.py   (the venv of bench/mitsuba/README.md: Mitsuba and numpy)
+A kelvin built with `--features ray-stats` also reports the nodes, leaf blocks and triangles each single ray tested
+(the counting costs time: take the rates from a build without it).
 """
 import argparse
 import json
@@ -137,6 +139,20 @@ def main():
             bare_cells = (f"{bare / 1e6:.1f} M/s", f"{bare / mm:.2f}") if bare else ("", "")
             print(f"| {kind} {what} | {one / 1e6:.1f} M/s | {pk / 1e6:.1f} M/s | {bare_cells[0]} | "
                   f"{mm / 1e6:.1f} M/s | {max(one, pk) / mm:.2f} | {bare_cells[1]} |")
+    # Time per ray on one thread's share (rays/s over the threads), and with a `ray-stats` build what
+    # each single ray tested: whether node tests, leaf tests or the rest bound it.
+    threads = rows[0][1]["threads"]
+    print(f"\n| rays, ns per ray per thread ({threads} threads) | kelvin single | kelvin packets | Mitsuba | "
+          f"nodes / ray | leaf blocks / ray | triangles / ray |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for kind, k, m in rows:
+        for what, one, pk, mm, walk in (
+                ("closest hit", k["closest_ref_per_s"], k["closest_packet_per_s"], m[0], k.get("closest_walk")),
+                ("any hit", k["any_per_s"], k["any_packet_per_s"], m[1], k.get("any_walk"))):
+            counts = ([f"{walk[c]:.2f}" for c in ("nodes", "blocks", "triangles")] if walk
+                      else ["(build with --features ray-stats)", "", ""])
+            print(f"| {kind} {what} | {threads * 1e9 / one:.0f} | {threads * 1e9 / pk:.0f} | "
+                  f"{threads * 1e9 / mm:.0f} | " + " | ".join(counts) + " |")
 
 
 if __name__ == "__main__":

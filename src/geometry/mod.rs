@@ -13,6 +13,7 @@ mod hits;
 pub mod mesh;
 mod packets;
 pub mod ray;
+pub mod ray_stats;
 mod refit;
 pub mod shapes;
 pub mod transform;

@@ -166,7 +166,8 @@ impl SceneBvh {
     /// [`Self::occluded_from`] of a valid ray over the wide tree.
     #[inline(always)]
     fn occluded_wide(&self, ray: &Ray, origin: GeometryId) -> bool {
-        let sheared = ShearedRay::new(ray);
+        // Built at the first leaf: many rays leave the tree without reaching one.
+        let mut sheared = None;
         let mut t_max = ray.t_max;
         let mut blocked = false;
         let complete = self.wide.traverse::<false>(
@@ -174,7 +175,8 @@ impl SceneBvh {
             &mut t_max,
             #[inline(always)]
             |block: &PrimBlock, t_max: &mut f32| {
-                blocked = self.block_blocks(block, ray, &sheared, *t_max, origin);
+                let sheared = sheared.get_or_insert_with(|| ShearedRay::new(ray));
+                blocked = self.block_blocks(block, ray, sheared, *t_max, origin);
                 blocked
             },
         );
@@ -221,7 +223,8 @@ impl SceneBvh {
     /// [`Self::closest_hit`] of a valid ray over the wide tree.
     #[inline(always)]
     fn closest_ref_wide(&self, ray: &Ray) -> Option<HitRef> {
-        let sheared = ShearedRay::new(ray);
+        // Built at the first leaf: many rays leave the tree without reaching one.
+        let mut sheared = None;
         let mut best: Option<Best> = None;
         // The object-space point of the best shape hit, so that `make_hit` need not find it again.
         let mut best_local = None;
@@ -231,7 +234,8 @@ impl SceneBvh {
             &mut t_max,
             #[inline(always)]
             |block: &PrimBlock, t_max: &mut f32| {
-                self.closest_in_block(block, ray, &sheared, t_max, &mut best, &mut best_local);
+                let sheared = sheared.get_or_insert_with(|| ShearedRay::new(ray));
+                self.closest_in_block(block, ray, sheared, t_max, &mut best, &mut best_local);
                 false
             },
         );

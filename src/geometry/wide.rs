@@ -11,12 +11,13 @@
 
 use std::mem::MaybeUninit;
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
 
 use super::ray::{Ray, gamma};
-use super::triangle::{EARLY_REJECT_SLACK, t_error_bound};
+use super::ray_stats;
+use super::triangle::{PERMUTED, any_edge_zero, decide, edges, sheared_xy};
 
 pub(crate) mod packet;
 
@@ -270,11 +271,7 @@ impl WideBvh {
         if self.nodes.is_empty() {
             return true;
         }
-        let inv = |d: f32| {
-            let i = 1.0 / d;
-            if i.is_finite() && i.abs() <= MAX_INV_DIR { i } else { MAX_INV_DIR.copysign(d) }
-        };
-        let inv_dir = [inv(ray.dir.x), inv(ray.dir.y), inv(ray.dir.z)];
+        let inv_dir = ray.dir.to_array().map(capped_inv);
         let origin = ray.origin.to_array();
         let neg = inv_dir.map(|i| i < 0.0);
         let far_pad = 1.0 + 2.0 * gamma(3);
@@ -286,11 +283,14 @@ impl WideBvh {
         let mut entry = root;
         loop {
             if entry & LEAF != 0 {
-                if visit(&self.blocks[(entry & !LEAF) as usize], t_max) {
+                let block = &self.blocks[(entry & !LEAF) as usize];
+                ray_stats::block(block.triangles);
+                if visit(block, t_max) {
                     return true;
                 }
             } else {
                 let node = &self.nodes[entry as usize];
+                ray_stats::node();
                 let mut t_near = [0f32; WIDTH];
                 let mut t_far = [0f32; WIDTH];
                 for c in 0..WIDTH {
@@ -316,13 +316,18 @@ impl WideBvh {
                 if sp + WIDTH > STACK {
                     return false;
                 }
+                if mask.count_ones() > 1 {
+                    self.prefetch_children(node, mask);
+                }
                 if !NEAREST {
                     let mut leaves = mask & leaf_mask(node);
                     mask &= !leaves;
                     while leaves != 0 {
                         let c = leaves.trailing_zeros() as usize;
                         leaves &= leaves - 1;
-                        if visit(&self.blocks[(node.child[c] & !LEAF) as usize], t_max) {
+                        let block = &self.blocks[(node.child[c] & !LEAF) as usize];
+                        ray_stats::block(block.triangles);
+                        if visit(block, t_max) {
                             return true;
                         }
                     }
@@ -381,6 +386,45 @@ impl WideBvh {
     }
 }
 
+impl WideBvh {
+    /// Asks the cache for the children of `node` in `mask`, so that their fetches overlap rather
+    /// than follow one another as the walk reaches each: an incoherent ray's time goes mostly to
+    /// waiting for nodes and blocks.
+    #[inline(always)]
+    fn prefetch_children(&self, node: &WideNode, mut mask: u32) {
+        while mask != 0 {
+            let c = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let child = node.child[c];
+            if child & LEAF != 0 {
+                prefetch(self.blocks.as_ptr().wrapping_add((child & !LEAF) as usize));
+            } else {
+                prefetch(self.nodes.as_ptr().wrapping_add(child as usize));
+            }
+        }
+    }
+}
+
+/// Prefetches every cache line of the `T` at `p` (a hint: `p` need not be valid).
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    for line in (0..size_of::<T>()).step_by(64) {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: a prefetch never faults and reads nothing into the program.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast::<i8>().wrapping_add(line)) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
+/// 1 / d, capped at [`MAX_INV_DIR`] in magnitude (the slab test's reciprocal direction).
+#[inline(always)]
+pub(crate) fn capped_inv(d: f32) -> f32 {
+    let i = 1.0 / d;
+    if i.is_finite() && i.abs() <= MAX_INV_DIR { i } else { MAX_INV_DIR.copysign(d) }
+}
+
 /// Bit `c` set for each child `c` of `node` that is a leaf.
 #[inline(always)]
 fn leaf_mask(node: &WideNode) -> u32 {
@@ -392,89 +436,29 @@ fn leaf_mask(node: &WideNode) -> u32 {
 }
 
 /// The lanes of `block` whose triangle `ray` (as `sheared`) hits over (delta_t, t_max], with their
-/// t and barycentrics: bit `l` of the mask for lane `l`. The same operations as
-/// [`super::triangle::ShearedRay::intersect`], lane by lane; lanes where an edge function is
-/// exactly zero are reported in the second mask, for the scalar test to decide.
+/// t and barycentrics: bit `l` of the mask for lane `l`. The watertight test's own steps
+/// (`triangle::decide`) over the block's 4 lanes at once, branch-free; lanes where an edge function
+/// is exactly zero are reported in the second mask, for the scalar test to decide.
 #[inline(always)]
 pub(crate) fn triangle_block_hits(
     block: &PrimBlock,
     sheared: &super::triangle::ShearedRay,
     t_max: f32,
 ) -> (u8, u8, [f32; LEAF_PRIMS], [[f32; LEAF_PRIMS]; 3]) {
-    const L: usize = LEAF_PRIMS;
     let (origin, kz, s) = sheared.parts();
     // Axis order after the permutation that makes the ray's dominant axis z.
-    let (ax, ay, az) = match kz {
-        0 => (1, 2, 0),
-        1 => (2, 0, 1),
-        _ => (0, 1, 2),
-    };
+    let [ax, ay, az] = PERMUTED[usize::from(kz)];
     let o = origin.to_array();
-    let mut p = [[[0f32; L]; 3]; 3];
-    for (vertex, pv) in p.iter_mut().enumerate() {
-        for (dst, src) in [ax, ay, az].into_iter().enumerate() {
-            for l in 0..L {
-                pv[dst][l] = block.v[vertex][src][l] - o[src];
-            }
-        }
-        for l in 0..L {
-            pv[0][l] += s.x * pv[2][l];
-            pv[1][l] += s.y * pv[2][l];
-        }
-    }
-    let mut e = [[0f32; L]; 3];
-    for l in 0..L {
-        e[0][l] = p[1][0][l] * p[2][1][l] - p[1][1][l] * p[2][0][l];
-        e[1][l] = p[2][0][l] * p[0][1][l] - p[2][1][l] * p[0][0][l];
-        e[2][l] = p[0][0][l] * p[1][1][l] - p[0][1][l] * p[1][0][l];
-    }
-    let (mut hit, mut exact) = (0u8, 0u8);
-    let mut t = [0f32; L];
-    let mut b = [[0f32; L]; 3];
-    let t_reject = t_max * EARLY_REJECT_SLACK;
-    for l in 0..L {
-        if block.triangles & (1 << l) == 0 {
-            continue;
-        }
-        let (e0, e1, e2) = (e[0][l], e[1][l], e[2][l]);
-        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-            exact |= 1 << l;
-            continue;
-        }
-        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
-            continue;
-        }
-        let det = e0 + e1 + e2;
-        if det == 0.0 {
-            continue;
-        }
-        let (z0, z1, z2) = (p[0][2][l] * s.z, p[1][2][l] * s.z, p[2][2][l] * s.z);
-        let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
-        if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_reject * det) {
-            continue;
-        }
-        if det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_reject * det) {
-            continue;
-        }
-        let inv_det = 1.0 / det;
-        let tl = t_scaled * inv_det;
-        if tl.is_nan() || tl > t_max {
-            continue;
-        }
-        let max_x = p[0][0][l].abs().max(p[1][0][l].abs()).max(p[2][0][l].abs());
-        let max_y = p[0][1][l].abs().max(p[1][1][l].abs()).max(p[2][1][l].abs());
-        let max_z = z0.abs().max(z1.abs()).max(z2.abs());
-        let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-        if tl <= t_error_bound([max_x, max_y, max_z], max_e, inv_det) {
-            continue;
-        }
-        hit |= 1 << l;
-        t[l] = tl;
-        b[0][l] = e0 * inv_det;
-        b[1][l] = e1 * inv_det;
-        b[2][l] = e2 * inv_det;
-    }
-    (hit, exact, t, b)
+    let shear = [Vec4::splat(s.x), Vec4::splat(s.y)];
+    let p = [0, 1, 2].map(|vertex| {
+        let axis = |a: usize| Vec4::from_array(block.v[vertex][a]) - Vec4::splat(o[a]);
+        sheared_xy([axis(ax), axis(ay), axis(az)], shear)
+    });
+    let e = edges(&p);
+    let exact = any_edge_zero(e).bitmask() as u8 & block.triangles;
+    let (hit, t, b) = decide(&p, e, Vec4::splat(s.z), Vec4::splat(t_max));
+    let hit = hit.bitmask() as u8 & block.triangles & !exact;
+    (hit, exact, t.to_array(), b.map(|b| b.to_array()))
 }
 
 /// The block of the leaf slots `slots` (at most [`LEAF_PRIMS`]).
