@@ -90,7 +90,8 @@ impl<'a> Shadows<'a> {
             let mut blocked = 0;
             for l in 0..n {
                 let ray = self.segment(first + l, kind[l], target[l], target_normal[l]);
-                blocked |= (self.bvh.occluded_from(&ray, origins[l]) as u32) << l;
+                // Inside the sampling pass's `lanes::widest`: no dispatch per ray.
+                blocked |= (self.bvh.occluded_in_lanes(&ray, origins[l]) as u32) << l;
             }
             return blocked;
         }

@@ -62,9 +62,14 @@ pub fn occluded(bvh: &SceneBvh, rays: &[Ray], out: &mut Vec<bool>) {
     out.clear();
     out.resize(rays.len(), false);
     out.par_chunks_mut(RAY_CHUNK).zip(rays.par_chunks(RAY_CHUNK)).for_each(|(out, rays)| {
-        for (o, r) in out.iter_mut().zip(rays) {
-            *o = bvh.occluded(r);
-        }
+        crate::lanes::widest(
+            #[inline(always)]
+            || {
+                for (o, r) in out.iter_mut().zip(rays) {
+                    *o = bvh.occluded_in_lanes(r, GeometryId::NONE);
+                }
+            },
+        )
     });
 }
 
@@ -73,9 +78,14 @@ pub fn closest_hits(bvh: &SceneBvh, rays: &[Ray], out: &mut Vec<Option<Hit>>) {
     out.clear();
     out.resize(rays.len(), None);
     out.par_chunks_mut(RAY_CHUNK).zip(rays.par_chunks(RAY_CHUNK)).for_each(|(out, rays)| {
-        for (o, r) in out.iter_mut().zip(rays) {
-            *o = bvh.closest_hit(r);
-        }
+        crate::lanes::widest(
+            #[inline(always)]
+            || {
+                for (o, r) in out.iter_mut().zip(rays) {
+                    *o = bvh.closest_ref_in_lanes(r).map(|h| bvh.hit_record(r, h));
+                }
+            },
+        )
     });
 }
 
@@ -122,16 +132,23 @@ impl SceneBvh {
     /// [`Self::occluded`] for a ray leaving a point on primitive `origin` (or
     /// [`GeometryId::NONE`]): a flat `origin` does not block it (see `SceneBvh::ignores`).
     pub fn occluded_from(&self, ray: &Ray, origin: GeometryId) -> bool {
+        crate::lanes::widest(
+            #[inline(always)]
+            || self.occluded_in_lanes(ray, origin),
+        )
+    }
+
+    /// [`Self::occluded_from`] for a caller that already runs at `lanes::widest`'s level (a batch
+    /// of rays, a lane kernel): the walk compiles into the caller, without a dispatch per ray.
+    #[inline(always)]
+    pub(crate) fn occluded_in_lanes(&self, ray: &Ray, origin: GeometryId) -> bool {
         if !ray.is_valid() || self.leaf.is_empty() {
             return false;
         }
         if self.leaf.len() <= FEW_PRIMITIVES {
             return self.occluded_each(ray, origin);
         }
-        crate::lanes::widest(
-            #[inline(always)]
-            || self.occluded_wide(ray, origin),
-        )
+        self.occluded_wide(ray, origin)
     }
 
     /// The nearest hit of `ray` in (0, t_max], or `None`.
@@ -141,16 +158,23 @@ impl SceneBvh {
 
     /// [`Self::closest_hit`] without its record.
     pub fn closest_hit_ref(&self, ray: &Ray) -> Option<HitRef> {
+        crate::lanes::widest(
+            #[inline(always)]
+            || self.closest_ref_in_lanes(ray),
+        )
+    }
+
+    /// [`Self::closest_hit_ref`] for a caller that already runs at `lanes::widest`'s level (see
+    /// [`Self::occluded_in_lanes`]).
+    #[inline(always)]
+    pub(crate) fn closest_ref_in_lanes(&self, ray: &Ray) -> Option<HitRef> {
         if !ray.is_valid() || self.leaf.is_empty() {
             return None;
         }
         if self.leaf.len() <= FEW_PRIMITIVES {
             return self.closest_ref_each(ray);
         }
-        crate::lanes::widest(
-            #[inline(always)]
-            || self.closest_ref_wide(ray),
-        )
+        self.closest_ref_wide(ray)
     }
 
     /// The instance (index into the built instances) that `hit` lies on.
