@@ -60,6 +60,11 @@ class Whereabouts:
     def node_of(self, attempt):
         return self.nodes.get(attempt)
 
+    def forget(self, attempts):
+        """Drops handled attempts, so that the actor holds those in flight only, however many tasks a run has."""
+        for attempt in attempts:
+            self.nodes.pop(attempt, None)
+
 
 def die_with_parent():
     """Runs in the kelvin child before exec: the kernel kills kelvin when its worker dies, so that a killed
