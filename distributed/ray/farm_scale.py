@@ -133,8 +133,10 @@ class Sampler(threading.Thread):
                 self.pids = head_processes(self.cluster, self.driver)
             rss = {name: rss_kb(pid) for name, pid in self.pids.items()}
             if os.path.exists(f"/proc/{self.driver}") and "tracker" in self.pids:
-                self.cpu_last = self.cpu()
-                self.cpu_first = self.cpu_first or self.cpu_last
+                now = self.cpu()
+                self.cpu_first = self.cpu_first or now
+                # The most each role has read: a process that has exited (the tracker as the driver ends) reads 0.
+                self.cpu_last = {n: max(v, (self.cpu_last or {}).get(n, 0.0)) for n, v in now.items()}
             self.samples.append({"t": time.monotonic() - start, "rss_kb": rss, "staged": staged_files(self.outputs)})
             self.stopped.wait(self.period)
 

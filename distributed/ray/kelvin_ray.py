@@ -40,21 +40,24 @@ at the same paths on every node (as in one container image); tiles travel throug
 checks first that its node's binary is the driver's and its scene and environment map are the ones planned (their
 SHA-256, from the plan's `inputs`): a node that differs, or lacks one, is a node failure, retried elsewhere.
 Without --address a local Ray cluster is started for the run.
+
+Work goes out in waves, so that the head's memory does not grow with the manifest: at most --in-flight tasks are
+submitted and not yet handled (default: two per task slot of the alive nodes), taken in plan order; a job is opened
+(its pieces made, its staged ones checked) only when the window has room for it and fewer than --open-jobs are
+open, and forgotten once merged. --task-logs DIR keeps every attempt of every task: its node, its outcome and
+kelvin's stderr (progress lines, messages), in DIR/JOB/PIECE.log.
 """
 
 import argparse
 import json
-import math
 import os
+import re
 import resource
-import secrets
 import shutil
-import socket
 import sys
 import tarfile
 import time
 from collections import deque
-from dataclasses import dataclass, field
 
 import ray
 from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
@@ -62,6 +65,7 @@ from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 import kelvin_exit
 import kelvin_staged
 import kelvin_tasks
+from kelvin_jobs import Job, Piece, pieces_of, remove_temporaries, tile_grid, write_durably  # noqa: F401 (tests)
 from kelvin_tasks import TaskFault, TileFailed, Whereabouts, bake_part, digest, render_chunk, render_tile
 
 # The tasks' code travels with them, so nodes need not have this folder on their path.
@@ -79,28 +83,6 @@ SLOTS_EVERY = 10.0
 # Seconds the driver's own kelvin commands may take: `kelvin batch --plan` (it hashes every input), and a merge.
 PLAN_TIMEOUT = 600
 MERGE_TIMEOUT = 600
-
-
-def tile_grid(width, height, tiles):
-    """Crops (x0, y0, x1, y1) of a cols x rows grid of about `tiles` tiles, as square as the image allows."""
-    best = None
-    for rows in range(1, tiles + 1):
-        if tiles % rows:
-            continue
-        cols = tiles // rows
-        # How far a tile is from square, in log ratio.
-        score = abs(math.log((width / cols) / (height / rows)))
-        if best is None or score < best[0]:
-            best = (score, cols, rows)
-    _, cols, rows = best
-    cols, rows = min(cols, width), min(rows, height)
-    xs = [i * width // cols for i in range(cols + 1)]
-    ys = [j * height // rows for j in range(rows + 1)]
-    return [(xs[i], ys[j], xs[i + 1], ys[j + 1]) for j in range(rows) for i in range(cols)]
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# Driver
 
 
 def plan(kelvin, manifest):
@@ -126,107 +108,6 @@ def classify(err):
         return False, f"{type(err.cause).__name__}: {err.cause}", None
     text = str(err).strip()
     return True, f"{type(err).__name__}: {text.splitlines()[-1] if text else ''}", None
-
-
-def write_durably(path, data):
-    """Writes `data` under a temporary name, fsyncs and renames it to `path`, then fsyncs the folder: a file
-    under its final name is always whole, whenever the driver or the machine stops."""
-    folder = os.path.dirname(path)
-    os.makedirs(folder, exist_ok=True)
-    # Unique to this host, process and call: two drivers on storage shared between machines never share one.
-    tmp = os.path.join(folder, f".{os.path.basename(path)}.{socket.gethostname()}.{os.getpid()}."
-                               f"{secrets.token_hex(8)}.tmp")
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-    fd = os.open(folder, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-@dataclass
-class Piece:
-    """One task's worth of a job: a tile of a render or a part of a bake, and its staged file."""
-
-    job: int  # plan position
-    index: int  # in the job's pieces
-    what: str  # "tile X0,Y0,X1,Y1" or "part K/N"
-    spec: tuple  # the crop, or (K, N)
-    path: str  # where the finished piece is staged
-    failed_on: set = field(default_factory=set)  # nodes it failed on
-    retries: int = 0
-
-    @property
-    def kind(self):
-        return self.what.split(" ")[0]  # "tile", "part" or "frames"
-
-    def staged(self, build, planned, staging):
-        """Whether the piece is staged and sound: it decodes, and records this piece, this build and files the
-        plan lists (kelvin_staged.check). One that is not is quarantined (moved aside with the reason)."""
-        if not os.path.exists(self.path):
-            return False
-        why = kelvin_staged.check("chunk" if self.kind == "frames" else self.kind, self.path, self.spec, build,
-                                  planned)
-        if why:
-            where = kelvin_staged.quarantine(staging, self.path, f"{self.what}: {why}")
-            print(f"{self.what} staged at {self.path} {why}: moved to {where}, rendered again", flush=True)
-            return False
-        return True
-
-
-@dataclass
-class Job:
-    index: int  # plan position: the frames of one manifest job share its manifest index
-    entry: dict  # the plan's entry
-    staging: str = ""  # folder of the staged pieces
-    pieces: list = field(default_factory=list)
-    have: int = 0  # pieces staged
-    status: tuple = None  # ("rendered" | "skipped" | "FAILED", detail) once decided
-
-    @property
-    def name(self):
-        return self.entry["name"]
-
-    @property
-    def bake(self):
-        return self.entry.get("command") == "bake"
-
-    @property
-    def chunk(self):
-        """A chunk of frames: rendered whole, in one process, as one task."""
-        return len(self.entry.get("frames") or []) > 1
-
-
-def pieces_of(i, job, tiles):
-    """The job's tiles (or bake parts) and where each is staged."""
-    entry = job.entry
-    if job.bake:
-        n = entry["parts"]
-        job.staging = entry["parts_dir"]
-        return [Piece(i, k, f"part {k + 1}/{n}", (k + 1, n), os.path.join(job.staging, f"part-{k + 1}-of-{n}.kbake"))
-                for k in range(n)]
-    if job.chunk:
-        # Beside the job's output pattern, one folder per chunk (the chunks of a job share the pattern).
-        job.staging = f"{entry['output']}.chunk-{entry['frames'][0]}-{entry['frames'][-1]}"
-        frames = entry["frames"]
-        return [Piece(i, 0, f"frames {frames[0]}-{frames[-1]}", (), os.path.join(job.staging, "frames.tar"))]
-    # A job whose tiles would not merge into its image (ReSTIR's reuse) renders as one tile.
-    crops = tile_grid(entry["width"], entry["height"], 1 if entry.get("untileable") else tiles)
-    job.staging = entry["output"] + ".tiles"
-    return [Piece(i, t, "tile " + ",".join(map(str, c)), c, os.path.join(job.staging, "_".join(map(str, c)) + ".exr"))
-            for t, c in enumerate(crops)]
-
-
-def remove_temporaries(folder):
-    """Removes half-written pieces a killed driver left (their names end in .tmp)."""
-    if os.path.isdir(folder):
-        for name in os.listdir(folder):
-            if name.startswith(".") and name.endswith(".tmp"):
-                os.remove(os.path.join(folder, name))
 
 
 def merge(kelvin, job):
@@ -436,12 +317,13 @@ class Farm:
             self.handled.append(attempt)
             return
         try:
-            data, node, secs, cpu = ray.get(ref)
+            data, node, secs, cpu, log = ray.get(ref)
         except Exception as err:  # a task's failure is its job's, not the run's
             self.failed(piece, err, pinned, attempt)
             self.handled.append(attempt)
             return
         self.handled.append(attempt)
+        self.keep_log(piece, node, f"done in {secs:.2f} s", log)
         try:
             write_durably(piece.path, data)
         except OSError as e:  # the driver's disk: no other node would help
@@ -462,23 +344,45 @@ class Farm:
         """Retries a transient failure away from the nodes it failed on; fails the job on a permanent one."""
         job = self.jobs[piece.job]
         transient, message, node = classify(err)
-        if not transient:
-            self.fail(job, f"job {job.index} ({job.name}): {message}")
-            return
         node = node or self.where(attempt) or pinned
+        log = self.keep_log(piece, node, f"failed: {message}", getattr(getattr(err, "cause", None), "log", ""))
+        seen = f" (its log: {log})" if log else ""
+        if not transient:
+            self.fail(job, f"job {job.index} ({job.name}): {message}{seen}")
+            return
         if node:
             piece.failed_on.add(node)
         if piece.retries >= self.opts.max_retries:
-            self.fail(job, f"job {job.index} ({job.name}): {piece.what} failed {piece.retries + 1} times, last: {message}")
+            self.fail(job, f"job {job.index} ({job.name}): {piece.what} failed {piece.retries + 1} times, last: "
+                           f"{message}{seen}")
             return
         piece.retries += 1
         target = self.other_node(piece.failed_on)
         self.retry_log.append({"job": job.name, "task": piece.what, "retry": piece.retries, "failed_on": node,
-                               "cause": message, "retried_on": target})
+                               "cause": message, "retried_on": target, "log": log})
         print(f"retry {piece.retries}/{self.opts.max_retries}: {job.name} {piece.what} failed on node "
               f"{(node or 'unknown')[:12]} ({message}); now on {'node ' + target[:12] if target else 'any node'}",
               flush=True)
         self.submit(piece, target)
+
+    def keep_log(self, piece, node, outcome, text):
+        """Appends an attempt of a piece to its task log (--task-logs DIR: DIR/JOB/PIECE.log, so a retried piece
+        keeps every attempt's): a line with the time, the attempt, its node and outcome, then kelvin's stderr (its
+        progress lines and messages). Returns the file, or None without --task-logs or if it cannot be written
+        (a log never fails a task)."""
+        if not self.opts.task_logs:
+            return None
+        safe = lambda name: re.sub(r"[^\w.,-]+", "_", name)
+        path = os.path.join(self.opts.task_logs, safe(self.jobs[piece.job].name), safe(piece.what) + ".log")
+        stamp = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+        try:
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            with open(path, "a") as f:
+                f.write(f"{stamp} attempt {piece.retries + 1} on node {(node or 'unknown')[:12]}: {outcome}\n{text}")
+        except OSError as e:
+            print(f"task log {path}: {e}", file=sys.stderr, flush=True)
+            return None
+        return path
 
     def where(self, attempt):
         """The node an attempt started on, as the tracker heard it; None if it never started (or is unknown)."""
@@ -614,6 +518,9 @@ def main():
     p.add_argument("--timeout", type=float, default=24 * 3600, help="seconds the whole run may take")
     p.add_argument("--force", action="store_true", help="render jobs whose output exists again")
     p.add_argument("--summary", help="write the outcome, per job and per node, as JSON here")
+    p.add_argument("--task-logs", metavar="DIR",
+                   help="keep each task's log here (DIR/JOB/PIECE.log: every attempt, its node and outcome, kelvin's "
+                        "stderr)")
     p.add_argument("--in-flight", type=int, default=0,
                    help=f"tasks in flight at most (default 0: {IN_FLIGHT_PER_SLOT} per task slot of the alive nodes, "
                         f"at least {IN_FLIGHT_MIN})")

@@ -53,7 +53,7 @@ class FakeRay:
             return piece
         if self.rng.random() < 0.1:  # lost with its worker: transient, retried on another node
             raise self.exceptions.WorkerCrashedError()
-        return b"tile " + piece.what.encode(), NODES[0]["NodeID"], 0.1, 0.05
+        return b"tile " + piece.what.encode(), NODES[0]["NodeID"], 0.1, 0.05, "kelvin's stderr"
 
     def cancel(self, ref, force=False):
         pass
@@ -115,7 +115,8 @@ class WaveTest:
                     "error": None, "done": False, "untileable": None, "command": "render", "args": [],
                     "inputs": {}, "frames": [], "exposure": None} for i in range(jobs)]
         opts = argparse.Namespace(tiles=TILES, threads=1, max_retries=50, task_timeout=1, timeout=1e9, force=False,
-                                  summary=None, in_flight=in_flight, open_jobs=open_jobs)
+                                  summary=None, in_flight=in_flight, open_jobs=open_jobs,
+                                  task_logs=None)
         kelvin_ray.ray = FakeRay(self)
         kelvin_ray.render_tile = Task(self)
         kelvin_ray.Whereabouts = TrackerClass()
