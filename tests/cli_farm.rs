@@ -138,7 +138,8 @@ fn render_log_has_the_start_progress_and_outcome() {
     assert!(lines.last().unwrap().contains("rendered"), "{lines:?}");
     // A failure is logged with its exit code, after the earlier run's lines (the log appends).
     let missing = dir.join("no-such-scene.glb");
-    let out = kelvin(&["render", missing.to_str().unwrap(), "-o", out_exr.to_str().unwrap(), "--log", log.to_str().unwrap()]);
+    let out =
+        kelvin(&["render", missing.to_str().unwrap(), "-o", out_exr.to_str().unwrap(), "--log", log.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2), "{}", text(&out));
     let again = std::fs::read_to_string(&log).unwrap();
     assert!(again.starts_with(&lines.join("\n")), "appended: {again}");

@@ -467,7 +467,11 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     progress.finish();
     let rendered = match rendered {
         Ok(r) => {
-            log.to_file_only(&format!("rendered {} in {:.1} s", args.output.display(), started.elapsed().as_secs_f64()));
+            log.to_file_only(&format!(
+                "rendered {} in {:.1} s",
+                args.output.display(),
+                started.elapsed().as_secs_f64()
+            ));
             r
         }
         Err(e) => {
