@@ -326,13 +326,15 @@ def plant_foreign_tile(ctx, jobs, have):
 def section_resume(ctx):
     """4. The driver killed and restarted: only missing tiles rendered; a foreign staged tile fails its job."""
     sec = Section(ctx, "resume")
-    every = [p for job in kelvin_plan(ctx.kelvin, sec.manifest) for p in pieces(job)]
+    every = [pieces(job) for job in kelvin_plan(ctx.kelvin, sec.manifest)]
     proc, deadline = sec.start(), time.monotonic() + 300
     try:
         while proc.poll() is None and time.monotonic() < deadline:
-            # Preferably while a bake part is staged too (its parts run alongside the tiles and finish quickly).
-            have = [p for p in every if os.path.exists(p)]
-            if len(have) >= 16 or (len(have) >= 4 and any(p.endswith(".kbake") for p in have)):
+            # Staged pieces of jobs not complete (a complete one is merging, and its pieces go): the driver opens
+            # jobs in plan order, a few at a time. Preferably a bake part among them.
+            have = [p for job in every for h in [[p for p in job if os.path.exists(p)]] if len(h) < len(job)
+                    for p in h]
+            if len(have) >= 8 or (len(have) >= 3 and any(p.endswith(".kbake") for p in have)):
                 proc.send_signal(signal.SIGKILL)
                 break
             time.sleep(0.1)
