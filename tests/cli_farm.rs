@@ -2,7 +2,7 @@
 //! (`kelvin batch M --job NAME --frames 11-15`) and does the same work when the manifest gains
 //! jobs, skipping frames a killed attempt finished; farm frame lists (negative frames) reach the
 //! task; its log file, created with its folder, has progress lines a monitor can tail; `render
-//! --frames` creates its output folders.
+//! --frames` creates its output folders; `render --log` logs its start, progress and outcome.
 
 mod common;
 
@@ -121,4 +121,27 @@ fn render_frames_creates_the_output_folders() {
     let out = kelvin(&[&args[..], &[blocked.join("f_#.exr").to_str().unwrap()]].concat());
     assert!(!out.status.success() && text(&out).contains("cannot create its folder"), "{}", text(&out));
     assert!(!text(&out).contains("rendered"), "{}", text(&out));
+}
+
+#[test]
+fn render_log_has_the_start_progress_and_outcome() {
+    let dir = TempDir::new("cli-farm", "render-log");
+    let log = dir.join("logs/new/tile.log");
+    let out_exr = dir.join("tile.exr");
+    let args = ["render", "--size", "8x6", "--spp", "1", "--crop", "0,0,4,6", "-o", out_exr.to_str().unwrap()];
+    let out = kelvin(&[&args[..], &["--log", log.to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", text(&out));
+    let lines = std::fs::read_to_string(&log).unwrap();
+    let lines: Vec<&str> = lines.lines().collect();
+    assert!(lines[0].contains("kelvin render") && lines[0].contains(", pid "), "{lines:?}");
+    assert!(lines.iter().any(|l| l.contains("progress 100%:")), "{lines:?}");
+    assert!(lines.last().unwrap().contains("rendered"), "{lines:?}");
+    // A failure is logged with its exit code, after the earlier run's lines (the log appends).
+    let missing = dir.join("no-such-scene.glb");
+    let out =
+        kelvin(&["render", missing.to_str().unwrap(), "-o", out_exr.to_str().unwrap(), "--log", log.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    let again = std::fs::read_to_string(&log).unwrap();
+    assert!(again.starts_with(&lines.join("\n")), "appended: {again}");
+    assert!(again.lines().last().unwrap().contains("failed (exit code 2)"), "{again}");
 }

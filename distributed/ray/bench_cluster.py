@@ -5,6 +5,13 @@ times; checks that the images are byte-identical.
 
     python bench_cluster.py --kelvin target/release/kelvin [--size 480x270] [--spp 32] [--tiles 16] [--nodes 1,2,3]
         [--rounds 2] [--json-out FILE]
+    python bench_cluster.py --kelvin target/release/kelvin --scale 625 --tiles 16 [--stub] [--nodes 2]
+        [--driver-args "--in-flight 8"]
+
+With --scale JOBS: the driver at farm scale (farm_scale.py), JOBS x --tiles small tasks (64x64 images of the default
+scene at 1 spp) on one cluster of --nodes nodes, submitted in waves; checks every output against a plain render and
+prints the tasks per second, the scheduling overhead per task, the head's CPU per task and its peak memory (driver,
+GCS, raylet, tracker). --stub: the tasks copy tiles rendered beforehand, so they cost Ray's and the driver's work.
 
 Per node count: the single render's wall and CPU seconds, the driver's tiles-and-merge wall time and the tiles'
 CPU seconds; overhead per tile = (CPU of the tiles - CPU of the single render) / tiles; throughput = camera
@@ -22,6 +29,8 @@ import sys
 import tempfile
 import time
 
+import farm_scale
+from kelvin_ray import tile_grid
 from local_cluster import Cluster, check
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -54,6 +63,39 @@ def tiled_render(opts, kelvin, cluster, manifest, work):
         return json.load(f), whole
 
 
+def scale(opts, kelvin):
+    """One run of the driver on JOBS x --tiles small tasks; its figures, and the head's samples over time."""
+    nodes = int(opts.nodes.split(",")[0])
+    work = tempfile.mkdtemp(prefix="kray-scale-", dir="/tmp")
+    cluster = Cluster(os.path.join(os.path.dirname(sys.executable), "ray"), work, workers=nodes - 1)
+    try:
+        manifest = farm_scale.manifest(work, opts.scale, size=opts.scale_size)
+        want = farm_scale.reference(kelvin, work, size=opts.scale_size)
+        if opts.stub:
+            w, h = map(int, opts.scale_size.split("x"))
+            kelvin = farm_scale.stub_kelvin(kelvin, work, tile_grid(w, h, opts.tiles), size=opts.scale_size)
+        cluster.start()
+        code, wall, summary, sampler = farm_scale.run_driver(
+            cluster, kelvin, manifest, os.path.join(work, "summary.json"), os.path.join(work, "driver.log"),
+            "--tiles", str(opts.tiles), *opts.driver_args.split())
+        if code != 0:
+            with open(os.path.join(work, "driver.log")) as log:
+                check(False, f"the driver failed (exit code {code}):\n{log.read()[-3000:]}")
+        same = farm_scale.same_outputs(work, want)
+        check(same == opts.scale, f"{same} of {opts.scale} outputs written")
+        f = farm_scale.figures(summary, sampler, slots=nodes)
+        f["driver_process_wall_s"], f["load"], f["stub"] = wall, os.getloadavg()[0], opts.stub
+        print(f"{nodes} node(s), {opts.scale} jobs x {opts.tiles} tiles{' (stub kelvin)' if opts.stub else ''}, "
+              f"outputs byte-identical: {farm_scale.describe(f)}; driver process {wall:.1f} s; load {f['load']:.1f}",
+              flush=True)
+        if opts.json_out:
+            with open(opts.json_out, "w") as out:
+                json.dump({"args": vars(opts), "figures": f, "samples": sampler.samples}, out, indent=1)
+    finally:
+        cluster.stop()
+        shutil.rmtree(work, ignore_errors=True)
+
+
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("--kelvin", required=True)
@@ -63,8 +105,15 @@ def main():
     p.add_argument("--nodes", default="1,2,3")
     p.add_argument("--rounds", type=int, default=2)
     p.add_argument("--json-out")
+    p.add_argument("--scale", type=int, help="jobs of the farm-scale run (tasks: jobs x --tiles)")
+    p.add_argument("--scale-size", default="64x64", help="image size of the farm-scale jobs")
+    p.add_argument("--stub", action="store_true",
+                   help="farm scale: tasks copy tiles rendered beforehand (the driver's and Ray's cost alone)")
+    p.add_argument("--driver-args", default="", help="more options for kelvin_ray.py (--in-flight 8, say)")
     opts = p.parse_args()
     kelvin = os.path.abspath(opts.kelvin)
+    if opts.scale:
+        return scale(opts, kelvin)
     w, h = map(int, opts.size.split("x"))
     samples = w * h * opts.spp
     rows = []

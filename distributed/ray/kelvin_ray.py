@@ -40,19 +40,24 @@ at the same paths on every node (as in one container image); tiles travel throug
 checks first that its node's binary is the driver's and its scene and environment map are the ones planned (their
 SHA-256, from the plan's `inputs`): a node that differs, or lacks one, is a node failure, retried elsewhere.
 Without --address a local Ray cluster is started for the run.
+
+Work goes out in waves, so that the head's memory does not grow with the manifest: at most --in-flight tasks are
+submitted and not yet handled (default: two per task slot of the alive nodes), taken in plan order; a job is opened
+(its pieces made, its staged ones checked) only when the window has room for it and fewer than --open-jobs are
+open, and forgotten once merged. --task-logs DIR keeps every attempt of every task: its node, its outcome and
+kelvin's stderr (progress lines, messages), in DIR/JOB/PIECE.log.
 """
 
 import argparse
 import json
-import math
 import os
-import secrets
+import re
+import resource
 import shutil
-import socket
 import sys
 import tarfile
 import time
-from dataclasses import dataclass, field
+from collections import deque
 
 import ray
 from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
@@ -60,6 +65,7 @@ from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 import kelvin_exit
 import kelvin_staged
 import kelvin_tasks
+from kelvin_jobs import Job, Piece, pieces_of, remove_temporaries, tile_grid, write_durably  # noqa: F401 (tests)
 from kelvin_tasks import TaskFault, TileFailed, Whereabouts, bake_part, digest, render_chunk, render_tile
 
 # The tasks' code travels with them, so nodes need not have this folder on their path.
@@ -69,31 +75,14 @@ ray.cloudpickle.register_pickle_by_value(kelvin_tasks)
 
 # How long one ray.wait may block: completions are handled in batches this often at most.
 WAIT_SECONDS = 0.5
+# With --in-flight 0: tasks in flight per task slot of the alive nodes (one running, one queued behind it, so that
+# a slot never waits for the driver), and at least this many in all.
+IN_FLIGHT_PER_SLOT, IN_FLIGHT_MIN = 2, 8
+# How often the automatic window looks at the cluster again (nodes join and leave).
+SLOTS_EVERY = 10.0
 # Seconds the driver's own kelvin commands may take: `kelvin batch --plan` (it hashes every input), and a merge.
 PLAN_TIMEOUT = 600
 MERGE_TIMEOUT = 600
-
-
-def tile_grid(width, height, tiles):
-    """Crops (x0, y0, x1, y1) of a cols x rows grid of about `tiles` tiles, as square as the image allows."""
-    best = None
-    for rows in range(1, tiles + 1):
-        if tiles % rows:
-            continue
-        cols = tiles // rows
-        # How far a tile is from square, in log ratio.
-        score = abs(math.log((width / cols) / (height / rows)))
-        if best is None or score < best[0]:
-            best = (score, cols, rows)
-    _, cols, rows = best
-    cols, rows = min(cols, width), min(rows, height)
-    xs = [i * width // cols for i in range(cols + 1)]
-    ys = [j * height // rows for j in range(rows + 1)]
-    return [(xs[i], ys[j], xs[i + 1], ys[j + 1]) for j in range(rows) for i in range(cols)]
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# Driver
 
 
 def plan(kelvin, manifest):
@@ -119,107 +108,6 @@ def classify(err):
         return False, f"{type(err.cause).__name__}: {err.cause}", None
     text = str(err).strip()
     return True, f"{type(err).__name__}: {text.splitlines()[-1] if text else ''}", None
-
-
-def write_durably(path, data):
-    """Writes `data` under a temporary name, fsyncs and renames it to `path`, then fsyncs the folder: a file
-    under its final name is always whole, whenever the driver or the machine stops."""
-    folder = os.path.dirname(path)
-    os.makedirs(folder, exist_ok=True)
-    # Unique to this host, process and call: two drivers on storage shared between machines never share one.
-    tmp = os.path.join(folder, f".{os.path.basename(path)}.{socket.gethostname()}.{os.getpid()}."
-                               f"{secrets.token_hex(8)}.tmp")
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-    fd = os.open(folder, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-@dataclass
-class Piece:
-    """One task's worth of a job: a tile of a render or a part of a bake, and its staged file."""
-
-    job: int  # plan position
-    index: int  # in the job's pieces
-    what: str  # "tile X0,Y0,X1,Y1" or "part K/N"
-    spec: tuple  # the crop, or (K, N)
-    path: str  # where the finished piece is staged
-    failed_on: set = field(default_factory=set)  # nodes it failed on
-    retries: int = 0
-
-    @property
-    def kind(self):
-        return self.what.split(" ")[0]  # "tile", "part" or "frames"
-
-    def staged(self, build, planned, staging):
-        """Whether the piece is staged and sound: it decodes, and records this piece, this build and files the
-        plan lists (kelvin_staged.check). One that is not is quarantined (moved aside with the reason)."""
-        if not os.path.exists(self.path):
-            return False
-        why = kelvin_staged.check("chunk" if self.kind == "frames" else self.kind, self.path, self.spec, build,
-                                  planned)
-        if why:
-            where = kelvin_staged.quarantine(staging, self.path, f"{self.what}: {why}")
-            print(f"{self.what} staged at {self.path} {why}: moved to {where}, rendered again", flush=True)
-            return False
-        return True
-
-
-@dataclass
-class Job:
-    index: int  # plan position: the frames of one manifest job share its manifest index
-    entry: dict  # the plan's entry
-    staging: str = ""  # folder of the staged pieces
-    pieces: list = field(default_factory=list)
-    have: int = 0  # pieces staged
-    status: tuple = None  # ("rendered" | "skipped" | "FAILED", detail) once decided
-
-    @property
-    def name(self):
-        return self.entry["name"]
-
-    @property
-    def bake(self):
-        return self.entry.get("command") == "bake"
-
-    @property
-    def chunk(self):
-        """A chunk of frames: rendered whole, in one process, as one task."""
-        return len(self.entry.get("frames") or []) > 1
-
-
-def pieces_of(i, job, tiles):
-    """The job's tiles (or bake parts) and where each is staged."""
-    entry = job.entry
-    if job.bake:
-        n = entry["parts"]
-        job.staging = entry["parts_dir"]
-        return [Piece(i, k, f"part {k + 1}/{n}", (k + 1, n), os.path.join(job.staging, f"part-{k + 1}-of-{n}.kbake"))
-                for k in range(n)]
-    if job.chunk:
-        # Beside the job's output pattern, one folder per chunk (the chunks of a job share the pattern).
-        job.staging = f"{entry['output']}.chunk-{entry['frames'][0]}-{entry['frames'][-1]}"
-        frames = entry["frames"]
-        return [Piece(i, 0, f"frames {frames[0]}-{frames[-1]}", (), os.path.join(job.staging, "frames.tar"))]
-    # A job whose tiles would not merge into its image (ReSTIR's reuse) renders as one tile.
-    crops = tile_grid(entry["width"], entry["height"], 1 if entry.get("untileable") else tiles)
-    job.staging = entry["output"] + ".tiles"
-    return [Piece(i, t, "tile " + ",".join(map(str, c)), c, os.path.join(job.staging, "_".join(map(str, c)) + ".exr"))
-            for t, c in enumerate(crops)]
-
-
-def remove_temporaries(folder):
-    """Removes half-written pieces a killed driver left (their names end in .tmp)."""
-    if os.path.isdir(folder):
-        for name in os.listdir(folder):
-            if name.startswith(".") and name.endswith(".tmp"):
-                os.remove(os.path.join(folder, name))
 
 
 def merge(kelvin, job):
@@ -262,17 +150,30 @@ def check_threads(threads):
 
 
 class Farm:
-    """The driver's state: the jobs, the tasks in flight, the retries, and the figures for the summary."""
+    """The driver's state: the jobs, the tasks in flight, the retries, and the figures for the summary.
+
+    Work is submitted in waves: at most `window` tasks are in flight (submitted and not yet handled), taken in plan
+    order, and a job is opened (its staged pieces checked, its missing ones queued) only when the window has room
+    for its pieces and fewer than --open-jobs jobs are open. So the head holds the results of at most `window`
+    tasks, the task specifications of as many, and staged pieces of the open jobs only, however long the
+    manifest; a finished job's pieces are forgotten."""
 
     def __init__(self, kelvin, jobs, opts):
         self.kelvin, self.opts = kelvin, opts
         self.build = digest(kelvin)
         self.jobs = [Job(i, entry) for i, entry in enumerate(jobs)]
         self.pending = {}  # object ref -> (piece, pinned node or None, attempt id)
+        self.queue = deque()  # jobs not opened yet, in plan order
+        self.open = set()  # jobs opened and not decided
+        self.waiting = deque()  # pieces of open jobs not submitted yet, in order
         self.pinned = {}  # node -> tasks pinned there in flight, to spread retries
         self.per_node = {}  # node id -> [tiles, task seconds, CPU seconds]
         self.retry_log = []  # one entry per retry: task, node, cause
-        self.tasks = self.done = self.resumed = 0
+        self.handled = []  # attempts the tracker may forget
+        self.tasks = self.done = self.resumed = self.todo = 0
+        self.staged_now = 0  # staged pieces of the open jobs
+        self.peak = {"in_flight": 0, "open_jobs": 0, "staged": 0}
+        self.slots_at, self.auto_window = -SLOTS_EVERY, IN_FLIGHT_MIN
         self.start = time.monotonic()
         here = ray.get_runtime_context().get_node_id()
         # On the driver's node, which outlives the nodes whose tasks it tracks.
@@ -281,36 +182,72 @@ class Farm:
     # -- starting
 
     def plan_jobs(self):
-        """Decides what each job needs: nothing (failed in the plan, or finished), a merge of what is staged,
-        or tasks for its missing pieces."""
+        """Decides what each job needs: nothing (failed in the plan, or finished), or to be opened in its turn."""
         for i, job in enumerate(self.jobs):
             entry = job.entry
             if entry["error"]:
                 job.status = ("FAILED", entry["error"])
                 continue
-            job.pieces = pieces_of(i, job, self.opts.tiles)
+            # Counted, and the staging folder named; the pieces themselves are made when the job opens.
+            count = len(pieces_of(i, job, self.opts.tiles))
             if entry["done"] and not self.opts.force:
                 job.status = ("skipped", f"{entry['output']} exists")
                 # A driver killed between a merge and its clean-up leaves the staged pieces behind.
                 shutil.rmtree(job.staging, ignore_errors=True)
                 continue
-            if entry.get("untileable") and not job.chunk:
-                print(f"{job.name}: one tile: {entry['untileable']}", flush=True)
-            remove_temporaries(job.staging)
-            if job.bake:
-                self.quarantine_other_splits(job)
-            planned = job.entry.get("inputs", {})
-            missing = [p for p in job.pieces if not p.staged(self.build, planned, job.staging)]
-            job.have = len(job.pieces) - len(missing)
-            self.resumed += job.have
-            if job.have:
-                print(f"{job.name}: {job.have} of {len(job.pieces)} staged in "
-                      f"{job.staging}, not rendered again", flush=True)
-            for piece in missing:
-                self.submit(piece)
-            if not missing:
-                self.finish(job)
-        self.tasks = len(self.pending)
+            self.todo += count
+            self.queue.append(job)
+
+    def open_job(self, job):
+        """Makes the job's pieces, keeps the sound staged ones and queues the others (merging at once if none
+        is missing)."""
+        job.pieces = pieces_of(job.index, job, self.opts.tiles)
+        self.open.add(job.index)
+        if job.entry.get("untileable") and not job.chunk:
+            print(f"{job.name}: one tile: {job.entry['untileable']}", flush=True)
+        remove_temporaries(job.staging)
+        if job.bake:
+            self.quarantine_other_splits(job)
+        planned = job.entry.get("inputs", {})
+        missing = [p for p in job.pieces if not p.staged(self.build, planned, job.staging)]
+        job.have = len(job.pieces) - len(missing)
+        self.resumed += job.have
+        self.staged_now += job.have
+        if job.have:
+            print(f"{job.name}: {job.have} of {len(job.pieces)} staged in "
+                  f"{job.staging}, not rendered again", flush=True)
+        self.waiting.extend(missing)
+        self.note_peaks()
+        if not missing:
+            self.finish(job)
+
+    def window(self):
+        """Tasks that may be in flight: --in-flight, or IN_FLIGHT_PER_SLOT per task slot of the alive nodes."""
+        if self.opts.in_flight:
+            return self.opts.in_flight
+        if time.monotonic() - self.slots_at >= SLOTS_EVERY:
+            self.slots_at = time.monotonic()
+            slots = sum(int(n["Resources"].get("CPU", 0) // self.opts.threads) for n in ray.nodes() if n["Alive"])
+            self.auto_window = max(IN_FLIGHT_MIN, IN_FLIGHT_PER_SLOT * slots)
+        return self.auto_window
+
+    def fill(self):
+        """Submits the next pieces, in plan order, while the window has room; opens the next job when the open
+        ones have nothing left to submit and fewer than --open-jobs are open."""
+        room = self.window()
+        while len(self.pending) < room:
+            if self.waiting:
+                piece = self.waiting.popleft()
+                if self.jobs[piece.job].status is None:  # not failed meanwhile
+                    self.submit(piece)
+                continue
+            if not self.queue or (self.opts.open_jobs and len(self.open) >= self.opts.open_jobs):
+                break
+            self.open_job(self.queue.popleft())
+
+    def note_peaks(self):
+        for key, now in (("in_flight", len(self.pending)), ("open_jobs", len(self.open)), ("staged", self.staged_now)):
+            self.peak[key] = max(self.peak[key], now)
 
     def quarantine_other_splits(self, job):
         """Moves aside the part files of another split of the bake (`kelvin bake --merge` reads every part file
@@ -343,23 +280,32 @@ class Farm:
             task = render_tile.options(num_cpus=o.threads, max_retries=0, scheduling_strategy=strategy)
             ref = task.remote(self.kelvin, inputs, job.entry["args"], piece.spec, o.threads, o.task_timeout, self.tracker, attempt)
         self.pending[ref] = (piece, node, attempt)
+        self.tasks += piece.retries == 0
         if node:
             self.pinned[node] = self.pinned.get(node, 0) + 1
+        self.note_peaks()
 
     # -- the loop
 
     def run(self):
-        """Handles finished tasks in batches until none is left or the time is up. One ray.wait per batch for
-        all of them (not one per completion), so the loop's cost grows with the tasks, not their square."""
+        """Handles finished tasks in batches and refills the window, until nothing is left or the time is up.
+        One ray.wait per batch (back when a quarter of the window is done, or after WAIT_SECONDS), so the loop
+        costs O(window) per batch, whatever the length of the manifest."""
         deadline = self.start + self.opts.timeout
+        self.fill()
         while self.pending:
             left = deadline - time.monotonic()
             if left <= 0:
                 self.time_out()
                 break
-            ready, _ = ray.wait(list(self.pending), num_returns=len(self.pending), timeout=min(left, WAIT_SECONDS))
+            refs = list(self.pending)
+            ready, _ = ray.wait(refs, num_returns=max(1, len(refs) // 4), timeout=min(left, WAIT_SECONDS))
             for ref in ready:
                 self.handle(ref)
+            if self.handled:  # one call per batch; the tracker would otherwise grow with every task of the run
+                self.tracker.forget.remote(self.handled)
+                self.handled = []
+            self.fill()
 
     def handle(self, ref):
         """Stages a finished piece (merging its job when it was the last), or deals with its failure."""
@@ -368,12 +314,16 @@ class Farm:
             self.pinned[pinned] -= 1
         job = self.jobs[piece.job]
         if job.status:  # the job failed already; its other tasks are of no use
+            self.handled.append(attempt)
             return
         try:
-            data, node, secs, cpu = ray.get(ref)
+            data, node, secs, cpu, log = ray.get(ref)
         except Exception as err:  # a task's failure is its job's, not the run's
             self.failed(piece, err, pinned, attempt)
+            self.handled.append(attempt)
             return
+        self.handled.append(attempt)
+        self.keep_log(piece, node, f"done in {secs:.2f} s", log)
         try:
             write_durably(piece.path, data)
         except OSError as e:  # the driver's disk: no other node would help
@@ -383,7 +333,9 @@ class Farm:
         stats = self.per_node.setdefault(node, [0, 0.0, 0.0])
         stats[0], stats[1], stats[2] = stats[0] + 1, stats[1] + secs, stats[2] + cpu
         job.have += 1
-        print(f"[{time.monotonic() - self.start:6.1f} s] tiles {self.done}/{self.tasks}: {job.name} "
+        self.staged_now += 1
+        self.note_peaks()
+        print(f"[{time.monotonic() - self.start:6.1f} s] tiles {self.done}/{self.todo - self.resumed}: {job.name} "
               f"{job.have}/{len(job.pieces)}", flush=True)
         if job.have == len(job.pieces):
             self.finish(job)
@@ -392,23 +344,45 @@ class Farm:
         """Retries a transient failure away from the nodes it failed on; fails the job on a permanent one."""
         job = self.jobs[piece.job]
         transient, message, node = classify(err)
-        if not transient:
-            self.fail(job, f"job {job.index} ({job.name}): {message}")
-            return
         node = node or self.where(attempt) or pinned
+        log = self.keep_log(piece, node, f"failed: {message}", getattr(getattr(err, "cause", None), "log", ""))
+        seen = f" (its log: {log})" if log else ""
+        if not transient:
+            self.fail(job, f"job {job.index} ({job.name}): {message}{seen}")
+            return
         if node:
             piece.failed_on.add(node)
         if piece.retries >= self.opts.max_retries:
-            self.fail(job, f"job {job.index} ({job.name}): {piece.what} failed {piece.retries + 1} times, last: {message}")
+            self.fail(job, f"job {job.index} ({job.name}): {piece.what} failed {piece.retries + 1} times, last: "
+                           f"{message}{seen}")
             return
         piece.retries += 1
         target = self.other_node(piece.failed_on)
         self.retry_log.append({"job": job.name, "task": piece.what, "retry": piece.retries, "failed_on": node,
-                               "cause": message, "retried_on": target})
+                               "cause": message, "retried_on": target, "log": log})
         print(f"retry {piece.retries}/{self.opts.max_retries}: {job.name} {piece.what} failed on node "
               f"{(node or 'unknown')[:12]} ({message}); now on {'node ' + target[:12] if target else 'any node'}",
               flush=True)
         self.submit(piece, target)
+
+    def keep_log(self, piece, node, outcome, text):
+        """Appends an attempt of a piece to its task log (--task-logs DIR: DIR/JOB/PIECE.log, so a retried piece
+        keeps every attempt's): a line with the time, the attempt, its node and outcome, then kelvin's stderr (its
+        progress lines and messages). Returns the file, or None without --task-logs or if it cannot be written
+        (a log never fails a task)."""
+        if not self.opts.task_logs:
+            return None
+        safe = lambda name: re.sub(r"[^\w.,-]+", "_", name)
+        path = os.path.join(self.opts.task_logs, safe(self.jobs[piece.job].name), safe(piece.what) + ".log")
+        stamp = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+        try:
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            with open(path, "a") as f:
+                f.write(f"{stamp} attempt {piece.retries + 1} on node {(node or 'unknown')[:12]}: {outcome}\n{text}")
+        except OSError as e:
+            print(f"task log {path}: {e}", file=sys.stderr, flush=True)
+            return None
+        return path
 
     def where(self, attempt):
         """The node an attempt started on, as the tracker heard it; None if it never started (or is unknown)."""
@@ -434,6 +408,7 @@ class Farm:
         for ref, (piece, _, _) in list(self.pending.items()):
             if piece.job == job.index:
                 ray.cancel(ref)
+        self.close(job)
 
     def finish(self, job):
         """Merges a job whose pieces are all staged. A refused merge (pieces of other settings, say, that the
@@ -448,6 +423,7 @@ class Farm:
         if error and error.transient:
             job.status = ("FAILED", f"job {job.index} ({job.name}): {error}; its staged pieces stay in "
                                     f"{job.staging} for a rerun")
+            self.close(job)
             return
         if error:
             for piece in job.pieces:
@@ -458,14 +434,22 @@ class Farm:
         else:
             job.status = ("rendered", job.entry["output"])
         shutil.rmtree(job.staging, ignore_errors=True)
+        self.close(job)
+
+    def close(self, job):
+        """A decided job leaves the window: its pieces are forgotten (their files stay where finish or fail left
+        them), so that the driver's memory does not grow with the finished jobs."""
+        self.open.discard(job.index)
+        self.staged_now -= job.have
+        job.pieces = []
 
     def time_out(self):
-        """Cancels what is left; the staged pieces stay for a rerun."""
-        for ref, (piece, _, _) in self.pending.items():
+        """Cancels what is left; jobs not decided (opened or not) fail, their staged pieces kept for a rerun."""
+        for ref in self.pending:
             ray.cancel(ref, force=True)
-            job = self.jobs[piece.job]
-            job.status = job.status or ("FAILED", f"timed out after {self.opts.timeout} s (finished tiles stay staged)")
         self.pending.clear()
+        for job in self.jobs:
+            job.status = job.status or ("FAILED", f"timed out after {self.opts.timeout} s (finished tiles stay staged)")
 
     # -- the outcome
 
@@ -478,7 +462,8 @@ class Farm:
         states = [(job.status or ("FAILED",))[0] for job in self.jobs]
         counts = {s: states.count(s) for s in ("rendered", "skipped", "FAILED")}
         print(f"{len(self.jobs)} jobs: {counts['rendered']} rendered, {counts['skipped']} skipped, {counts['FAILED']} failed")
-        print(f"{self.tasks} tiles in {wall:.2f} s ({self.resumed} staged before, {len(self.retry_log)} retries)")
+        print(f"{self.tasks} tiles in {wall:.2f} s ({self.resumed} staged before, {len(self.retry_log)} retries; at most "
+              f"{self.peak['in_flight']} in flight, {self.peak['open_jobs']} jobs open, {self.peak['staged']} staged)")
         for node, (n, secs, cpu) in sorted(self.per_node.items()):
             print(f"node {node[:12]}: {n} tiles, {secs:.2f} s in tasks ({cpu:.2f} CPU s), {n / wall:.2f} tiles/s")
         if self.opts.summary:
@@ -495,6 +480,12 @@ class Farm:
             "jobs": {str(i): {"status": s[0], "detail": s[1]} for i, job in enumerate(self.jobs)
                      for s in [job.status or ("FAILED", "not finished")]},
             "nodes": {k: {"tiles": v[0], "task_seconds": v[1], "cpu_seconds": v[2]} for k, v in self.per_node.items()},
+            # The waves' bounds (0: none given) and the most the run held at once.
+            "bounds": {"in_flight": self.opts.in_flight or self.auto_window, "open_jobs": self.opts.open_jobs},
+            "peak": self.peak,
+            # The driver process alone (not the merges it ran): its CPU seconds and peak resident memory.
+            "driver_cpu_seconds": (lambda t: t.user + t.system)(os.times()),
+            "driver_max_rss_kb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,
         }
         with open(self.opts.summary, "w") as f:
             json.dump(summary, f, indent=2)
@@ -527,11 +518,22 @@ def main():
     p.add_argument("--timeout", type=float, default=24 * 3600, help="seconds the whole run may take")
     p.add_argument("--force", action="store_true", help="render jobs whose output exists again")
     p.add_argument("--summary", help="write the outcome, per job and per node, as JSON here")
+    p.add_argument("--task-logs", metavar="DIR",
+                   help="keep each task's log here (DIR/JOB/PIECE.log: every attempt, its node and outcome, kelvin's "
+                        "stderr)")
+    p.add_argument("--in-flight", type=int, default=0,
+                   help=f"tasks in flight at most (default 0: {IN_FLIGHT_PER_SLOT} per task slot of the alive nodes, "
+                        f"at least {IN_FLIGHT_MIN})")
+    p.add_argument("--open-jobs", type=int, default=0,
+                   help="jobs open at most (tasks submitted or pieces staged, not merged); default 0: as many as the "
+                        "in-flight tasks need")
     opts = p.parse_args()
     if opts.tiles < 1:
         p.error("--tiles must be at least 1")
     if opts.threads < 1:
         p.error("--threads must be at least 1")
+    if opts.in_flight < 0 or opts.open_jobs < 0:
+        p.error("--in-flight and --open-jobs must be 0 (automatic) or more")
     if os.sep not in opts.kelvin:
         opts.kelvin = shutil.which(opts.kelvin) or opts.kelvin
     sys.exit(run(opts))

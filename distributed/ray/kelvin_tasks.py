@@ -28,19 +28,31 @@ import ray
 import kelvin_exit
 
 
+# The most of a kelvin's stderr a task sends back (its end): progress lines are a few kB, a runaway log is cut.
+LOG_BYTES = 64 << 10
+
+
 class TileFailed(Exception):
     """kelvin itself refused or failed a tile (bad input or settings, a bug): retrying would fail the same way,
-    anywhere."""
+    anywhere. Carries kelvin's stderr (`log`) for the driver's task logs."""
+
+    def __init__(self, message, log=""):
+        super().__init__(message, log)
+        self.message, self.log = message, log
+
+    def __str__(self):
+        return self.message
 
 
 class TaskFault(Exception):
     """The tile failed for a reason of its node, not of the job (kelvin killed, interrupted, timed out or not
     executable, an environment or I/O failure such as a full disk, or the node's binary, scene or map not the
-    planned file): worth retrying elsewhere. Carries the node so that the driver can avoid it."""
+    planned file): worth retrying elsewhere. Carries the node so that the driver can avoid it, and kelvin's
+    stderr (`log`, empty if it never ran)."""
 
-    def __init__(self, node, message):
-        super().__init__(node, message)
-        self.node, self.message = node, message
+    def __init__(self, node, message, log=""):
+        super().__init__(node, message, log)
+        self.node, self.message, self.log = node, message, log
 
     def __str__(self):
         return self.message
@@ -60,6 +72,11 @@ class Whereabouts:
     def node_of(self, attempt):
         return self.nodes.get(attempt)
 
+    def forget(self, attempts):
+        """Drops handled attempts, so that the actor holds those in flight only, however many tasks a run has."""
+        for attempt in attempts:
+            self.nodes.pop(attempt, None)
+
 
 def die_with_parent():
     """Runs in the kelvin child before exec: the kernel kills kelvin when its worker dies, so that a killed
@@ -69,16 +86,23 @@ def die_with_parent():
 
 
 def run_kelvin(cmd, what, timeout, node):
-    """Runs one kelvin command; raises TaskFault for failures of the node and TileFailed for kelvin's own, told
-    apart by kelvin's exit code alone (kelvin_exit)."""
+    """Runs one kelvin command and returns its stderr (the end of it); raises TaskFault for failures of the node
+    and TileFailed for kelvin's own, told apart by kelvin's exit code alone (kelvin_exit)."""
     preexec = die_with_parent if sys.platform.startswith("linux") else None
     try:
         run = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, preexec_fn=preexec)
-    except subprocess.TimeoutExpired:
-        raise TaskFault(node, f"{what}: kelvin took over {timeout} s")
+    except subprocess.TimeoutExpired as e:
+        raise TaskFault(node, f"{what}: kelvin took over {timeout} s", tail(e.stderr))
     except OSError as e:
         raise TaskFault(node, f"{what}: cannot run {cmd[0]}: {e}")
     check_exit(run.returncode, run.stderr, what, node)
+    return tail(run.stderr)
+
+
+def tail(text):
+    if isinstance(text, bytes):
+        text = text.decode(errors="replace")
+    return (text or "")[-LOG_BYTES:]
 
 
 def check_exit(returncode, stderr, what, node):
@@ -91,8 +115,8 @@ def check_exit(returncode, stderr, what, node):
     last = lines[-1] if lines else "no message"
     message = f"{what}: kelvin {kelvin_exit.describe(returncode)}: {last}"
     if kelvin_exit.is_transient(returncode):
-        raise TaskFault(node, message)
-    raise TileFailed(message)
+        raise TaskFault(node, message, tail(stderr))
+    raise TileFailed(message, tail(stderr))
 
 
 # The digests this worker process has computed, by (path, inode, size, modification time): a file is hashed once per
@@ -139,15 +163,15 @@ def report_start(tracker, attempt):
 def run_task(what, kelvin_args, collect, inputs, timeout, tracker, attempt):
     """What every task does: reports its node, checks the node's files, runs kelvin with `kelvin_args(tmp)` in a
     temporary folder, checks the files again (not changed while kelvin read them) and returns (`collect(tmp)`, the
-    bytes to send back, node, seconds, kelvin's CPU seconds)."""
+    bytes to send back, node, seconds, kelvin's CPU seconds, kelvin's stderr)."""
     start, cpu = time.monotonic(), cpu_seconds()
     node = report_start(tracker, attempt)
     check_inputs(inputs, node, what)
     try:
         with tempfile.TemporaryDirectory(prefix="kelvin-task-") as tmp:
-            run_kelvin(kelvin_args(tmp), what, timeout, node)
+            log = run_kelvin(kelvin_args(tmp), what, timeout, node)
             check_inputs(inputs, node, what)
-            return collect(tmp), node, time.monotonic() - start, cpu_seconds() - cpu
+            return collect(tmp), node, time.monotonic() - start, cpu_seconds() - cpu, log
     except OSError as e:  # the node's temporary disk, not the job
         raise TaskFault(node, f"{what}: {e}")
 

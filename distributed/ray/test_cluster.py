@@ -13,7 +13,7 @@
    tiles on the head and the images are still byte-identical.
 3. The same jobs with a kelvin that dies on the second node (a wrapper that kills itself with SIGKILL for a render,
    exits 127 for a bake, when the second node's environment says so): every tile that ran there is retried on the
-   head, and the summary shows those retries. (Before it, and before 5, a task pinned to the second node must run
+   head, the summary shows those retries, and each retried tile's task log (--task-logs) keeps every attempt. (Before it, and before 5, a task pinned to the second node must run
    there: a node that Ray has not recovered from section 2's kills in 60 s is replaced by a fresh one.)
 4. The driver is killed (SIGKILL) once some tiles are staged, a tile of another seed is planted among one job's
    staged tiles, and the driver is run again: it renders only the missing tiles, the planted tile's job fails
@@ -21,7 +21,9 @@
 5. The scene file changes while its job runs (as on a node that holds another copy): every later tile fails its
    input check on both nodes, the job fails after its retries and keeps its finished tiles staged; with the scene
    restored, a rerun renders only the missing tiles, byte-identical.
-6. Last, as it leaves one node: the whole second node (raylet, workers, kelvin) is killed with SIGKILL mid-run;
+6. 12 jobs of 16 small tiles in waves (the automatic window of 8 tasks, --open-jobs 2): the tiles staged on disk,
+   counted from outside, never exceed 2 jobs' worth, the tasks in flight the window; every output is byte-identical.
+7. Last, as it leaves one node: the whole second node (raylet, workers, kelvin) is killed with SIGKILL mid-run;
    its tiles are retried on the head and every output is byte-identical.
 
 Every wait is bounded. The cluster runs in its own temporary folder and is stopped at the end, also when a
@@ -45,6 +47,7 @@ LAMP = os.path.join(REPO, "tests/data/gltf/kelvin/animated_lamp.gltf")
 sys.path.insert(0, HERE)
 from kelvin_ray import tile_grid  # noqa: E402  (the driver's grid, to count the tiles of a job)
 from local_cluster import SECOND_NODE_ENV, Cluster, check, processes  # noqa: E402
+import farm_scale  # noqa: E402
 
 
 
@@ -245,8 +248,8 @@ def broken_kelvin(ctx):
     path = os.path.join(ctx.work, "kelvin-broken-on-second-node")
     with open(path, "w") as f:
         f.write(f'#!/bin/sh\nif [ -n "${SECOND_NODE_ENV}" ]; then\n'
-                f'  if [ "$1" = bake ]; then exit 127; fi\n'
-                f'  for a in "$@"; do case "$a" in 0,*) exit 127;; esac; done\n'
+                f'  if [ "$1" = bake ]; then echo "no kelvin on this node" >&2; exit 127; fi\n'
+                f'  for a in "$@"; do case "$a" in 0,*) echo "no kelvin on this node" >&2; exit 127;; esac; done\n'
                 f'  kill -9 $$\nfi\nexec {ctx.kelvin} "$@"\n')
     os.chmod(path, 0o755)
     return path
@@ -270,18 +273,28 @@ def section_broken_binary(ctx):
     """3. kelvin dies on the second node: every tile that ran there is retried on the head."""
     second_node_back(ctx)
     sec = Section(ctx, "broken", kelvin=broken_kelvin(ctx))
-    code, out = sec.run()
+    code, out = sec.run("--task-logs", os.path.join(sec.folder, "logs"))
     show(out)
     check(code == 0, f"the run with a broken second node failed: exit code {code}")
     same_images(sec.refs)
     result = sec.summary()
     kinds = retries_from_second(ctx, result, causes=["killed by SIGKILL", "exit code 127"])
+    # Each retried tile's log keeps every attempt: the failed ones (with what the broken kelvin printed) and
+    # the last, done, with kelvin's progress lines.
+    for r in result["retry_log"]:
+        with open(r["log"]) as f:
+            log = f.read()
+        check(f"on node {ctx.ids['second'][:12]}: failed: " in log, f"{r['log']}: {log}")
+        check("exit code 127" not in r["cause"] or "no kelvin on this node" in log, f"{r['log']}: {log}")
+        if r["task"].startswith("tile"):
+            done = log[log.rindex(" attempt "):]
+            check(f"on node {ctx.ids['head'][:12]}: done in " in done and "progress 100%" in done, f"{r['log']}: {log}")
     check(all(r["failed_on"] == ctx.ids["second"] for r in result["retry_log"]), "the failing node is known")
     check(set(result["nodes"]) == {ctx.ids["head"]}, f"tiles succeed on the head only: {result['nodes']}")
     check(result["nodes"][ctx.ids["head"]]["tiles"] == ctx.tasks, f"{result['nodes']}")
     check(len(kinds) == 2, f"both kinds of death retried: {kinds}")
-    print(f"3. kelvin broken on the second node: {result['retries']} retries on the head {kinds}; outputs "
-          f"byte-identical ({sec.elapsed()})", flush=True)
+    print(f"3. kelvin broken on the second node: {result['retries']} retries on the head {kinds}, each tile's "
+          f"attempts in its task log; outputs byte-identical ({sec.elapsed()})", flush=True)
 
 
 def staged(jobs):
@@ -313,13 +326,15 @@ def plant_foreign_tile(ctx, jobs, have):
 def section_resume(ctx):
     """4. The driver killed and restarted: only missing tiles rendered; a foreign staged tile fails its job."""
     sec = Section(ctx, "resume")
-    every = [p for job in kelvin_plan(ctx.kelvin, sec.manifest) for p in pieces(job)]
+    every = [pieces(job) for job in kelvin_plan(ctx.kelvin, sec.manifest)]
     proc, deadline = sec.start(), time.monotonic() + 300
     try:
         while proc.poll() is None and time.monotonic() < deadline:
-            # Preferably while a bake part is staged too (its parts run alongside the tiles and finish quickly).
-            have = [p for p in every if os.path.exists(p)]
-            if len(have) >= 16 or (len(have) >= 4 and any(p.endswith(".kbake") for p in have)):
+            # Staged pieces of jobs not complete (a complete one is merging, and its pieces go): the driver opens
+            # jobs in plan order, a few at a time. Preferably a bake part among them.
+            have = [p for job in every for h in [[p for p in job if os.path.exists(p)]] if len(h) < len(job)
+                    for p in h]
+            if len(have) >= 8 or (len(have) >= 3 and any(p.endswith(".kbake") for p in have)):
                 proc.send_signal(signal.SIGKILL)
                 break
             time.sleep(0.1)
@@ -420,8 +435,32 @@ def section_changed_scene(ctx):
           flush=True)
 
 
+def section_waves(ctx):
+    """6. Many small tasks in waves (the automatic window, at most 2 jobs open): the tiles staged on disk, counted
+    from outside every half second, stay within 2 jobs' worth, the driver's tasks in flight within its window; every
+    output is a plain render's bytes. Prints the head's memory and the cost per task."""
+    folder = os.path.join(ctx.work, "waves")
+    os.makedirs(folder)
+    jobs, tiles = 12, 16
+    manifest = farm_scale.manifest(folder, jobs)
+    want = farm_scale.reference(ctx.kelvin, folder)
+    started = time.monotonic()
+    code, wall, summary, sampler = farm_scale.run_driver(
+        ctx.cluster, ctx.kelvin, manifest, os.path.join(folder, "summary.json"), os.path.join(folder, "driver.log"),
+        "--tiles", str(tiles), "--open-jobs", "2", timeout=300)
+    check(code == 0, f"the waves run failed: exit code {code}")
+    check(farm_scale.same_outputs(folder, want) == jobs, "every job written")
+    f = farm_scale.figures(summary, sampler, slots=2)
+    check(summary["tiles"] == jobs * tiles and f["bounds"]["in_flight"] == 8, f"{summary['tiles']}, {f['bounds']}")
+    check(f["driver_peak"]["in_flight"] <= 8 and f["driver_peak"]["open_jobs"] <= 2, f"{f['driver_peak']}")
+    check(f["staged_peak"] <= 2 * tiles and f["driver_peak"]["staged"] <= 2 * tiles,
+          f"{f['staged_peak']} tiles staged on disk at once, {f['driver_peak']['staged']} by the driver's count")
+    print(f"6. waves: {farm_scale.describe(f)}; byte-identical ({time.monotonic() - started:.1f} s, total "
+          f"{time.monotonic() - ctx.started:.1f} s)", flush=True)
+
+
 def section_node_death(ctx):
-    """6. The whole second node killed mid-run: its tiles are retried on the head."""
+    """7. The whole second node killed mid-run: its tiles are retried on the head."""
     second_node_back(ctx)
     sec = Section(ctx, "node-death")
     proc, victims, deadline = sec.start(), [], time.monotonic() + 300
@@ -445,7 +484,7 @@ def section_node_death(ctx):
     kinds = retries_from_second(ctx, result)
     check(result["nodes"].get(ctx.ids["second"], {}).get("tiles"), f"the second node rendered before: {result['nodes']}")
     tiles = {("second" if k == ctx.ids["second"] else "head"): v["tiles"] for k, v in result["nodes"].items()}
-    print(f"6. second node killed after {tiles['second']} tiles; retries on the head {kinds}; outputs byte-identical "
+    print(f"7. second node killed after {tiles['second']} tiles; retries on the head {kinds}; outputs byte-identical "
           f"({sec.elapsed()})", flush=True)
 
 
@@ -512,6 +551,7 @@ def main():
         section_broken_binary(ctx)
         section_resume(ctx)
         section_changed_scene(ctx)
+        section_waves(ctx)
         section_node_death(ctx)  # last: the cluster has one node after it
     finally:
         cluster.stop()

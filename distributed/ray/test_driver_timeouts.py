@@ -38,15 +38,16 @@ def main():
         job.pieces = kelvin_ray.pieces_of(0, job, 2)
         for piece in job.pieces:
             kelvin_ray.write_durably(piece.path, b"a staged tile")
-        farm = kelvin_ray.Farm.__new__(kelvin_ray.Farm)  # no cluster: finish() needs only the binary
-        farm.kelvin = slow
+        farm = kelvin_ray.Farm.__new__(kelvin_ray.Farm)  # no cluster: finish() needs the binary and the window
+        farm.kelvin, farm.open, farm.staged_now = slow, {0}, 0
+        paths = [p.path for p in job.pieces]  # finish() forgets the pieces of a decided job
         farm.finish(job)
         state, detail = job.status
         assert state == "FAILED" and "timed out after 0.5 s" in detail and "stay in" in detail, job.status
-        assert all(os.path.exists(p.path) for p in job.pieces), "the staged tiles stay"
+        assert all(os.path.exists(p) for p in paths), "the staged tiles stay"
         assert not os.path.exists(job.staging.rstrip(os.sep) + ".quarantine"), "nothing quarantined"
         # The staging folder holds the tiles only: the temporaries' names were unique and renamed away.
-        assert sorted(os.listdir(job.staging)) == sorted(os.path.basename(p.path) for p in job.pieces)
+        assert sorted(os.listdir(job.staging)) == sorted(os.path.basename(p) for p in paths)
     print("driver timeouts: ok (plan -> exit 3; a merge that timed out keeps its staged tiles)")
 
 

@@ -81,8 +81,8 @@ struct CameraSpec {
 }
 
 /// Flags a render job's settings may not set: the job's own keys (`frames`, `output`), the
-/// driver's tiling (`crop`) and the machine's (`threads`, `report`).
-pub(super) const RESERVED: [&str; 7] = ["output", "crop", "frames", "fps", "animation", "threads", "report"];
+/// driver's tiling (`crop`) and the machine's (`threads`, `report`, `log`: a task's log is the batch's).
+pub(super) const RESERVED: [&str; 8] = ["output", "crop", "frames", "fps", "animation", "threads", "report", "log"];
 
 /// A job ready to run, or why it cannot.
 #[derive(Serialize)]

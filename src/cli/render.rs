@@ -117,6 +117,12 @@ pub struct RenderArgs {
     /// warning), and the time of each pass.
     #[arg(long)]
     report: bool,
+    /// Append the start (output, host, pid), progress (`progress N%` lines, every 5% and at least
+    /// every 30 s) and the outcome with its exit code to this file (its folder created), a line at a
+    /// time with the UTC time, as `kelvin batch --log` does, for a farm's monitor to tail. The same
+    /// lines but the outcome go to stderr when it is not a terminal (the error is printed there anyway).
+    #[arg(long, value_name = "FILE")]
+    log: Option<PathBuf>,
 }
 
 /// The lights a job adds to its scene: an environment map or a sun and sky (`render`, `bake`).
@@ -447,13 +453,34 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     if let Some(t) = args.threads {
         rayon::ThreadPoolBuilder::new().num_threads(t).build_global()?;
     }
-    // A bar on a terminal; progress lines when a farm's task runner reads stderr.
-    let log = super::task_log::TaskLog::open(None)?;
+    // A bar on a terminal; progress lines when a farm's task runner reads stderr (and in --log).
+    let log = super::task_log::TaskLog::open(args.log.as_deref())?;
+    log.line(&format!(
+        "kelvin render {}: host {}, pid {}",
+        args.output.display(),
+        kelvin::render::partial::this_host(),
+        std::process::id()
+    ));
     let mut progress = log.job(0, 1, &args.output.display().to_string());
+    let started = std::time::Instant::now();
     let rendered = render_to_files(&args, |f| progress.set(f));
     progress.finish();
+    let rendered = match rendered {
+        Ok(r) => {
+            log.to_file_only(&format!(
+                "rendered {} in {:.1} s",
+                args.output.display(),
+                started.elapsed().as_secs_f64()
+            ));
+            r
+        }
+        Err(e) => {
+            log.to_file_only(&format!("failed (exit code {}): {e}", super::exit_code(&*e)));
+            return Err(e);
+        }
+    };
     let (width, height) = args.crop.map_or(args.size, |c| (c.width(), c.height()));
-    for Rendered { frame, pose_seconds, stats, .. } in rendered? {
+    for Rendered { frame, pose_seconds, stats, .. } in rendered {
         if let Some(f) = frame {
             println!(
                 "frame {f} (t = {:.4} s): pose {:.3} ms, light system update {:.3} ms",

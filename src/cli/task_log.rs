@@ -61,6 +61,11 @@ impl TaskLog {
         self.to_file(&format!("{} {text}\n", utc(SystemTime::now())));
     }
 
+    /// `text` as a line in the log file only (a message stderr gets in another form).
+    pub fn to_file_only(&self, text: &str) {
+        self.to_file(&format!("{} {text}\n", utc(SystemTime::now())));
+    }
+
     fn to_file(&self, line: &str) {
         // One write per line, so that lines of concurrent writers do not interleave mid-line. A log
         // that cannot be written does not fail the render (a full disk fails its outputs, with the code).
