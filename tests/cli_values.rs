@@ -122,6 +122,7 @@ const PATH_OPTIONS: &[(&[&str], &str, &str)] = &[
     (&["bench", "lights"], "--out", "an output folder, created"),
     (&["bench", "render"], "--data", "read when each scene loads"),
     (&["batch"], "--log", "the task's log, opened (its folder created) once the manifest is planned"),
+    (&["render"], "--log", "the task's log, opened (its folder created) before the render (tests/cli_farm.rs)"),
     (&["batch"], "--job", "a job's name, looked up in the manifest (tests/cli_farm.rs: an unknown one is refused)"),
     (&["bake", "lightmaps"], "--output", "an output folder, created after the bake"),
     (&["bake", "volume"], "--output", "the .ktx2 written after the bake; its extension is checked first"),
