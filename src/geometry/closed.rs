@@ -102,7 +102,15 @@ impl DisjointSets {
 pub struct ClosedSurfaces {
     /// Per instance, per triangle (one entry for a shape).
     closed: Vec<Vec<bool>>,
+    /// [`CONTACT`] times the diagonal of the scene's bounds, m.
+    contact: f32,
 }
+
+/// Two surfaces nearer than this share of the scene's diagonal touch: a box exported standing on a
+/// floor has its bottom a few float steps above or below the floor, where rays cannot tell which
+/// side they start on. Well above those steps (2^-23 of the coordinates), well below any gap a
+/// texel could see through.
+pub const CONTACT: f32 = 1e-5;
 
 impl ClosedSurfaces {
     /// The closed primitives of `bvh`. Instances with the same `group` key are welded together
@@ -131,7 +139,14 @@ impl ClosedSurfaces {
                 closed[i as usize] = flags.by_ref().take(count).collect();
             }
         }
-        Self { closed }
+        let contact = bvh.world_bounds().map_or(0.0, |(lo, hi)| CONTACT * (hi - lo).length());
+        Self { closed, contact }
+    }
+
+    /// Distance (m) within which a point touches a closed surface ([`CONTACT`]): a point that
+    /// close to a solid's face, on either side, is in contact with it (under a box on a floor).
+    pub fn contact_distance(&self) -> f32 {
+        self.contact
     }
 
     /// Whether primitive `primitive` of instance `instance` bounds a solid (false for unknown ids).

@@ -22,7 +22,7 @@ mod triangle;
 pub mod visibility;
 mod wide;
 
-pub use closed::{ClosedSurfaces, closed_triangles};
+pub use closed::{CONTACT, ClosedSurfaces, closed_triangles};
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
 pub use hits::HitLanes;
 pub(crate) use hits::mesh_point;
