@@ -42,7 +42,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let index: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join(LIGHTMAPS_JSON))?)?;
     match index["camera_ev100"].as_f64() {
-        Some(ev100) => println!("  camera: Exposure {{ ev100: {ev100:.2} }} (Bevy's default 9.7 shows this room black)"),
+        Some(ev100) => {
+            println!("  camera: Exposure {{ ev100: {ev100:.2} }} (Bevy's default 9.7 shows this room black)")
+        }
         None => println!("  camera: nothing was lit; no exposure to suggest"),
     }
     println!(

@@ -365,11 +365,20 @@ fn cornell_box_floor_under_its_double_sided_box_keeps_no_sample() {
     for (i, state) in map.state.iter().enumerate() {
         let texel = glam::Vec2::new((i as u32 % size) as f32, (i as u32 / size) as f32);
         let centre = (texel + 0.5) / size as f32;
-        let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].map(|(x, y)| (texel + glam::Vec2::new(x, y)) / size as f32);
-        let Some(points) = corners.iter().map(|&uv| floor_at(centre, uv)).collect::<Option<Vec<Vec3>>>() else { continue };
+        let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+            .map(|(x, y)| (texel + glam::Vec2::new(x, y)) / size as f32);
+        let Some(points) = corners.iter().map(|&uv| floor_at(centre, uv)).collect::<Option<Vec<Vec3>>>() else {
+            continue;
+        };
         if points.iter().all(|&p| under_box(p)) {
             under += 1;
-            assert_ne!(*state, TexelState::Baked, "texel {i} at {} lies wholly under the large box: {}", points[0], map.texels[i]);
+            assert_ne!(
+                *state,
+                TexelState::Baked,
+                "texel {i} at {} lies wholly under the large box: {}",
+                points[0],
+                map.texels[i]
+            );
         }
     }
     eprintln!("{under} texels wholly under the large box; {} samples dropped", map.leaked_samples);

@@ -9,8 +9,8 @@ use glam::{UVec3, Vec3};
 use kelvin::bake::ktx2::Format;
 use kelvin::bake::volume::SIDES;
 use kelvin::bake::{BakeError, IrradianceVolume, TexelState, VolumeOptions, bake_volume, write_volume};
-use kelvin::light::UniformInfiniteLight;
 use kelvin::geometry::Mesh;
+use kelvin::light::UniformInfiniteLight;
 use kelvin::render::job::RenderJob;
 use kelvin::render::material::Material;
 use serde_json::json;
@@ -192,9 +192,8 @@ fn cornell_box_voxels_inside_its_double_sided_boxes_are_found_and_filled() {
         }
     }
     assert_eq!(boxes.len(), 2);
-    let in_a_box = |p: Vec3| {
-        boxes.iter().any(|faces| faces.iter().all(|[a, b, c]| (p - *a).dot((*b - *a).cross(*c - *a)) < 0.0))
-    };
+    let in_a_box =
+        |p: Vec3| boxes.iter().any(|faces| faces.iter().all(|[a, b, c]| (p - *a).dot((*b - *a).cross(*c - *a)) < 0.0));
     let opts = VolumeOptions { resolution: UVec3::splat(4), spp: 64, ..VolumeOptions::default() };
     let volume = bake_volume(&mut loaded, &opts, |_| {}).unwrap();
     let at = |v: usize| volume.voxel_center(UVec3::new(v as u32 % 4, v as u32 / 4 % 4, v as u32 / 16));

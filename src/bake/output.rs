@@ -164,7 +164,10 @@ mod tests {
         // Filled and empty texels are not surfaces the bake saw.
         let mut dark = map(n, 0.0, 1.0, 1.0);
         dark.state.fill(TexelState::Filled);
-        let report = BakeReport { lightmaps: vec![report.lightmaps[0].clone(), report.lightmaps[1].clone(), dark], ..BakeReport::default() };
+        let report = BakeReport {
+            lightmaps: vec![report.lightmaps[0].clone(), report.lightmaps[1].clone(), dark],
+            ..BakeReport::default()
+        };
         assert!((camera_ev100(&report).unwrap() - want).abs() < 1e-3);
         assert_eq!(camera_ev100(&BakeReport::default()), None);
     }

@@ -96,9 +96,10 @@ fn file_safe(name: &str) -> String {
 /// The colour an engine multiplies a lightmap by on `m`: its base colour (times its texture's mean)
 /// on the share that is not metal, as Bevy's `diffuse_color`.
 fn diffuse_albedo(m: &Material) -> Vec3 {
-    let texture = m.base_color_texture.as_ref().map_or(Vec3::ONE, |t| {
-        t.pixels.iter().fold(Vec3::ZERO, |sum, p| sum + *p) / t.pixels.len().max(1) as f32
-    });
+    let texture = m
+        .base_color_texture
+        .as_ref()
+        .map_or(Vec3::ONE, |t| t.pixels.iter().fold(Vec3::ZERO, |sum, p| sum + *p) / t.pixels.len().max(1) as f32);
     m.base_color * texture * (1.0 - m.metallic)
 }
 
@@ -112,4 +113,3 @@ mod tests {
         assert_eq!(super::file_safe(""), "mesh");
     }
 }
-

@@ -214,7 +214,8 @@ mod tests {
     #[test]
     fn surfaces_are_judged_apart() {
         let mut tris = cube(Vec3::ZERO, Vec3::ONE, false);
-        let (a, b, c, d) = (Vec3::new(2.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 1.0), Vec3::Z * 2.0);
+        let (a, b, c, d) =
+            (Vec3::new(2.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 1.0), Vec3::Z * 2.0);
         tris.extend([Some([a, b, c]), Some([a, c, d])]);
         let closed = closed_triangles(&tris);
         assert!(closed[..12].iter().all(|c| *c) && closed[12..].iter().all(|c| !*c), "{closed:?}");

@@ -22,8 +22,8 @@ mod triangle;
 pub mod visibility;
 mod wide;
 
-pub use closed::{CONTACT, ClosedSurfaces, closed_triangles};
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
+pub use closed::{CONTACT, ClosedSurfaces, closed_triangles};
 pub use hits::HitLanes;
 pub(crate) use hits::mesh_point;
 pub use mesh::Mesh;
