@@ -248,8 +248,8 @@ impl Paths {
     /// than `leak_distance`: of a one-sided material, or of a closed surface (`closed`), whose
     /// back faces only its inside, double-sided or not. An open double-sided surface has no
     /// inside: its back is a face like its front (a two-sided lamp lights the ceiling above it
-    /// with its back), not a leak. A first ray that meets a closed surface's front within its
-    /// contact distance starts where a solid touches the surface (a floor under a box whose bottom
+    /// with its back), not a leak. A first ray that meets a closed surface turned against the
+    /// start's within its contact distance starts where a solid touches the surface (a floor under a box whose bottom
     /// lies a float step below the floor): a leak too.
     fn note_leaks(&mut self, leak_distance: f32, materials: &[Material], closed: Option<&ClosedSurfaces>) {
         let one_sided = |m: u32| materials.get(m as usize).is_none_or(|m| !m.double_sided);
@@ -257,7 +257,9 @@ impl Paths {
         for ((p, c), hit) in self.continuations.iter().zip(&self.hits) {
             // The ray's direction is unit length, so t is the distance.
             let back = hit.is_some_and(|h| {
-                let touching = closed.is_some_and(|c| h.t < c.contact_distance()) && solid(h);
+                // Face to face only: a room's corner has its walls within reach too.
+                let facing = h.ng.dot(c.from.n) < -0.5;
+                let touching = facing && closed.is_some_and(|c| h.t < c.contact_distance()) && solid(h);
                 touching || (h.ng.dot(c.wi) > 0.0 && h.t < leak_distance && (one_sided(h.material) || solid(h)))
             });
             self.leaked[*p as usize] = back;
