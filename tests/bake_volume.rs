@@ -1,7 +1,7 @@
 //! `kelvin bake volume`: ambient cubes against closed forms (a uniform sky on every side; light from
 //! +X only on the +X side alone, read face by face from the KTX2 file in Bevy's layout), voxels
-//! inside geometry filled from their neighbours, bad input, and the layout against the volume Bevy
-//! ships for its example scene.
+//! inside geometry (double-sided or not; Bevy's CornellBox) filled from their neighbours, bad
+//! input, and the layout against the volume Bevy ships for its example scene.
 
 mod common;
 
@@ -9,11 +9,13 @@ use glam::{UVec3, Vec3};
 use kelvin::bake::ktx2::Format;
 use kelvin::bake::volume::SIDES;
 use kelvin::bake::{BakeError, IrradianceVolume, TexelState, VolumeOptions, bake_volume, write_volume};
+use kelvin::geometry::Mesh;
 use kelvin::light::UniformInfiniteLight;
 use kelvin::render::job::RenderJob;
+use kelvin::render::material::Material;
 use serde_json::json;
 
-use common::files::TempDir;
+use common::files::{TempDir, test_data};
 use common::gltf_doc::{Doc, cuboid};
 
 fn lum(c: Vec3) -> f64 {
@@ -146,22 +148,68 @@ fn light_from_plus_x_lands_on_the_plus_x_sides_of_the_file() {
 }
 
 /// Voxel centres inside a closed box: their samples all meet back faces, so they are marked and
-/// filled from their neighbours, never left black.
+/// filled from their neighbours, never left black. A double-sided material (Blender's default)
+/// shades the box's inside too, but the box still has one.
 #[test]
 fn voxels_inside_geometry_are_filled_from_their_neighbours() {
-    let dir = TempDir::new("volume", "inside");
-    let mut doc = Doc::default();
-    let m = doc.material(0.5, 0.0);
-    // 4 x 4 x 4 voxels over [0, 4]^3: centres at 0.5, 1.5, ...; the box holds the 8 at 1.5 and 2.5.
-    doc.mesh("box", &[cuboid(Vec3::splat(1.0), Vec3::splat(3.0), false, false, m)]);
-    let volume = bake(&dir, &doc, &options(UVec3::splat(4), (Vec3::ZERO, Vec3::splat(4.0))), sky).unwrap();
-    assert_eq!(volume.inside, 8);
+    for double_sided in [false, true] {
+        let dir = TempDir::new("volume", "inside");
+        let mut doc = Doc::default();
+        let m = doc.material(0.5, 0.0);
+        if double_sided {
+            doc.double_sided(m);
+        }
+        // 4 x 4 x 4 voxels over [0, 4]^3: centres at 0.5, 1.5, ...; the box holds the 8 at 1.5 and 2.5.
+        doc.mesh("box", &[cuboid(Vec3::splat(1.0), Vec3::splat(3.0), false, false, m)]);
+        let volume = bake(&dir, &doc, &options(UVec3::splat(4), (Vec3::ZERO, Vec3::splat(4.0))), sky).unwrap();
+        assert_eq!(volume.inside, 8, "double-sided {double_sided}");
+        for (v, state) in volume.state.iter().enumerate() {
+            let centre = volume.voxel_center(UVec3::new(v as u32 % 4, v as u32 / 4 % 4, v as u32 / 16));
+            let inside = centre.cmpgt(Vec3::ONE).all() && centre.cmplt(Vec3::splat(3.0)).all();
+            let want = if inside { TexelState::Filled } else { TexelState::Baked };
+            assert!(state.iter().all(|s| *s == want), "voxel {v} at {centre}: {state:?} (double-sided {double_sided})");
+            let sides = volume.sides[v];
+            assert!(sides.iter().all(|s| lum(*s) > 0.05 * NITS as f64), "voxel {v}: {sides:?} ({double_sided})");
+        }
+    }
+}
+
+/// Bevy's CornellBox as Blender exported it, every material double-sided: the voxel centres inside
+/// its two boxes (behind every face plane of one) are found inside, no more and no fewer, and
+/// filled from their neighbours. Issue 61: a 4^3 grid reported none inside and left voxel
+/// (1, 1, 1), inside the large box, black on all six sides.
+#[test]
+fn cornell_box_voxels_inside_its_double_sided_boxes_are_found_and_filled() {
+    let job = RenderJob { scene: Some(test_data("gltf/bevy/CornellBox.glb")), seed: 3, ..RenderJob::default() };
+    let mut loaded = job.load().unwrap();
+    let mut boxes: Vec<Vec<[Vec3; 3]>> = Vec::new();
+    for p in &loaded.primitives {
+        let material = loaded.world.get::<Material>(p.entity).unwrap();
+        assert!(material.double_sided, "{:?}: the file's materials are all double-sided", p.mesh_name);
+        if matches!(p.mesh_name.as_deref(), Some("large_box" | "small_box")) {
+            let mesh = loaded.world.get::<Mesh>(p.entity).unwrap();
+            boxes.push((0..mesh.triangle_count()).map(|t| mesh.triangle(t)).collect());
+        }
+    }
+    assert_eq!(boxes.len(), 2);
+    let in_a_box =
+        |p: Vec3| boxes.iter().any(|faces| faces.iter().all(|[a, b, c]| (p - *a).dot((*b - *a).cross(*c - *a)) < 0.0));
+    let opts = VolumeOptions { resolution: UVec3::splat(4), spp: 64, ..VolumeOptions::default() };
+    let volume = bake_volume(&mut loaded, &opts, |_| {}).unwrap();
+    let at = |v: usize| volume.voxel_center(UVec3::new(v as u32 % 4, v as u32 / 4 % 4, v as u32 / 16));
+    let expected: Vec<usize> = (0..64).filter(|&v| in_a_box(at(v))).collect();
+    eprintln!("voxels inside the boxes: {expected:?}; voxel (1, 1, 1) at {}", at(21));
+    assert!(expected.contains(&21), "voxel (1, 1, 1) at {} lies inside the large box", at(21));
+    assert_eq!(volume.inside, expected.len());
+    let mean = volume.sides.iter().flatten().map(|s| lum(*s)).sum::<f64>() / (6 * 64) as f64;
     for (v, state) in volume.state.iter().enumerate() {
-        let centre = volume.voxel_center(UVec3::new(v as u32 % 4, v as u32 / 4 % 4, v as u32 / 16));
-        let inside = centre.cmpgt(Vec3::ONE).all() && centre.cmplt(Vec3::splat(3.0)).all();
-        let want = if inside { TexelState::Filled } else { TexelState::Baked };
-        assert!(state.iter().all(|s| *s == want), "voxel {v} at {centre}: {state:?}");
-        assert!(volume.sides[v].iter().all(|s| lum(*s) > 0.05 * NITS as f64), "voxel {v}: {:?}", volume.sides[v]);
+        let want = if expected.contains(&v) { TexelState::Filled } else { TexelState::Baked };
+        assert!(state.iter().all(|s| *s == want), "voxel {v} at {}: {state:?}", at(v));
+    }
+    for &v in &expected {
+        // Filled from the same sides of lit neighbours: a share of the room's mean, never black.
+        let sides = volume.sides[v];
+        assert!(sides.iter().all(|s| lum(*s) > 0.02 * mean), "voxel {v}: {sides:?} (room mean {mean})");
     }
 }
 

@@ -75,6 +75,10 @@ pub(super) fn finish(target: Target, coverage: &Coverage, sums: &[Accumulator], 
     let n = (size * size) as usize;
     let (mut texels, mut std_error, mut state) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![TexelState::Empty; n]);
     let mut leaked_samples = 0;
+    let (mut area, mut albedo) = (vec![0.0; n], vec![Vec3::ZERO; n]);
+    for (&texel, (a, m)) in coverage.texels.iter().zip(coverage.areas(&target.surfaces, size)) {
+        (area[texel as usize], albedo[texel as usize]) = (a, m);
+    }
     for (&texel, a) in coverage.texels.iter().zip(sums) {
         leaked_samples += a.leaked as u64;
         if let Some((mean, error)) = a.mean() {
@@ -92,6 +96,8 @@ pub(super) fn finish(target: Target, coverage: &Coverage, sums: &[Accumulator], 
         std_error,
         state,
         leaked_samples,
+        area,
+        albedo,
     }
 }
 

@@ -10,9 +10,13 @@
 //! as in `kelvin render` (`render::surface_paths`, the path tracer's own wavefront).
 //!
 //! **Leaks.** A sample whose first ray meets a back face nearer than the leak distance starts
-//! inside geometry or behind a wall (a floor under a box, a wall's far side): it is dropped. A
-//! sample inside closed geometry meets a back face in every direction, so no sample under a box is
-//! kept, whatever its ray. Texels left without a valid sample, and texels no triangle covers, are
+//! inside geometry or behind a wall (a floor under a box, a wall's far side): it is dropped. The
+//! back faces that count are those of one-sided materials and of closed meshes
+//! ([`crate::geometry::ClosedSurfaces`]) whatever their material: Blender exports materials
+//! double-sided by default, and a double-sided box still has an inside, while the back of an open
+//! double-sided quad is a face (a two-sided lamp lights the ceiling with it). A sample inside
+//! closed geometry meets a back face in every direction, so no sample under a box is kept,
+//! whatever its ray. Texels left without a valid sample, and texels no triangle covers, are
 //! filled from their valid neighbours, ring by ring, up to `margin` texels out (`lightmap.rs`):
 //! bilinear filtering then reads no black fringe at a chart's edge.
 //!
@@ -136,6 +140,11 @@ pub struct Lightmap {
     pub state: Vec<TexelState>,
     /// Samples dropped because their first ray met a back face nearby.
     pub leaked_samples: u64,
+    /// World area (m^2) of the surfaces inside each texel; zero where none.
+    pub area: Vec<f32>,
+    /// Area-weighted diffuse albedo (linear sRGB) of the surfaces inside each texel: what an engine
+    /// multiplies the texel by (Bevy's `diffuse_color`); zero where none.
+    pub albedo: Vec<Vec3>,
 }
 
 impl Lightmap {

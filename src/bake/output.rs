@@ -76,16 +76,21 @@ pub fn write_lightmaps(dir: &Path, report: &BakeReport, opts: &LightmapOptions) 
     Ok(written)
 }
 
-/// The EV100 that a reflected-light meter (calibration K = 12.5 cd s/m^2 at ISO 100) reads off the
-/// mean baked luminance, EV100 = log2(L 100 / K): Bevy's `Exposure { ev100 }` that shows the baked
-/// light near mid-grey. None without a lit texel.
+/// The EV100 that an averaging reflected-light meter (calibration K = 12.5 cd s/m^2 at ISO 100)
+/// reads off the baked surfaces, EV100 = log2(L 100 / K): Bevy's `Exposure { ev100 }` that shows
+/// them near mid-grey. L is the luminance they show, texel times albedo (Bevy's `lightmap *
+/// diffuse_color`), averaged over their area, so a small lamp with a map as large as the room's
+/// weighs as little as it covers. Emission is left out: a light in view would set the exposure.
+/// None without a lit texel.
 fn camera_ev100(report: &BakeReport) -> Option<f32> {
-    let (mut sum, mut n) = (0.0, 0.0);
+    let (mut sum, mut area) = (0.0f64, 0.0f64);
     for map in &report.lightmaps {
-        let baked = map.state.iter().filter(|s| **s == TexelState::Baked).count() as f32;
-        (sum, n) = (sum + map.mean_luminance() * baked, n + baked);
+        for (k, _) in map.state.iter().enumerate().filter(|(_, s)| **s == TexelState::Baked) {
+            let shown = super::lightmap::luminance(map.texels[k] * map.albedo[k]) as f64;
+            (sum, area) = (sum + shown * map.area[k] as f64, area + map.area[k] as f64);
+        }
     }
-    (sum > 0.0).then(|| (sum / n * 100.0 / 12.5).log2())
+    (sum > 0.0).then(|| (sum / area * 100.0 / 12.5).log2() as f32)
 }
 
 /// Writes `volume` as a 3D KTX2 at `path` (its folder created if missing; E5B9G9R9_UFLOAT, zstd,
@@ -119,4 +124,51 @@ pub fn write_volume(path: &Path, volume: &IrradianceVolume) -> Result<Vec<PathBu
     let text = serde_json::to_string_pretty(&info).unwrap_or_default() + "\n";
     write_file(&json_path, &json_path.display().to_string(), text.as_bytes())?;
     Ok(vec![path.to_path_buf(), json_path])
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::bake::Lightmap;
+
+    /// A lightmap of `texels` texels, each `nit` on `area` m^2 of albedo `albedo`.
+    fn map(texels: usize, nit: f32, area: f32, albedo: f32) -> Lightmap {
+        Lightmap {
+            name: String::new(),
+            mesh_name: None,
+            node_name: None,
+            size: 1,
+            texels: vec![Vec3::splat(nit); texels],
+            std_error: vec![Vec3::ZERO; texels],
+            state: vec![TexelState::Baked; texels],
+            leaked_samples: 0,
+            area: vec![area; texels],
+            albedo: vec![Vec3::splat(albedo); texels],
+        }
+    }
+
+    /// A 1 m^2 lamp (100 nit, white) baked at as many texels as a 99 m^2 room (1 nit, albedo 0.5)
+    /// covers 1% of what the camera sees: the meter reads (0.01 100 + 0.99 0.5) nit = 1.495 nit, not
+    /// the texels' mean after albedo (25.25 nit) nor their plain mean (50.5 nit).
+    #[test]
+    fn the_meter_weighs_surfaces_by_area_after_albedo() {
+        let n = 64;
+        let lamp = map(n, 100.0, 1.0 / n as f32, 1.0);
+        let room = map(n, 1.0, 99.0 / n as f32, 0.5);
+        let report = BakeReport { lightmaps: vec![lamp, room], ..BakeReport::default() };
+        let ev = camera_ev100(&report).unwrap();
+        let want = (1.495f32 * 100.0 / 12.5).log2();
+        assert!((ev - want).abs() < 1e-3, "EV100 {ev}, want {want}");
+        // Filled and empty texels are not surfaces the bake saw.
+        let mut dark = map(n, 0.0, 1.0, 1.0);
+        dark.state.fill(TexelState::Filled);
+        let report = BakeReport {
+            lightmaps: vec![report.lightmaps[0].clone(), report.lightmaps[1].clone(), dark],
+            ..BakeReport::default()
+        };
+        assert!((camera_ev100(&report).unwrap() - want).abs() < 1e-3);
+        assert_eq!(camera_ev100(&BakeReport::default()), None);
+    }
 }

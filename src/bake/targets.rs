@@ -4,10 +4,12 @@
 use std::collections::{HashMap, HashSet};
 
 use bevy_ecs::world::World;
+use glam::Vec3;
 
 use super::texels::Surface;
 use super::{BakeError, BakeReport};
 use crate::geometry::Mesh;
+use crate::render::material::Material;
 use crate::scene::spawn::SpawnedPrimitive;
 
 /// One lightmap to bake.
@@ -49,7 +51,9 @@ pub(super) fn gather(world: &World, primitives: &[SpawnedPrimitive]) -> Result<(
                 ));
                 continue;
             }
-            surfaces.push(Surface { mesh: mesh.clone(), uvs1: uvs1.clone(), entity_index: p.entity.index_u32() });
+            let albedo = world.get::<Material>(p.entity).map_or(Vec3::ONE, diffuse_albedo);
+            let entity_index = p.entity.index_u32();
+            surfaces.push(Surface { mesh: mesh.clone(), uvs1: uvs1.clone(), entity_index, albedo });
         }
         if surfaces.is_empty() {
             report.skipped.push(format!("mesh {label} (node {node}): no TEXCOORD_1 (lightmap uvs); skipped"));
@@ -87,6 +91,16 @@ fn file_safe(name: &str) -> String {
     let safe: String =
         name.chars().map(|c| if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') { c } else { '_' }).collect();
     if safe.is_empty() || safe.starts_with('.') { format!("mesh{safe}") } else { safe }
+}
+
+/// The colour an engine multiplies a lightmap by on `m`: its base colour (times its texture's mean)
+/// on the share that is not metal, as Bevy's `diffuse_color`.
+fn diffuse_albedo(m: &Material) -> Vec3 {
+    let texture = m
+        .base_color_texture
+        .as_ref()
+        .map_or(Vec3::ONE, |t| t.pixels.iter().fold(Vec3::ZERO, |sum, p| sum + *p) / t.pixels.len().max(1) as f32);
+    m.base_color * texture * (1.0 - m.metallic)
 }
 
 #[cfg(test)]

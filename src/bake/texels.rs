@@ -5,7 +5,7 @@
 //! by area, so no sample lies outside a triangle and a texel half covered is sampled on its
 //! covered half only.
 
-use glam::{DVec2, Vec2};
+use glam::{DVec2, Vec2, Vec3};
 
 use crate::geometry::{GeometryId, Mesh, mesh_point};
 use crate::render::surface_paths::StartPoint;
@@ -23,6 +23,9 @@ pub(super) struct Surface {
     pub(super) uvs1: Vec<Vec2>,
     /// `Entity::index_u32` of the mesh's entity, as the scene BVH reports it.
     pub(super) entity_index: u32,
+    /// Diffuse albedo (linear sRGB): what an engine multiplies the texel by (Bevy's
+    /// `diffuse_color`, the base colour and its texture's mean, times 1 - metallic).
+    pub(super) albedo: Vec3,
 }
 
 /// The world area (m^2) of `surfaces`' triangles and the area their uv1 triangles cover (a share
@@ -112,6 +115,36 @@ impl Coverage {
         coverage
     }
 
+    /// Per covered texel (as `texels`): the world area (m^2) of the surfaces inside it, and their
+    /// area-weighted mean albedo.
+    pub(super) fn areas(&self, surfaces: &[Surface], size: u32) -> Vec<(f32, Vec3)> {
+        let n = size as f64;
+        // World m^2 per texel^2 of each triangle, by surface and triangle.
+        let scale: Vec<Vec<f64>> = surfaces
+            .iter()
+            .map(|s| {
+                (0..s.mesh.triangle_count())
+                    .map(|t| {
+                        let [a, b, c] = s.mesh.triangle(t).map(|p| p.as_dvec3());
+                        let [d, e, f] = s.mesh.triangle_indices(t).map(|i| s.uvs1[i as usize].as_dvec2() * n);
+                        let uv = (e - d).perp_dot(f - d).abs();
+                        if uv > 0.0 { (b - a).cross(c - a).length() / uv } else { 0.0 }
+                    })
+                    .collect()
+            })
+            .collect();
+        (0..self.texels.len())
+            .map(|k| {
+                let (mut area, mut albedo) = (0.0f64, Vec3::ZERO);
+                for p in &self.pieces[self.starts[k] as usize..self.starts[k + 1] as usize] {
+                    let a = p.area as f64 * scale[p.surface as usize][p.triangle as usize];
+                    (area, albedo) = (area + a, albedo + a as f32 * surfaces[p.surface as usize].albedo);
+                }
+                (area as f32, if area > 0.0 { albedo / area as f32 } else { Vec3::ZERO })
+            })
+            .collect()
+    }
+
     /// The point of covered texel `k` that `u` (three uniform numbers) picks, uniform over the
     /// texel's covered area, as a path's start: its pixel and sample keys are `pixel`, `sample`.
     pub(super) fn point(&self, surfaces: &[Surface], k: usize, u: [f32; 3], pixel: u32, sample: u32) -> StartPoint {
@@ -188,12 +221,11 @@ fn clip_to_texel(tri: &[DVec2; 3], x: f64, y: f64) -> Vec<DVec2> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3;
 
     fn quad_surface(uv: [Vec2; 4]) -> Surface {
         let positions = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, -1.0), Vec3::NEG_Z];
         let mesh = Mesh::new(positions, vec![0, 1, 2, 0, 2, 3]).unwrap();
-        Surface { mesh, uvs1: uv.to_vec(), entity_index: 0 }
+        Surface { mesh, uvs1: uv.to_vec(), entity_index: 0, albedo: Vec3::ONE }
     }
 
     /// The pieces of every texel add up to the uv area of the triangles: coverage is exact, and

@@ -7,8 +7,10 @@
 //! - [`occluded`] and [`closest_hits`]: batched any-hit and closest-hit queries (rayon);
 //!   `SceneBvh::closest_hits_packet` (hits as [`HitLanes`] columns, `hits.rs`) and `occluded_packet`
 //!   answer 16 rays at once (`packets.rs`).
+//! - [`ClosedSurfaces`]: which triangles bound a solid (closed, consistently wound; `closed.rs`).
 //! - [`offset_ray_origin`], [`SurfacePoint`]: robust shadow-ray endpoints with stated error bounds.
 pub mod bvh;
+mod closed;
 mod hits;
 pub mod mesh;
 mod packets;
@@ -22,6 +24,7 @@ pub mod visibility;
 mod wide;
 
 pub use bvh::{BuildReport, GeometryId, GeometryInstance, GeometryRef, SceneBvh, UpdateKind};
+pub use closed::{CONTACT, ClosedSurfaces, closed_triangles};
 pub use hits::HitLanes;
 pub(crate) use hits::mesh_point;
 pub use mesh::Mesh;

@@ -18,7 +18,7 @@ use super::material::Material;
 use super::normal_map::apply_normal_maps;
 use super::renderer::{RenderStats, Strategy, to_rgb};
 use super::shade::{Bounce, BounceRules, BsdfRay, Continuation, Materials, ShadeContext};
-use crate::geometry::{Hit, RAY_CHUNK, SceneBvh, closest_hits_in_packets};
+use crate::geometry::{ClosedSurfaces, Hit, RAY_CHUNK, SceneBvh, closest_hits_in_packets};
 use crate::lanes::LANES;
 use crate::light::ColorQuery;
 use crate::rng::mix64;
@@ -93,6 +93,9 @@ pub(super) struct PathJob<'a> {
     pub(super) seed: u64,
     pub(super) strategy: Strategy,
     pub(super) start: Start,
+    /// The primitives that bound solids, whose back faces are leaks whatever their material
+    /// (`Start::Surfaces`; None: only one-sided back faces are).
+    pub(super) closed: Option<&'a ClosedSurfaces>,
 }
 
 impl Paths {
@@ -136,7 +139,7 @@ impl Paths {
             self.shade(&ctx, depth, rules);
             self.follow(&ctx, rules);
             if let (0, Start::Surfaces { leak_distance, .. }) = (depth, job.start) {
-                self.note_leaks(leak_distance, &job.materials.materials);
+                self.note_leaks(leak_distance, &job.materials.materials, job.closed);
             }
             stats.bsdf_rays += self.continuations.len() as u64;
             drop(ctx);
@@ -242,13 +245,23 @@ impl Paths {
     }
 
     /// Marks the paths whose first ray (the continuations just followed) met a back face nearer
-    /// than `leak_distance`. A double-sided surface has no inside: its back is a face like its
-    /// front (a two-sided lamp lights the ceiling above it with its back), not a leak.
-    fn note_leaks(&mut self, leak_distance: f32, materials: &[Material]) {
+    /// than `leak_distance`: of a one-sided material, or of a closed surface (`closed`), whose
+    /// back faces only its inside, double-sided or not. An open double-sided surface has no
+    /// inside: its back is a face like its front (a two-sided lamp lights the ceiling above it
+    /// with its back), not a leak. A first ray that meets a closed surface turned against the
+    /// start's within its contact distance starts where a solid touches the surface (a floor under a box whose bottom
+    /// lies a float step below the floor): a leak too.
+    fn note_leaks(&mut self, leak_distance: f32, materials: &[Material], closed: Option<&ClosedSurfaces>) {
         let one_sided = |m: u32| materials.get(m as usize).is_none_or(|m| !m.double_sided);
+        let solid = |h: Hit| closed.is_some_and(|c| c.contains(h.instance, h.id.primitive));
         for ((p, c), hit) in self.continuations.iter().zip(&self.hits) {
             // The ray's direction is unit length, so t is the distance.
-            let back = hit.is_some_and(|h| h.ng.dot(c.wi) > 0.0 && h.t < leak_distance && one_sided(h.material));
+            let back = hit.is_some_and(|h| {
+                // Face to face only: a room's corner has its walls within reach too.
+                let facing = h.ng.dot(c.from.n) < -0.5;
+                let touching = facing && closed.is_some_and(|c| h.t < c.contact_distance()) && solid(h);
+                touching || (h.ng.dot(c.wi) > 0.0 && h.t < leak_distance && (one_sided(h.material) || solid(h)))
+            });
             self.leaked[*p as usize] = back;
         }
     }

@@ -328,8 +328,8 @@ fn render_on_pool(
                     job.shade(world, schedule, (&mut film, first, opts.spp as usize), &mut contributions, &mut stats);
                 }
                 Integrator::Path(depth) => {
-                    let job =
-                        PathJob { depth, materials: &materials, seed, strategy: opts.strategy, start: Start::Camera };
+                    let (strategy, start) = (opts.strategy, Start::Camera);
+                    let job = PathJob { depth, materials: &materials, seed, strategy, start, closed: None };
                     paths.trace(world, schedule, &mut columns, &job, &mut contributions, &mut stats);
                     let film_start = std::time::Instant::now();
                     film.par_add_samples(first, opts.spp as usize, &contributions);

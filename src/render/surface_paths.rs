@@ -14,7 +14,8 @@ use super::material::Material;
 use super::path::{PathDepth, PathJob, Paths, Start};
 use super::renderer::{BATCH_SAMPLES, RENDER_SALT, RenderStats, Strategy};
 use super::shade::Materials;
-use crate::geometry::GeometryId;
+use crate::geometry::{ClosedSurfaces, GeometryId, SceneBvh};
+use crate::scene::animate::GltfNode;
 use crate::shading::{RunReport, SceneBounds, Settings, ShadingBatch};
 use crate::systems::GeometryIndex;
 
@@ -46,6 +47,8 @@ pub(crate) struct SurfaceTracer {
     paths: Paths,
     rgb: Vec<Vec3>,
     job: (PathDepth, Start),
+    /// The primitives that bound solids: their back faces are leaks, double-sided or not.
+    closed: ClosedSurfaces,
     seed: u64,
     pattern: crate::rng::Pattern,
     /// Counts and times, summed over the batches (with the first update's).
@@ -59,7 +62,8 @@ impl SurfaceTracer {
     /// Brings the world's BVH and light tables up to date (one run of `schedule`) and prepares
     /// paths of `depth` that count direct light at their first surface or not (`direct`), and
     /// call a first ray that meets a back face nearer than `leak_distance` (m; None: any back
-    /// face in the scene) leaked.
+    /// face in the scene) leaked: of a one-sided material, or of a closed surface (the primitives
+    /// of a glTF mesh placement are welded together; [`ClosedSurfaces`]).
     pub(crate) fn new(
         world: &mut World,
         schedule: &mut Schedule,
@@ -83,6 +87,12 @@ impl SurfaceTracer {
         let leak_distance = leak_distance.unwrap_or_else(|| 2.0 * world.resource::<SceneBounds>().sphere.radius);
         let entities = &world.resource::<GeometryIndex>().entities;
         let instance_of = entities.iter().enumerate().map(|(i, e)| (e.index_u32(), i as u32)).collect();
+        // A glTF node's primitives (an entity each) together; any other entity alone.
+        let group = |i: u32| match entities.get(i as usize).and_then(|&e| world.get::<GltfNode>(e)) {
+            Some(n) => (n.file as u64) << 32 | n.node as u64,
+            None => 1 << 63 | i as u64,
+        };
+        let closed = ClosedSurfaces::of(world.resource::<SceneBvh>(), group);
         Self {
             white: materials.materials.len() as u32 - 1,
             materials,
@@ -91,6 +101,7 @@ impl SurfaceTracer {
             paths: Paths::default(),
             rgb: Vec::new(),
             job: (depth, Start::Surfaces { direct, leak_distance }),
+            closed,
             seed: world.resource::<Settings>().seed ^ RENDER_SALT,
             pattern: world.resource::<Settings>().pattern,
             stats,
@@ -121,7 +132,8 @@ impl SurfaceTracer {
         self.write_batch(&mut world.resource_mut::<ShadingBatch>(), points);
         self.stats.passes.camera += start.elapsed().as_secs_f64();
         let (depth, start) = self.job;
-        let job = PathJob { depth, materials: &self.materials, seed: self.seed, strategy: Strategy::Mis, start };
+        let (materials, closed) = (&self.materials, Some(&self.closed));
+        let job = PathJob { depth, materials, seed: self.seed, strategy: Strategy::Mis, start, closed };
         self.paths.trace(world, schedule, &mut self.columns, &job, &mut self.rgb, &mut self.stats);
         self.stats.camera_samples += points.len() as u64;
         (&self.rgb, self.paths.leaked())
