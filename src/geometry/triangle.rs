@@ -99,8 +99,9 @@ pub(crate) fn any_edge_zero<R: Real>(e: [R; 3]) -> R::Mask {
 
 /// The watertight test after its edge functions `e` of sheared vertices `p` (z unscaled) with
 /// the ray's z shear `sz`: whether each lane hits over (delta_t, t_max], its t and barycentrics.
-/// Written once over [`Real`], so the scalar test, a leaf's triangles against one ray
-/// (`wide::triangle_block_hits`) and one triangle against a packet (`wide::packet`) decide alike.
+/// Written once over [`Real`], so the scalar test and a leaf's triangles against one ray
+/// (`wide::triangle_block_hits`) decide alike; the packet kernel (`wide::packet`) runs these steps
+/// fused per lane, and its tests hold it to the same bits.
 #[inline(always)]
 pub(crate) fn decide<R: Real>(p: &[[R; 3]; 3], e: [R; 3], sz: R, t_max: R) -> (R::Mask, R, [R; 3]) {
     let zero = R::splat(0.0);
