@@ -171,6 +171,17 @@ pub(crate) fn mesh_transform_ok(t: &Transform) -> bool {
 }
 
 impl SceneBvh {
+    /// The tree of one mesh at the identity, entity 0, material 0: what most geometry tests trace.
+    #[cfg(test)]
+    pub(crate) fn of_mesh(mesh: &super::Mesh) -> Self {
+        Self::build(&[GeometryInstance {
+            geometry: GeometryRef::Mesh(mesh),
+            transform: Transform::IDENTITY,
+            entity_index: 0,
+            material: 0,
+        }])
+    }
+
     /// Builds with obvhs's `fast_build` preset (PLOC, light reinsertion).
     pub fn build(instances: &[GeometryInstance]) -> Self {
         Self::build_with_params(instances, BvhBuildParams::fast_build())

@@ -99,7 +99,7 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::geometry::{GeometryInstance, GeometryRef, Mesh, Ray, SceneBvh, Transform};
+    use crate::geometry::{Mesh, Ray, SceneBvh};
 
     #[test]
     fn counts_what_a_walk_tests() {
@@ -111,12 +111,7 @@ mod tests {
             })
             .collect();
         let mesh = Mesh::from_triangles(&tris).unwrap();
-        let bvh = SceneBvh::build(&[GeometryInstance {
-            geometry: GeometryRef::Mesh(&mesh),
-            transform: Transform::IDENTITY,
-            entity_index: 0,
-            material: 0,
-        }]);
+        let bvh = SceneBvh::of_mesh(&mesh);
         take_this_thread();
         // Misses the root's every child box: one node tested, no leaf.
         assert!(!bvh.occluded(&Ray::new(Vec3::new(0.2, 0.2, 5.0), Vec3::Z)));

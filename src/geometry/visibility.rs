@@ -429,12 +429,7 @@ mod tests {
         let tri =
             Mesh::from_triangles(&[[Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]]);
         let tri = tri.unwrap();
-        let bvh = SceneBvh::build(&[GeometryInstance {
-            geometry: GeometryRef::Mesh(&tri),
-            transform: Transform::IDENTITY,
-            entity_index: 0,
-            material: 0,
-        }]);
+        let bvh = SceneBvh::of_mesh(&tri);
         let ray = Ray::new(Vec3::new(0.0, 0.0, 1e-6), Vec3::NEG_Z);
         assert!(bvh.occluded(&ray));
         assert!((bvh.closest_hit(&ray).unwrap().t - 1e-6).abs() < 1e-12);
@@ -448,12 +443,7 @@ mod tests {
             [Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 1.0)],
         ])
         .unwrap();
-        let bvh = SceneBvh::build(&[GeometryInstance {
-            geometry: GeometryRef::Mesh(&quad),
-            transform: Transform::IDENTITY,
-            entity_index: 0,
-            material: 0,
-        }]);
+        let bvh = SceneBvh::of_mesh(&quad);
         for x in [-0.999f32, -0.5, 0.0, 0.25, 0.999] {
             let down = Ray::new(Vec3::new(x, 3.0, 0.1), Vec3::NEG_Y);
             assert!(bvh.occluded(&down), "x = {x}");

@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use super::*;
 use crate::geometry::triangle::ShearedRay;
-use crate::geometry::{GeometryInstance, GeometryRef, Mesh, SceneBvh, Transform};
+use crate::geometry::{Mesh, SceneBvh};
 use crate::rng::SplitMix64;
 
 struct Triangles(Vec<[Vec3; 3]>);
@@ -95,12 +95,7 @@ fn stacked_and_collinear_triangles_match_brute_force() {
     let mut rng = SplitMix64::new(9);
     for tris in [stacked, line] {
         let mesh = Mesh::from_triangles(&tris).unwrap();
-        let bvh = SceneBvh::build(&[GeometryInstance {
-            geometry: GeometryRef::Mesh(&mesh),
-            transform: Transform::IDENTITY,
-            entity_index: 0,
-            material: 0,
-        }]);
+        let bvh = SceneBvh::of_mesh(&mesh);
         for _ in 0..500 {
             let target = Vec3::new(rng.range(-0.1, 3.1), rng.range(-0.1, 1.1), 0.0);
             let origin = v(&mut rng, 4.0) + Vec3::Z * 5.0;
