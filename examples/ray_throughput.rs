@@ -13,7 +13,9 @@ use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
-use kelvin::geometry::{GeometryId, HitLanes, RAY_CHUNK, Ray, SceneBvh, closest_hits, occluded, ray_columns, ray_stats};
+use kelvin::geometry::{
+    GeometryId, HitLanes, RAY_CHUNK, Ray, SceneBvh, closest_hits, occluded, ray_columns, ray_stats,
+};
 use kelvin::lanes::{self, LANES};
 use kelvin::systems::LightingPlugin;
 use rayon::prelude::*;
@@ -112,7 +114,11 @@ fn main() -> Result<(), String> {
                 "any" => occluded(bvh, &rays, &mut occ_buf),
                 "closest_packet" => drop(packet_hits(bvh, &rays)),
                 "any_packet" => drop(packet_blocked(bvh, &rays)),
-                _ => return Err(format!("unknown query {query}: closest, closest_ref, any, closest_packet, any_packet")),
+                _ => {
+                    return Err(format!(
+                        "unknown query {query}: closest, closest_ref, any, closest_packet, any_packet"
+                    ));
+                }
             }
         }
         return Ok(());

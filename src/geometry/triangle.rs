@@ -85,7 +85,11 @@ pub(crate) fn sheared_xy<R: Real>(q: [R; 3], s: [R; 2]) -> [R; 3] {
 /// The watertight test's three edge functions of sheared vertices `p`.
 #[inline(always)]
 pub(crate) fn edges<R: Real>(p: &[[R; 3]; 3]) -> [R; 3] {
-    [p[1][0] * p[2][1] - p[1][1] * p[2][0], p[2][0] * p[0][1] - p[2][1] * p[0][0], p[0][0] * p[1][1] - p[0][1] * p[1][0]]
+    [
+        p[1][0] * p[2][1] - p[1][1] * p[2][0],
+        p[2][0] * p[0][1] - p[2][1] * p[0][0],
+        p[0][0] * p[1][1] - p[0][1] * p[1][0],
+    ]
 }
 
 /// Lanes where an edge function is exactly zero: there the f32 test cannot decide which side of an
@@ -254,7 +258,10 @@ mod tests {
                     assert_eq!(kz, nested(d.abs()), "{d}");
                     if d.to_array()[kz as usize] != 0.0 {
                         let [px, py, pz] = PERMUTED[kz as usize].map(|a| d.to_array()[a]);
-                        assert_eq!(shear.to_array().map(f32::to_bits), [-px / pz, -py / pz, 1.0 / pz].map(f32::to_bits));
+                        assert_eq!(
+                            shear.to_array().map(f32::to_bits),
+                            [-px / pz, -py / pz, 1.0 / pz].map(f32::to_bits)
+                        );
                     }
                 }
             }
